@@ -1,0 +1,33 @@
+# Set-up and everyday commands. Only this file and pyproject.toml install things.
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed
+
+.PHONY: install run test lint samples bench clean
+
+install: $(STAMP)
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e ".[test]"
+	touch $(STAMP)
+
+run: install
+	$(BIN)/bim-extract sample_models/block_a.ifc -o runs/block_a_site
+
+test: install
+	$(BIN)/python -m pytest -q
+
+lint: install
+	$(BIN)/ruff check bimtools initcli tests benchmarks
+
+samples: install
+	$(BIN)/python -m bimtools.samples --out sample_models
+
+bench: install
+	$(BIN)/python benchmarks/bench_extract.py ../shared/ifc/*.ifc sample_models/*.ifc
+
+clean:
+	rm -rf $(VENV) runs *_site .pytest_cache

@@ -1,0 +1,102 @@
+"""``bim-extract MODEL.ifc``: per-storey features, wall outlines, maps and previews from an IFC model."""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from bimtools import __version__
+from bimtools.errors import EXIT_BAD_INPUT, InputError
+
+app = typer.Typer(add_completion=False, pretty_exceptions_enable=False, rich_markup_mode=None)
+err = Console(stderr=True)
+out = Console()
+
+
+class LazyProgress:
+    """A rich progress bar that only appears once the work has taken more than a second."""
+
+    def __init__(self, label: str, delay: float = 1.0):
+        self.label = label
+        self.delay = delay
+        self.start = time.monotonic()
+        self.progress: Progress | None = None
+        self.task = None
+
+    def __call__(self, done: int, total: int) -> None:
+        if self.progress is None:
+            if time.monotonic() - self.start < self.delay:
+                return
+            self.progress = Progress(TextColumn(self.label), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                                     console=err, transient=True)
+            self.progress.start()
+            self.task = self.progress.add_task(self.label, total=total)
+        self.progress.update(self.task, completed=done, total=total)
+
+    def close(self) -> None:
+        if self.progress is not None:
+            self.progress.stop()
+
+
+def summary_table(manifest) -> Table:
+    categories: list[str] = []
+    for s in manifest.storeys:
+        categories += [c for c in s.counts if c not in categories]
+    table = Table(title=f"{manifest.source_file} ({manifest.schema}, {manifest.application or 'unknown tool'})")
+    table.add_column("Storey")
+    table.add_column("Elevation (m)", justify="right")
+    for c in categories:
+        table.add_column(c, justify="right")
+    table.add_column("Map")
+    for s in manifest.storeys:
+        table.add_row(s.name, f"{s.elevation:.2f}", *[str(s.counts.get(c, 0)) for c in categories], s.map_yaml or "")
+    return table
+
+
+@app.command()
+def extract(
+    model: Annotated[Path, typer.Argument(help="IFC model (IFC2X3, IFC4, IFC4X3)", show_default=False)],
+    outdir: Annotated[Path | None, typer.Option("-o", "--outdir", help="output folder [default: ./<model-stem>_site/]")] = None,
+    storey: Annotated[str | None, typer.Option(help="storey name, or 'all' [default: storeys with features]")] = None,
+    categories: Annotated[Path | None, typer.Option(help="categories YAML overriding the shipped default")] = None,
+    section_height: Annotated[float, typer.Option(help="cut height above each storey's elevation (m)")] = 1.0,
+    resolution: Annotated[float, typer.Option(help="occupancy grid resolution (m/pixel)")] = 0.05,
+    as_json: Annotated[bool, typer.Option("--json", help="print the manifest (site.json) instead of a table")] = False,
+    version: Annotated[bool, typer.Option("--version", help="print the version and exit")] = False,
+) -> None:
+    """Extract doors, lifts and stairs (paper Table 1), wall outlines, ROS maps and previews per storey."""
+    from bimtools.extract.pipeline import extract_site
+    from bimtools.ifc.categories import load_categories
+    from bimtools.site.writer import write_site
+
+    if version:
+        out.print(f"bim-extract {__version__}")
+        return
+    progress = LazyProgress("geometry")
+    try:
+        category_set = load_categories(categories) if categories is not None else load_categories()
+        site = extract_site(model, category_set, storey, section_height, resolution, progress=progress)
+        progress.close()
+        target = outdir if outdir is not None else Path.cwd() / f"{model.stem}_site"
+        manifest = write_site(target, site)
+    except InputError as exc:
+        progress.close()
+        print(f"bim-extract: error: {exc}", file=sys.stderr)
+        raise typer.Exit(EXIT_BAD_INPUT) from None
+    if as_json:
+        print(json.dumps(manifest.to_dict(), indent=2))
+    else:
+        out.print(summary_table(manifest))
+        out.print(f"wrote {len(manifest.files)} files to {target}")
+
+
+def main() -> None:
+    app()

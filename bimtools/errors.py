@@ -1,0 +1,13 @@
+"""The one exception type for bad user input.
+
+Every reader and loader raises :class:`InputError` with a message that names the file (and
+line or key) and what is wrong; the CLIs print it as one line on stderr and exit with code 2.
+"""
+
+from __future__ import annotations
+
+EXIT_BAD_INPUT = 2
+
+
+class InputError(Exception):
+    """A problem with a user-supplied file or argument, worded for the user."""

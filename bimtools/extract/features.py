@@ -1,0 +1,178 @@
+"""Feature extraction for one storey: doors, lift entrances, staircase entrances (paper Table 1).
+
+Inputs are element candidates already placed in plan (see :mod:`bimtools.extract.placement`) and
+the storey's free-space regions and spaces (see :mod:`bimtools.extract.circulation`).
+
+Order of claims follows the categories file: a door that is a lift landing door or the door into
+a stair enclosure becomes a Lift / Stairs feature and not also a Door.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import shapely
+from shapely.geometry.base import BaseGeometry
+
+from bimtools.extract.circulation import FreeRegions, SideProbe, SpaceIndex, choose_side, probe_side
+from bimtools.extract.placement import Front, Opening, rectangle_fronts, stair_foot
+from bimtools.ifc.categories import Category, CategorySet
+from bimtools.site.records import Feature
+
+ENTRANCE_RADIUS = 2.5  # metres: a door this close to a lift/stair body is its entrance
+
+
+@dataclass
+class DoorCandidate:
+    """A door-like element on this storey with its plan geometry."""
+
+    guid: str
+    ifc_class: str
+    name: str
+    opening: Opening
+    entity: object  # ifcopenshell entity, for category rules
+    plus: SideProbe | None = None
+    minus: SideProbe | None = None
+    side: int = 1
+    rule: str = ""
+
+    @property
+    def circulation(self) -> SideProbe:
+        return self.plus if self.side > 0 else self.minus  # type: ignore[return-value]
+
+    @property
+    def room(self) -> SideProbe:
+        return self.minus if self.side > 0 else self.plus  # type: ignore[return-value]
+
+
+@dataclass
+class BodyCandidate:
+    """A lift car/shaft or staircase present on this storey."""
+
+    guid: str
+    ifc_class: str
+    name: str
+    category: str
+    footprint: BaseGeometry  # plan area on this storey
+    points: np.ndarray  # plan points sampled from it (for region look-up)
+    parts: list[np.ndarray] = field(default_factory=list)  # 3D vertex arrays (stairs: flights)
+    starts_here: bool = True  # stairs: its foot is on this storey
+    height: float = 2.1
+
+
+@dataclass
+class StoreyContext:
+    name: str
+    elevation: float
+    regions: FreeRegions
+    spaces: SpaceIndex
+    categories: CategorySet
+
+
+def _enclosure_space(categories: CategorySet, name: str) -> bool:
+    return any(c.kind in ("lift", "stairs") and c.is_space(name) for c in categories.categories)
+
+
+def decide_sides(ctx: StoreyContext, doors: list[DoorCandidate]) -> None:
+    """Probe both sides of every door, count doors per free region, then pick circulation sides."""
+    for door in doors:
+        o = door.opening
+        door.plus = probe_side(ctx.regions, ctx.spaces, *o.face(+1), o.across)
+        door.minus = probe_side(ctx.regions, ctx.spaces, *o.face(-1), -o.across)
+        for label in {door.plus.label, door.minus.label} - {0}:
+            ctx.regions.doors[label] += 1
+    for door in doors:
+        door.side, door.rule = choose_side(
+            door.plus, door.minus, ctx.regions, ctx.categories.is_circulation,
+            lambda name: _enclosure_space(ctx.categories, name),
+        )
+
+
+def _feature(ctx: StoreyContext, guid: str, category: str, front: Front, ifc_class: str, name: str) -> Feature:
+    n = front.normal / max(float(np.hypot(*front.normal)), 1e-12)
+    return Feature(
+        id=guid, category=category, x=float(front.point[0]), y=float(front.point[1]),
+        norm_x=float(n[0]), norm_y=float(n[1]), width=float(front.width), height=float(front.height),
+        storey=ctx.name, elevation=ctx.elevation, ifc_class=ifc_class, name=name,
+    )
+
+
+def _door_front(door: DoorCandidate) -> Front:
+    o = door.opening
+    return Front(point=o.face(door.side), normal=door.side * o.across, width=o.width, height=o.height)
+
+
+def _body_regions(ctx: StoreyContext, body: BodyCandidate, category: Category) -> set[int]:
+    """Free regions that count as this body's enclosure (small, holding the body)."""
+    labels = ctx.regions.labels_at(body.points)
+    return {lab for lab in labels if ctx.regions.areas[lab] <= category.enclosure_max_area}
+
+
+def _is_entrance(ctx: StoreyContext, door: DoorCandidate, category: Category, enclosures: set[int]) -> bool:
+    if category.is_door(door.entity):
+        return True
+    if category.is_space(door.room.space) and not ctx.categories.is_circulation(door.room.space):
+        return True
+    return door.room.label != 0 and door.room.label in enclosures and door.room.label != door.circulation.label
+
+
+def _best_front(ctx: StoreyContext, footprint: BaseGeometry, exclude: set[int]) -> Front | None:
+    """The side of a shaft footprint that faces the circulation area."""
+    best: tuple[tuple, Front] | None = None
+    for front in rectangle_fronts(footprint):
+        probe = probe_side(ctx.regions, ctx.spaces, *front.point, front.normal)
+        circulation = ctx.categories.is_circulation(probe.space)
+        label_score = ctx.regions.score(probe.label) if probe.label not in exclude else (-1, 0.0)
+        key = (circulation, label_score, front.width)
+        if best is None or key > best[0]:
+            best = (key, front)
+    return best[1] if best else None
+
+
+def storey_features(ctx: StoreyContext, doors: list[DoorCandidate], bodies: list[BodyCandidate]) -> list[Feature]:
+    decide_sides(ctx, doors)
+    features: list[Feature] = []
+    claimed: set[str] = set()
+    for category in ctx.categories.categories:
+        if category.kind == "door":
+            for door in doors:
+                if door.guid not in claimed and category.is_door(door.entity):
+                    claimed.add(door.guid)
+                    features.append(_feature(ctx, door.guid, category.name, _door_front(door), door.ifc_class, door.name))
+            continue
+        own_bodies = [b for b in bodies if b.category == category.name]
+        enclosure_of = {b.guid: _body_regions(ctx, b, category) for b in own_bodies}
+        enclosures = set().union(*enclosure_of.values()) if enclosure_of else set()
+        entrances: list[DoorCandidate] = []
+        for door in doors:
+            if door.guid not in claimed and _is_entrance(ctx, door, category, enclosures):
+                claimed.add(door.guid)
+                entrances.append(door)
+                features.append(_feature(ctx, door.guid, category.name, _door_front(door), door.ifc_class, door.name))
+        served: list[BaseGeometry] = []
+        for body in own_bodies:
+            near = any(
+                door.room.label in enclosure_of[body.guid]
+                or body.footprint.distance(shapely.Point(*door.opening.centre)) <= ENTRANCE_RADIUS
+                for door in entrances
+            )
+            if near or any(body.footprint.distance(s) < 1.0 for s in served):
+                continue
+            front = _body_front(ctx, body, category)
+            if front is None:
+                continue
+            served.append(body.footprint)
+            features.append(_feature(ctx, body.guid, category.name, front, body.ifc_class, body.name))
+    return features
+
+
+def _body_front(ctx: StoreyContext, body: BodyCandidate, category: Category) -> Front | None:
+    if category.kind == "stairs":
+        if not body.starts_here:
+            return None
+        return stair_foot(body.parts)
+    front = _best_front(ctx, body.footprint, set())
+    if front is None:
+        return None
+    return Front(point=front.point, normal=front.normal, width=min(front.width, 2.0), height=body.height)

@@ -1,0 +1,312 @@
+"""``extract_site``: IFC file in, per-storey site model (features, floor plan, grid) out."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import ifcopenshell
+import ifcopenshell.util.element
+import ifcopenshell.util.placement
+import numpy as np
+import shapely
+from shapely.geometry.base import BaseGeometry
+
+from bimtools.errors import InputError
+from bimtools.extract.circulation import FreeRegions, SpaceIndex
+from bimtools.extract.features import BodyCandidate, DoorCandidate, StoreyContext, storey_features
+from bimtools.extract.floorplan import FloorPlan, ObstacleShape, build_floorplan
+from bimtools.extract.occupancy import rasterise
+from bimtools.extract.placement import opening_in_plan
+from bimtools.extract.section import polygons_of, section_polygon
+from bimtools.ifc.categories import CategorySet, load_categories
+from bimtools.ifc.geometry import Mesh, ProgressCallback, iterate_meshes
+from bimtools.ifc.model import ModelInfo, describe_model, open_model
+from bimtools.ifc.storeys import Storey, container_storey, list_storeys, storey_at_elevation
+from bimtools.ifc.text import element_name
+from bimtools.site.occupancy_map import OccupancyGrid
+from bimtools.site.records import Feature
+
+OBSTACLE_CLASSES = ("IfcWall", "IfcColumn", "IfcCurtainWall", "IfcDoor", "IfcWindow")
+CURTAIN_PART_CLASSES = ("IfcPlate", "IfcMember")
+DEFAULT_SECTION_HEIGHT = 1.0
+DEFAULT_RESOLUTION = 0.05
+BODY_BAND = (-0.2, 2.2)
+LIFT_MIN_SPAN = 1.8  # metres a lift body must reach above a storey's floor to serve it  # metres around a storey's elevation where a lift/stair is "on" it
+
+
+@dataclass
+class StoreyResult:
+    storey: Storey
+    features: list[Feature]
+    plan: FloorPlan
+    grid: OccupancyGrid
+
+
+@dataclass
+class ExtractedSite:
+    info: ModelInfo
+    section_height: float
+    resolution: float
+    storeys: list[StoreyResult] = field(default_factory=list)
+    all_storeys: list[str] = field(default_factory=list)
+
+    @property
+    def features(self) -> list[Feature]:
+        return [f for s in self.storeys for f in s.features]
+
+
+def _is_curtain_part(element: ifcopenshell.entity_instance) -> bool:
+    parent = ifcopenshell.util.element.get_aggregate(element)
+    return parent is not None and parent.is_a("IfcCurtainWall")
+
+
+def _placement_axes(element: ifcopenshell.entity_instance) -> tuple[np.ndarray, np.ndarray]:
+    matrix = ifcopenshell.util.placement.get_local_placement(element.ObjectPlacement)
+    return np.asarray(matrix[:3, 0]), np.asarray(matrix[:3, 1])
+
+
+@dataclass
+class Candidates:
+    """The elements whose geometry the extraction needs, by role."""
+
+    obstacles: list[ifcopenshell.entity_instance]
+    doors: list[ifcopenshell.entity_instance]
+    bodies: list[ifcopenshell.entity_instance]
+    body_category: dict[int, str]  # entity id -> category name
+    spaces: list[ifcopenshell.entity_instance]
+
+    def all(self) -> list[ifcopenshell.entity_instance]:
+        unique: dict[int, ifcopenshell.entity_instance] = {}
+        for element in [*self.obstacles, *self.doors, *self.spaces, *self.bodies]:
+            unique.setdefault(element.id(), element)
+        return list(unique.values())
+
+
+def collect_candidates(model: ifcopenshell.file, categories: CategorySet) -> Candidates:
+    obstacles = [e for cls in OBSTACLE_CLASSES for e in model.by_type(cls)]
+    obstacles += [e for cls in CURTAIN_PART_CLASSES for e in model.by_type(cls) if _is_curtain_part(e)]
+    door_classes = {c for cat in categories.categories for rule in cat.doors for c in rule.classes}
+    doors: list[ifcopenshell.entity_instance] = []
+    for cls in sorted(door_classes):
+        for element in model.by_type(cls):
+            if any(cat.is_door(element) for cat in categories.categories):
+                doors.append(element)
+    body_classes = {c for cat in categories.categories for rule in cat.bodies for c in rule.classes}
+    body_category: dict[int, str] = {}
+    bodies: list[ifcopenshell.entity_instance] = []
+    for cls in sorted(body_classes):
+        for element in model.by_type(cls):
+            for cat in categories.categories:
+                if cat.kind in ("lift", "stairs") and cat.is_body(element) and element.id() not in body_category:
+                    body_category[element.id()] = cat.name
+                    bodies.append(element)
+    unique_doors = list({d.id(): d for d in doors}.values())
+    return Candidates(obstacles, unique_doors, bodies, body_category, list(model.by_type("IfcSpace")))
+
+
+class ElementStoreys:
+    """Which storey each element stands on: its spatial container, else its lowest point."""
+
+    def __init__(self, storeys: list[Storey], meshes: dict[str, Mesh]):
+        self.storeys = storeys
+        self.by_entity = {s.entity.id(): s for s in storeys}
+        self.meshes = meshes
+        self._cache: dict[int, Storey | None] = {}
+
+    def of(self, element: ifcopenshell.entity_instance) -> Storey | None:
+        """The container storey; but geometry standing on a higher storey's floor wins (exports put
+        e.g. upper landing doors in the lowest level), and uncontained elements go by elevation."""
+        cached = self._cache.get(element.id())
+        if cached is not None or element.id() in self._cache:
+            return cached
+        container = container_storey(element)
+        mesh = self.meshes.get(element.GlobalId)
+        by_height = storey_at_elevation(self.storeys, mesh.zmin) if mesh is not None else None
+        storey: Storey | None
+        if container is not None and container.id() in self.by_entity:
+            storey = self.by_entity[container.id()]
+            if by_height is not None and by_height.elevation > storey.elevation + 0.5:
+                storey = by_height
+        else:
+            storey = by_height
+        self._cache[element.id()] = storey
+        return storey
+
+
+def _clamped_section(mesh: Mesh, z: float) -> BaseGeometry | None:
+    zc = min(max(z, mesh.zmin + 0.02), mesh.zmax - 0.02)
+    return section_polygon(mesh.verts, mesh.faces, zc)
+
+
+def _band_points(verts: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    inside = verts[(verts[:, 2] >= lo) & (verts[:, 2] <= hi)]
+    return inside[:, :2] if len(inside) else np.empty((0, 2))
+
+
+def _area_points(area: BaseGeometry) -> np.ndarray:
+    inner = area.buffer(-0.15)
+    source = inner if not inner.is_empty else area
+    pts = [np.asarray(source.representative_point().coords)[:, :2]]
+    for poly in polygons_of(source):
+        pts.append(np.asarray(poly.exterior.coords)[:, :2])
+    return np.concatenate(pts)
+
+
+def _stair_parts(element: ifcopenshell.entity_instance, meshes: dict[str, Mesh]) -> list[np.ndarray]:
+    parts = [meshes[element.GlobalId].verts] if element.GlobalId in meshes else []
+    for child in ifcopenshell.util.element.get_decomposition(element):
+        if child.GlobalId in meshes:
+            parts.append(meshes[child.GlobalId].verts)
+    return parts
+
+
+def extract_site(
+    path: Path,
+    categories: CategorySet | None = None,
+    storey: str | None = None,
+    section_height: float = DEFAULT_SECTION_HEIGHT,
+    resolution: float = DEFAULT_RESOLUTION,
+    progress: ProgressCallback | None = None,
+    threads: int | None = None,
+) -> ExtractedSite:
+    """Extract features, floor plans and grids of the storeys of an IFC model.
+
+    ``storey``: None = every storey that has features, ``"all"`` = every storey, else a name.
+    """
+    if section_height <= 0:
+        raise InputError(f"--section-height must be positive, got {section_height}")
+    if resolution <= 0 or resolution > 1.0:
+        raise InputError(f"--resolution must be in (0, 1] metres, got {resolution}")
+    categories = categories or load_categories()
+    model = open_model(path)
+    info = describe_model(path, model)
+    storeys = list_storeys(model, info.unit_scale)
+    if storey not in (None, "all") and storey not in {s.name for s in storeys}:
+        valid = ", ".join(repr(s.name) for s in storeys)
+        raise InputError(f"{path}: no storey {storey!r}; valid storeys: {valid}")
+    candidates = collect_candidates(model, categories)
+    meshes = iterate_meshes(model, candidates.all(), progress=progress, threads=threads)
+    where = ElementStoreys(storeys, meshes)
+
+    result = ExtractedSite(info, section_height, resolution, all_storeys=[s.name for s in storeys])
+    for s in storeys:
+        if storey not in (None, "all") and s.name != storey:
+            continue
+        storey_result = _extract_storey(s, storeys, candidates, meshes, where, categories, section_height,
+                                        resolution, info.unit_scale)
+        if storey_result.features or storey is not None:
+            result.storeys.append(storey_result)
+    if not result.features:
+        raise InputError(f"{path}: no features found (no doors, lifts or stairs on any storey)")
+    return result
+
+
+def _extract_storey(
+    s: Storey,
+    storeys: list[Storey],
+    candidates: Candidates,
+    meshes: dict[str, Mesh],
+    where: ElementStoreys,
+    categories: CategorySet,
+    section_height: float,
+    resolution: float,
+    scale: float,
+) -> StoreyResult:
+    cut = s.elevation + section_height
+    obstacles: list[ObstacleShape] = []
+    for element in candidates.obstacles:
+        mesh = meshes.get(element.GlobalId)
+        if mesh is None or not (mesh.zmin < cut < mesh.zmax):
+            continue
+        area = section_polygon(mesh.verts, mesh.faces, cut)
+        if area is not None and area.area > 1e-6:
+            obstacles.append(ObstacleShape(element.GlobalId, element.is_a(), area))
+
+    space_names: list[str] = []
+    space_areas: list[BaseGeometry] = []
+    space_entities = []
+    for space in candidates.spaces:
+        mesh = meshes.get(space.GlobalId)
+        if mesh is None or where.of(space) is not s:
+            continue
+        area = _clamped_section(mesh, cut)
+        if area is None or area.is_empty:
+            continue
+        space_names.append(element_name(space))
+        space_areas.append(area)
+        space_entities.append(space)
+
+    plan = build_floorplan(s.name, cut, obstacles, space_areas)
+    grid, _ = rasterise(plan, resolution)
+    ctx = StoreyContext(s.name, s.elevation, FreeRegions(grid), SpaceIndex(space_names, space_areas), categories)
+
+    doors: list[DoorCandidate] = []
+    for element in candidates.doors:
+        mesh = meshes.get(element.GlobalId)
+        if mesh is None or where.of(element) is not s:
+            continue
+        x_axis, y_axis = _placement_axes(element)
+        width = getattr(element, "OverallWidth", None)
+        height = getattr(element, "OverallHeight", None)
+        opening = opening_in_plan(
+            mesh.verts, x_axis, y_axis, width * scale if width else None, height * scale if height else None
+        )
+        doors.append(DoorCandidate(element.GlobalId, element.is_a(), element_name(element), opening, element))
+
+    bodies = _bodies_on_storey(s, storeys, candidates, meshes, where, categories)
+    for entity, name, area in zip(space_entities, space_names, space_areas, strict=True):
+        for cat in categories.categories:
+            if cat.kind in ("lift", "stairs") and cat.is_space(name) and not categories.is_circulation(name):
+                bodies.append(BodyCandidate(entity.GlobalId, entity.is_a(), name, cat.name, area, _area_points(area),
+                                            starts_here=cat.kind == "lift"))
+                break
+    features = storey_features(ctx, doors, bodies)
+    order = {c.name: i for i, c in enumerate(categories.categories)}
+    features.sort(key=lambda f: (order.get(f.category, 99), round(f.x, 3), round(f.y, 3), f.id))
+    return StoreyResult(s, features, plan, grid)
+
+
+def _bodies_on_storey(
+    s: Storey,
+    storeys: list[Storey],
+    candidates: Candidates,
+    meshes: dict[str, Mesh],
+    where: ElementStoreys,
+    categories: CategorySet,
+) -> list[BodyCandidate]:
+    kinds = {c.name: c.kind for c in categories.categories}
+    lo, hi = s.elevation + BODY_BAND[0], s.elevation + BODY_BAND[1]
+    bodies: list[BodyCandidate] = []
+    for element in candidates.bodies:
+        category = candidates.body_category[element.id()]
+        if kinds[category] == "stairs":
+            parent = ifcopenshell.util.element.get_aggregate(element)
+            if parent is not None and parent.id() in candidates.body_category:
+                continue  # a flight of a stair: handled with its stair
+            parts = _stair_parts(element, meshes)
+        else:
+            parts = [meshes[element.GlobalId].verts] if element.GlobalId in meshes else []
+        if not parts:
+            continue
+        verts = np.concatenate(parts)
+        zmin, zmax = float(verts[:, 2].min()), float(verts[:, 2].max())
+        home = where.of(element)
+        if kinds[category] == "lift":
+            # A lift serves a storey when its car/shaft spans the storey's door height.
+            on_storey = zmin <= s.elevation + 0.5 and zmax >= s.elevation + LIFT_MIN_SPAN
+        else:
+            on_storey = home is s or (zmin < hi and zmax > lo + 0.4)
+        if not on_storey:
+            continue
+        points = _band_points(verts, lo, hi)
+        if len(points) < 3:
+            continue
+        footprint = shapely.convex_hull(shapely.multipoints(points))
+        starts_here = storey_at_elevation(storeys, zmin) is s
+        bodies.append(
+            BodyCandidate(element.GlobalId, element.is_a(), element_name(element), category, footprint, points,
+                          parts=parts, starts_here=starts_here, height=min(zmax - zmin, 2.1) if zmax > zmin else 2.1)
+        )
+    return bodies

@@ -1,0 +1,1 @@
+"""Reading IFC models: opening with clear errors, units, storeys, element text, geometry."""

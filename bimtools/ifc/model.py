@@ -1,0 +1,92 @@
+"""Open an IFC file and describe it (schema, authoring application, length unit)."""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+from pathlib import Path
+
+import ifcopenshell
+import ifcopenshell.util.unit
+
+from bimtools.errors import InputError
+
+SUPPORTED_SCHEMAS = ("IFC2X3", "IFC4", "IFC4X3")
+
+
+@dataclass(frozen=True)
+class ModelInfo:
+    path: Path
+    sha256: str
+    schema: str
+    application: str
+    length_unit: str
+    unit_scale: float  # project length unit -> metres
+
+
+def file_sha256(path: Path) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def open_model(path: Path) -> ifcopenshell.file:
+    """Open an IFC-SPF file, turning every failure into one :class:`InputError` line."""
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"{path}: no such file")
+    if path.is_dir():
+        raise InputError(f"{path}: is a folder, expected an .ifc file")
+    with open(path, "rb") as handle:
+        head = handle.read(64)
+    if not head.lstrip().startswith(b"ISO-10303-21"):
+        raise InputError(f"{path}: not an IFC file (no ISO-10303-21 header)")
+    try:
+        model = ifcopenshell.open(str(path))
+    except Exception as exc:  # ifcopenshell raises a variety of types for parse errors
+        text = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        if "schema" in text.lower():
+            raise InputError(f"{path}: unsupported IFC schema ({text})") from None
+        raise InputError(f"{path}: cannot parse IFC file ({text}); is it truncated?") from None
+    schema = model.schema_identifier if hasattr(model, "schema_identifier") else model.schema
+    if not any(str(schema).upper().startswith(s) for s in SUPPORTED_SCHEMAS):
+        raise InputError(f"{path}: unsupported IFC schema {schema}; supported: {', '.join(SUPPORTED_SCHEMAS)}")
+    if not model.by_type("IfcProject"):
+        raise InputError(f"{path}: IFC file has no IfcProject; is it truncated?")
+    return model
+
+
+def authoring_application(model: ifcopenshell.file) -> str:
+    apps = [a.ApplicationFullName for a in model.by_type("IfcApplication") if a.ApplicationFullName]
+    if apps:
+        return apps[0]
+    try:
+        system = model.header.file_name.originating_system
+    except (AttributeError, RuntimeError):
+        system = ""
+    return str(system or "")
+
+
+def length_unit_name(model: ifcopenshell.file) -> str:
+    for project in model.by_type("IfcProject"):
+        assignment = project.UnitsInContext
+        for unit in assignment.Units if assignment else []:
+            if getattr(unit, "UnitType", None) != "LENGTHUNIT":
+                continue
+            if unit.is_a("IfcSIUnit"):
+                return f"{unit.Prefix or ''}{unit.Name}"
+            return str(getattr(unit, "Name", "unknown")).upper()
+    return "METRE"
+
+
+def describe_model(path: Path, model: ifcopenshell.file) -> ModelInfo:
+    return ModelInfo(
+        path=Path(path),
+        sha256=file_sha256(path),
+        schema=str(model.schema),
+        application=authoring_application(model),
+        length_unit=length_unit_name(model),
+        unit_scale=float(ifcopenshell.util.unit.calculate_unit_scale(model)),
+    )

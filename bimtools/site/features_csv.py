@@ -1,0 +1,94 @@
+"""``features.csv``: the paper's Table 1 plus storey, elevation, IFC class and name.
+
+Only the eight Table 1 columns are required when reading, so a hand-written Table 1 works.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from collections.abc import Iterable
+from pathlib import Path
+
+from bimtools.errors import InputError
+from bimtools.site.records import EXTRA_COLUMNS, FEATURE_COLUMNS, TABLE1_COLUMNS, Feature
+
+
+def format_features(features: Iterable[Feature]) -> str:
+    """Render features as CSV text (metres, 4 decimals; normals 6 decimals)."""
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(FEATURE_COLUMNS)
+    for f in features:
+        writer.writerow(
+            [
+                f.id, f.category, f"{f.x:.4f}", f"{f.y:.4f}", f"{round(f.norm_x, 6) + 0.0:.6f}", f"{round(f.norm_y, 6) + 0.0:.6f}",
+                f"{f.width:.3f}", f"{f.height:.3f}", f.storey, f"{f.elevation:.4f}", f.ifc_class, f.name,
+            ]
+        )
+    return out.getvalue()
+
+
+def write_features(path: Path, features: Iterable[Feature]) -> None:
+    Path(path).write_text(format_features(features), encoding="utf-8")
+
+
+def _number(path: Path, line: int, column: str, text: str) -> float:
+    try:
+        value = float(text)
+    except (TypeError, ValueError):
+        raise InputError(f"{path}:{line}: column {column}: expected a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise InputError(f"{path}:{line}: column {column}: expected a finite number, got {text!r}")
+    return value
+
+
+def read_features(path: Path) -> list[Feature]:
+    """Read a features.csv; raise :class:`InputError` naming ``file:line`` on a bad row."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    reader = csv.DictReader(io.StringIO(text))
+    header = [h.strip() for h in (reader.fieldnames or [])]
+    missing = [c for c in TABLE1_COLUMNS if c not in header]
+    if missing:
+        raise InputError(f"{path}:1: missing column(s) {', '.join(missing)} (Table 1 needs {','.join(TABLE1_COLUMNS)})")
+    reader.fieldnames = header
+    features: list[Feature] = []
+    for row in reader:
+        line = reader.line_num
+        if not any((v or "").strip() for v in row.values() if isinstance(v, str)):
+            continue
+        values = {k: (row.get(k) or "").strip() for k in FEATURE_COLUMNS}
+        if not values["ID"]:
+            raise InputError(f"{path}:{line}: column ID is empty")
+        if not values["Category"]:
+            raise InputError(f"{path}:{line}: column Category is empty")
+        nx = _number(path, line, "Norm_X", values["Norm_X"])
+        ny = _number(path, line, "Norm_Y", values["Norm_Y"])
+        norm = math.hypot(nx, ny)
+        if norm < 1e-9:
+            raise InputError(f"{path}:{line}: Norm_X, Norm_Y is the zero vector")
+        features.append(
+            Feature(
+                id=values["ID"],
+                category=values["Category"],
+                x=_number(path, line, "X", values["X"]),
+                y=_number(path, line, "Y", values["Y"]),
+                norm_x=nx / norm,
+                norm_y=ny / norm,
+                width=_number(path, line, "Width", values["Width"]),
+                height=_number(path, line, "Height", values["Height"]),
+                storey=values["Storey"],
+                elevation=_number(path, line, "Elevation", values["Elevation"]) if values["Elevation"] else 0.0,
+                ifc_class=values["IfcClass"],
+                name=values["Name"],
+            )
+        )
+    return features
+
+
+__all__ = ["EXTRA_COLUMNS", "format_features", "read_features", "write_features"]

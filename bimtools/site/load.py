@@ -1,0 +1,73 @@
+"""Load a site model: a ``bim-extract`` OUTDIR, or a bare features.csv (a hand-written Table 1)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from bimtools.errors import InputError
+from bimtools.site.features_csv import read_features
+from bimtools.site.manifest import SiteManifest, read_manifest
+from bimtools.site.occupancy_map import OccupancyGrid, read_map
+from bimtools.site.records import Feature, Obstacle, WallSegment
+from bimtools.site.walls_geojson import read_walls
+
+
+@dataclass
+class StoreyModel:
+    """Everything known of one storey: the BIM features B_object, walls, obstacles, map."""
+
+    name: str
+    elevation: float
+    features: list[Feature]
+    walls: list[WallSegment] = field(default_factory=list)
+    obstacles: list[Obstacle] = field(default_factory=list)
+    grid: OccupancyGrid | None = None
+
+
+@dataclass
+class Site:
+    root: Path
+    storeys: dict[str, StoreyModel]
+    manifest: SiteManifest | None = None
+
+    def storey(self, name: str) -> StoreyModel:
+        if name not in self.storeys:
+            valid = ", ".join(repr(s) for s in self.storeys) or "none"
+            raise InputError(f"{self.root}: no storey {name!r}; valid storeys: {valid}")
+        return self.storeys[name]
+
+
+def load_site(path: Path, with_maps: bool = True) -> Site:
+    """Read an OUTDIR (features.csv, walls.geojson, maps, site.json) or a features.csv alone."""
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"{path}: no such file or folder")
+    if path.is_dir():
+        csv_path = path / "features.csv"
+        if not csv_path.exists():
+            raise InputError(f"{path}: not a site folder (no features.csv)")
+    else:
+        csv_path = path
+    features = read_features(csv_path)
+    if not features:
+        raise InputError(f"{csv_path}: no features")
+    manifest = read_manifest(path / "site.json") if path.is_dir() and (path / "site.json").exists() else None
+
+    storeys: dict[str, StoreyModel] = {}
+    for f in features:
+        model = storeys.setdefault(f.storey, StoreyModel(f.storey, f.elevation, []))
+        model.features.append(f)
+    if path.is_dir() and (path / "walls.geojson").exists():
+        walls, obstacles = read_walls(path / "walls.geojson")
+        for w in walls:
+            if w.storey in storeys:
+                storeys[w.storey].walls.append(w)
+        for o in obstacles:
+            if o.storey in storeys:
+                storeys[o.storey].obstacles.append(o)
+    if with_maps and manifest is not None:
+        for info in manifest.storeys:
+            if info.name in storeys and info.map_yaml and (path / info.map_yaml).exists():
+                storeys[info.name].grid = read_map(path / info.map_yaml)
+    return Site(root=path, storeys=storeys, manifest=manifest)

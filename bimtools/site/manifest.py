@@ -1,0 +1,78 @@
+"""``site.json``: the manifest of a ``bim-extract`` OUTDIR."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+from bimtools.errors import InputError
+from bimtools.site.records import StoreyInfo
+
+SITE_FORMAT = "bim-init.site/1"
+
+
+@dataclass
+class SiteManifest:
+    source_file: str
+    source_sha256: str
+    schema: str  # the IFC schema of the source, e.g. IFC4
+    application: str
+    length_unit: str
+    unit_scale: float
+    section_height: float
+    resolution: float
+    storeys: list[StoreyInfo] = field(default_factory=list)
+    files: list[str] = field(default_factory=list)
+    tool_version: str = ""
+    format: str = SITE_FORMAT
+
+    def to_dict(self) -> dict:
+        return {
+            "format": self.format,
+            "tool": {"name": "bim-extract", "version": self.tool_version},
+            "source": {"file": self.source_file, "sha256": self.source_sha256},
+            "schema": self.schema,
+            "application": self.application,
+            "length_unit": self.length_unit,
+            "unit_scale": self.unit_scale,
+            "section_height": self.section_height,
+            "resolution": self.resolution,
+            "storeys": [asdict(s) for s in self.storeys],
+            "files": list(self.files),
+        }
+
+    @classmethod
+    def from_dict(cls, doc: dict, where: str = "site.json") -> SiteManifest:
+        try:
+            return cls(
+                source_file=doc["source"]["file"],
+                source_sha256=doc["source"]["sha256"],
+                schema=doc["schema"],
+                application=doc.get("application", ""),
+                length_unit=doc.get("length_unit", ""),
+                unit_scale=float(doc.get("unit_scale", 1.0)),
+                section_height=float(doc["section_height"]),
+                resolution=float(doc.get("resolution", 0.05)),
+                storeys=[StoreyInfo(**s) for s in doc["storeys"]],
+                files=list(doc.get("files", [])),
+                tool_version=doc.get("tool", {}).get("version", ""),
+                format=doc.get("format", SITE_FORMAT),
+            )
+        except (KeyError, TypeError, ValueError) as exc:
+            raise InputError(f"{where}: malformed manifest ({exc!s})") from None
+
+
+def format_manifest(manifest: SiteManifest) -> str:
+    return json.dumps(manifest.to_dict(), indent=2) + "\n"
+
+
+def read_manifest(path: Path) -> SiteManifest:
+    path = Path(path)
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{path}:{exc.lineno}: not valid JSON: {exc.msg}") from None
+    return SiteManifest.from_dict(doc, str(path))
