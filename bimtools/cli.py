@@ -35,8 +35,14 @@ class LazyProgress:
         if self.progress is None:
             if time.monotonic() - self.start < self.delay:
                 return
-            self.progress = Progress(TextColumn(self.label), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                                     console=err, transient=True)
+            self.progress = Progress(
+                TextColumn(self.label),
+                BarColumn(),
+                MofNCompleteColumn(),
+                TimeElapsedColumn(),
+                console=err,
+                transient=True,
+            )
             self.progress.start()
             self.task = self.progress.add_task(self.label, total=total)
         self.progress.update(self.task, completed=done, total=total)
@@ -50,26 +56,38 @@ def summary_table(manifest) -> Table:
     categories: list[str] = []
     for s in manifest.storeys:
         categories += [c for c in s.counts if c not in categories]
-    table = Table(title=f"{manifest.source_file} ({manifest.schema}, {manifest.application or 'unknown tool'})")
+    table = Table(
+        title=f"{manifest.source_file} ({manifest.schema}, {manifest.application or 'unknown tool'})"
+    )
     table.add_column("Storey")
     table.add_column("Elevation (m)", justify="right")
     for c in categories:
         table.add_column(c, justify="right")
     table.add_column("Map")
     for s in manifest.storeys:
-        table.add_row(s.name, f"{s.elevation:.2f}", *[str(s.counts.get(c, 0)) for c in categories], s.map_yaml or "")
+        table.add_row(
+            s.name, f"{s.elevation:.2f}", *[str(s.counts.get(c, 0)) for c in categories], s.map_yaml or ""
+        )
     return table
 
 
 @app.command()
 def extract(
     model: Annotated[Path, typer.Argument(help="IFC model (IFC2X3, IFC4, IFC4X3)", show_default=False)],
-    outdir: Annotated[Path | None, typer.Option("-o", "--outdir", help="output folder [default: ./<model-stem>_site/]")] = None,
-    storey: Annotated[str | None, typer.Option(help="storey name, or 'all' [default: storeys with features]")] = None,
-    categories: Annotated[Path | None, typer.Option(help="categories YAML overriding the shipped default")] = None,
+    outdir: Annotated[
+        Path | None, typer.Option("-o", "--outdir", help="output folder [default: ./<model-stem>_site/]")
+    ] = None,
+    storey: Annotated[
+        str | None, typer.Option(help="storey name, or 'all' [default: storeys with features]")
+    ] = None,
+    categories: Annotated[
+        Path | None, typer.Option(help="categories YAML overriding the shipped default")
+    ] = None,
     section_height: Annotated[float, typer.Option(help="cut height above each storey's elevation (m)")] = 1.0,
     resolution: Annotated[float, typer.Option(help="occupancy grid resolution (m/pixel)")] = 0.05,
-    as_json: Annotated[bool, typer.Option("--json", help="print the manifest (site.json) instead of a table")] = False,
+    as_json: Annotated[
+        bool, typer.Option("--json", help="print the manifest (site.json) instead of a table")
+    ] = False,
     version: Annotated[bool, typer.Option("--version", help="print the version and exit")] = False,
 ) -> None:
     """Extract doors, lifts and stairs (paper Table 1), wall outlines, ROS maps and previews per storey."""

@@ -1,104 +1,196 @@
-"""Preview plot of one storey: walls, obstacles and features (category, normal, ID), with a legend
-and a metric scale bar."""
+"""Preview image of one storey: obstacles, wall surfaces, features by category with their normal
+and ID, a legend and a metric scale bar.
+
+Drawn with OpenCV rather than matplotlib: a preview per storey costs milliseconds, so extraction
+stays close to the geometry kernel's own time (see benchmarks/bench_extract.py).
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import cv2
+import numpy as np
+from shapely.geometry.base import BaseGeometry
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.patches import Polygon as PolygonPatch  # noqa: E402
-from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar  # noqa: E402
+from bimtools.extract.section import polygons_of
+from bimtools.site.records import Feature, WallSegment
 
-from bimtools.extract.section import polygons_of  # noqa: E402
-from bimtools.site.records import Feature, WallSegment  # noqa: E402
-
-CATEGORY_STYLE = {
-    "Door": ("tab:blue", "s"),
-    "Lift": ("tab:red", "^"),
-    "Stairs": ("tab:green", "D"),
+# BGR colours
+CATEGORY_STYLE: dict[str, tuple[tuple[int, int, int], str]] = {
+    "Door": ((180, 119, 31), "square"),
+    "Lift": ((40, 39, 214), "triangle"),
+    "Stairs": ((44, 160, 44), "diamond"),
 }
-_EXTRA_COLOURS = ["tab:purple", "tab:orange", "tab:brown", "tab:pink", "tab:olive", "tab:cyan"]
+_EXTRA_COLOURS = [(189, 103, 148), (14, 127, 255), (75, 86, 140), (194, 119, 227), (34, 189, 188)]
+_FONT = cv2.FONT_HERSHEY_SIMPLEX
+_WHITE = (255, 255, 255)
 
 
-def category_style(category: str, index: int = 0) -> tuple[str, str]:
-    return CATEGORY_STYLE.get(category, (_EXTRA_COLOURS[index % len(_EXTRA_COLOURS)], "o"))
+def category_style(category: str, index: int = 0) -> tuple[tuple[int, int, int], str]:
+    return CATEGORY_STYLE.get(category, (_EXTRA_COLOURS[index % len(_EXTRA_COLOURS)], "circle"))
 
 
-def _scale_length(span: float) -> float:
+class Canvas:
+    """World metres -> image pixels (y up in the world, down in the image)."""
+
+    def __init__(
+        self,
+        bounds: tuple[float, float, float, float],
+        max_side: int = 2400,
+        min_scale: float = 20.0,
+        margin_px: int = 60,
+    ):
+        minx, miny, maxx, maxy = bounds
+        span = max(maxx - minx, maxy - miny, 1.0)
+        self.scale = max(min_scale, min(80.0, max_side / span))
+        self.margin = margin_px
+        self.minx, self.maxy = minx, maxy
+        width = int((maxx - minx) * self.scale) + 2 * margin_px
+        height = int((maxy - miny) * self.scale) + 2 * margin_px + 40
+        self.image = np.full((max(height, 300), max(width, 500), 3), 255, dtype=np.uint8)
+
+    def px(self, xy: np.ndarray) -> np.ndarray:
+        xy = np.atleast_2d(np.asarray(xy, dtype=float))
+        u = (xy[:, 0] - self.minx) * self.scale + self.margin
+        v = (self.maxy - xy[:, 1]) * self.scale + self.margin + 40
+        return np.round(np.stack([u, v], axis=1)).astype(np.int32)
+
+
+def _marker(img: np.ndarray, centre: tuple[int, int], shape: str, colour, size: int = 6) -> None:
+    x, y = centre
+    if shape == "square":
+        cv2.rectangle(img, (x - size, y - size), (x + size, y + size), colour, -1, cv2.LINE_AA)
+    elif shape == "triangle":
+        pts = np.array([[x, y - size - 2], [x - size - 1, y + size], [x + size + 1, y + size]], np.int32)
+        cv2.fillPoly(img, [pts], colour, cv2.LINE_AA)
+    elif shape == "diamond":
+        pts = np.array([[x, y - size - 2], [x + size + 2, y], [x, y + size + 2], [x - size - 2, y]], np.int32)
+        cv2.fillPoly(img, [pts], colour, cv2.LINE_AA)
+    else:
+        cv2.circle(img, (x, y), size, colour, -1, cv2.LINE_AA)
+
+
+def _scale_length(span_m: float) -> float:
     for step in (1, 2, 5, 10, 20, 50, 100):
-        if span / step < 6:
+        if span_m / step < 6:
             return float(step)
     return 200.0
 
 
-def draw_floorplan(ax, obstacles, walls: list[WallSegment], outline=None) -> None:
-    """Obstacle footprints (grey), wall surfaces (black) and the building outline (dashed)."""
+def draw_plan(
+    canvas: Canvas, obstacles: list[BaseGeometry], walls: list[WallSegment], outline: BaseGeometry | None
+) -> None:
+    img = canvas.image
     if outline is not None:
         for poly in polygons_of(outline):
-            x, y = poly.exterior.xy
-            ax.plot(x, y, color="0.6", lw=0.6, ls="--", zorder=1)
-    for area in obstacles:
-        for poly in polygons_of(area):
-            ax.add_patch(PolygonPatch(list(poly.exterior.coords), closed=True, fc="0.8", ec="none", zorder=2))
+            cv2.polylines(
+                img,
+                [canvas.px(np.asarray(poly.exterior.coords)[:, :2])],
+                True,
+                (170, 170, 170),
+                1,
+                cv2.LINE_AA,
+            )
+    shapes = [
+        canvas.px(np.asarray(p.exterior.coords)[:, :2]) for area in obstacles for p in polygons_of(area)
+    ]
+    if shapes:
+        cv2.fillPoly(img, shapes, (205, 205, 205), cv2.LINE_AA)
     for w in walls:
-        ax.plot([w.x1, w.x2], [w.y1, w.y2], color="k", lw=0.7, zorder=3)
+        (a, b) = canvas.px(np.array([[w.x1, w.y1], [w.x2, w.y2]]))
+        cv2.line(img, tuple(int(v) for v in a), tuple(int(v) for v in b), (0, 0, 0), 1, cv2.LINE_AA)
 
 
-def draw_features(ax, features: list[Feature], label_ids: bool = True) -> None:
+def draw_features(canvas: Canvas, features: list[Feature]) -> list[str]:
+    """Markers, normals (arrows) and IDs; returns the categories drawn, in order."""
+    img = canvas.image
     extra = sorted({f.category for f in features} - set(CATEGORY_STYLE))
-    seen: set[str] = set()
-    span = 1.0
-    if features:
-        xs = [f.x for f in features]
-        ys = [f.y for f in features]
-        span = max(max(xs) - min(xs), max(ys) - min(ys), 1.0)
-    arrow = max(0.6, span / 40)
+    arrow = max(18, int(0.8 * canvas.scale))
+    drawn: list[str] = []
     for f in features:
-        colour, marker = category_style(f.category, extra.index(f.category) if f.category in extra else 0)
-        ax.plot(f.x, f.y, marker=marker, color=colour, ms=6, ls="none", zorder=5,
-                label=f.category if f.category not in seen else None)
-        seen.add(f.category)
-        ax.annotate("", xy=(f.x + f.norm_x * arrow, f.y + f.norm_y * arrow), xytext=(f.x, f.y),
-                    arrowprops={"arrowstyle": "->", "color": colour, "lw": 1.0}, zorder=6)
-        if label_ids:
-            ax.text(f.x + f.norm_x * arrow * 1.3, f.y + f.norm_y * arrow * 1.3, f.id, fontsize=4, color=colour,
-                    ha="center", va="center", zorder=7)
+        colour, shape = category_style(f.category, extra.index(f.category) if f.category in extra else 0)
+        ((x, y),) = canvas.px(np.array([[f.x, f.y]]))
+        tip = (int(x + f.norm_x * arrow), int(y - f.norm_y * arrow))
+        cv2.arrowedLine(img, (int(x), int(y)), tip, colour, 2, cv2.LINE_AA, tipLength=0.3)
+        _marker(img, (int(x), int(y)), shape, colour)
+        label_at = (int(x + f.norm_x * arrow * 1.35) - 3 * len(f.id), int(y - f.norm_y * arrow * 1.35) + 4)
+        cv2.putText(img, f.id, label_at, _FONT, 0.33, colour, 1, cv2.LINE_AA)
+        if f.category not in drawn:
+            drawn.append(f.category)
+    return drawn
 
 
-def add_scale_bar(ax, span: float) -> None:
-    length = _scale_length(span)
-    bar = AnchoredSizeBar(ax.transData, length, f"{length:g} m", "lower right", pad=0.5, frameon=True,
-                          size_vertical=span / 500)
-    ax.add_artist(bar)
+def draw_legend(canvas: Canvas, categories: list[str], counts: dict[str, int]) -> None:
+    img = canvas.image
+    extra = sorted(set(categories) - set(CATEGORY_STYLE))
+    x0, y0 = img.shape[1] - 190, 50
+    height = 22 * len(categories) + 34
+    cv2.rectangle(img, (x0 - 10, y0 - 18), (x0 + 175, y0 + height - 18), _WHITE, -1)
+    cv2.rectangle(img, (x0 - 10, y0 - 18), (x0 + 175, y0 + height - 18), (0, 0, 0), 1)
+    for i, category in enumerate(categories):
+        colour, shape = category_style(category, extra.index(category) if category in extra else 0)
+        y = y0 + 22 * i
+        _marker(img, (x0 + 8, y - 4), shape, colour)
+        cv2.putText(
+            img,
+            f"{category} ({counts.get(category, 0)})",
+            (x0 + 24, y),
+            _FONT,
+            0.5,
+            (0, 0, 0),
+            1,
+            cv2.LINE_AA,
+        )
+    y = y0 + 22 * len(categories)
+    cv2.line(img, (x0, y - 4), (x0 + 16, y - 4), (0, 0, 0), 1, cv2.LINE_AA)
+    cv2.putText(img, "wall surface", (x0 + 24, y), _FONT, 0.5, (0, 0, 0), 1, cv2.LINE_AA)
 
 
-def render_preview(path: Path, title: str, obstacles, walls: list[WallSegment], features: list[Feature],
-                   outline=None) -> None:
+def draw_scale_bar(canvas: Canvas, span_m: float) -> None:
+    img = canvas.image
+    length = _scale_length(span_m)
+    pixels = int(length * canvas.scale)
+    x1, y = img.shape[1] - 30, img.shape[0] - 25
+    x0 = x1 - pixels
+    cv2.rectangle(img, (x0, y - 5), (x1, y), (0, 0, 0), -1)
+    half = x0 + pixels // 2
+    cv2.rectangle(img, (half, y - 5), (x1, y), _WHITE, -1)
+    cv2.rectangle(img, (x0, y - 5), (x1, y), (0, 0, 0), 1)
+    cv2.putText(img, f"{length:g} m", (x0, y - 10), _FONT, 0.5, (0, 0, 0), 1, cv2.LINE_AA)
+
+
+def render_preview(
+    path: Path,
+    title: str,
+    obstacles: list[BaseGeometry],
+    walls: list[WallSegment],
+    features: list[Feature],
+    outline: BaseGeometry | None = None,
+) -> None:
     """Write a PNG of the storey plan with its features."""
-    bounds = outline.bounds if outline is not None and not outline.is_empty else None
-    if bounds is None:
-        xs = [w.x1 for w in walls] + [w.x2 for w in walls] + [f.x for f in features]
-        ys = [w.y1 for w in walls] + [w.y2 for w in walls] + [f.y for f in features]
+    if outline is not None and not outline.is_empty:
+        bounds = outline.bounds
+    else:
+        xs = [w.x1 for w in walls] + [w.x2 for w in walls] + [f.x for f in features] or [0.0, 1.0]
+        ys = [w.y1 for w in walls] + [w.y2 for w in walls] + [f.y for f in features] or [0.0, 1.0]
         bounds = (min(xs), min(ys), max(xs), max(ys))
-    width = max(bounds[2] - bounds[0], 1.0)
-    height = max(bounds[3] - bounds[1], 1.0)
-    scale = 14.0 / max(width, height)
-    fig, ax = plt.subplots(figsize=(max(6.0, width * scale + 1.5), max(4.5, height * scale + 1.5)))
-    draw_floorplan(ax, obstacles, walls, outline)
-    draw_features(ax, features)
-    ax.set_aspect("equal")
-    margin = 0.05 * max(width, height)
-    ax.set_xlim(bounds[0] - margin, bounds[2] + margin)
-    ax.set_ylim(bounds[1] - margin, bounds[3] + margin)
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.set_title(title)
-    add_scale_bar(ax, max(width, height))
-    if features:
-        ax.legend(loc="upper right", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
+    canvas = Canvas(bounds)
+    draw_plan(canvas, obstacles, walls, outline)
+    categories = draw_features(canvas, features)
+    counts: dict[str, int] = {}
+    for f in features:
+        counts[f.category] = counts.get(f.category, 0) + 1
+    draw_legend(canvas, categories, counts)
+    draw_scale_bar(canvas, max(bounds[2] - bounds[0], bounds[3] - bounds[1]))
+    cv2.putText(canvas.image, title, (20, 30), _FONT, 0.6, (0, 0, 0), 1, cv2.LINE_AA)
+    north = (30, canvas.image.shape[0] - 30)
+    cv2.arrowedLine(canvas.image, north, (north[0], north[1] - 30), (0, 0, 0), 1, cv2.LINE_AA, tipLength=0.3)
+    cv2.putText(canvas.image, "+y", (north[0] + 6, north[1] - 20), _FONT, 0.45, (0, 0, 0), 1, cv2.LINE_AA)
+    ok, data = cv2.imencode(".png", canvas.image)
+    if not ok:
+        raise RuntimeError(f"could not encode {path}")
+    Path(path).write_bytes(data.tobytes())
+
+
+__all__ = ["CATEGORY_STYLE", "category_style", "render_preview"]

@@ -104,7 +104,9 @@ class SideProbe:
     point: tuple[float, float]
 
 
-def probe_side(regions: FreeRegions, spaces: SpaceIndex, x: float, y: float, direction: np.ndarray) -> SideProbe:
+def probe_side(
+    regions: FreeRegions, spaces: SpaceIndex, x: float, y: float, direction: np.ndarray
+) -> SideProbe:
     label, px, py = regions.probe(x, y, direction)
     return SideProbe(label, spaces.name_at(px, py), (px, py))
 

@@ -84,17 +84,31 @@ def decide_sides(ctx: StoreyContext, doors: list[DoorCandidate]) -> None:
             ctx.regions.doors[label] += 1
     for door in doors:
         door.side, door.rule = choose_side(
-            door.plus, door.minus, ctx.regions, ctx.categories.is_circulation,
+            door.plus,
+            door.minus,
+            ctx.regions,
+            ctx.categories.is_circulation,
             lambda name: _enclosure_space(ctx.categories, name),
         )
 
 
-def _feature(ctx: StoreyContext, guid: str, category: str, front: Front, ifc_class: str, name: str) -> Feature:
+def _feature(
+    ctx: StoreyContext, guid: str, category: str, front: Front, ifc_class: str, name: str
+) -> Feature:
     n = front.normal / max(float(np.hypot(*front.normal)), 1e-12)
     return Feature(
-        id=guid, category=category, x=float(front.point[0]), y=float(front.point[1]),
-        norm_x=float(n[0]), norm_y=float(n[1]), width=float(front.width), height=float(front.height),
-        storey=ctx.name, elevation=ctx.elevation, ifc_class=ifc_class, name=name,
+        id=guid,
+        category=category,
+        x=float(front.point[0]),
+        y=float(front.point[1]),
+        norm_x=float(n[0]),
+        norm_y=float(n[1]),
+        width=float(front.width),
+        height=float(front.height),
+        storey=ctx.name,
+        elevation=ctx.elevation,
+        ifc_class=ifc_class,
+        name=name,
     )
 
 
@@ -114,7 +128,9 @@ def _is_entrance(ctx: StoreyContext, door: DoorCandidate, category: Category, en
         return True
     if category.is_space(door.room.space) and not ctx.categories.is_circulation(door.room.space):
         return True
-    return door.room.label != 0 and door.room.label in enclosures and door.room.label != door.circulation.label
+    return (
+        door.room.label != 0 and door.room.label in enclosures and door.room.label != door.circulation.label
+    )
 
 
 def _best_front(ctx: StoreyContext, footprint: BaseGeometry, exclude: set[int]) -> Front | None:
@@ -130,7 +146,9 @@ def _best_front(ctx: StoreyContext, footprint: BaseGeometry, exclude: set[int]) 
     return best[1] if best else None
 
 
-def storey_features(ctx: StoreyContext, doors: list[DoorCandidate], bodies: list[BodyCandidate]) -> list[Feature]:
+def storey_features(
+    ctx: StoreyContext, doors: list[DoorCandidate], bodies: list[BodyCandidate]
+) -> list[Feature]:
     decide_sides(ctx, doors)
     features: list[Feature] = []
     claimed: set[str] = set()
@@ -139,7 +157,9 @@ def storey_features(ctx: StoreyContext, doors: list[DoorCandidate], bodies: list
             for door in doors:
                 if door.guid not in claimed and category.is_door(door.entity):
                     claimed.add(door.guid)
-                    features.append(_feature(ctx, door.guid, category.name, _door_front(door), door.ifc_class, door.name))
+                    features.append(
+                        _feature(ctx, door.guid, category.name, _door_front(door), door.ifc_class, door.name)
+                    )
             continue
         own_bodies = [b for b in bodies if b.category == category.name]
         enclosure_of = {b.guid: _body_regions(ctx, b, category) for b in own_bodies}
@@ -149,7 +169,9 @@ def storey_features(ctx: StoreyContext, doors: list[DoorCandidate], bodies: list
             if door.guid not in claimed and _is_entrance(ctx, door, category, enclosures):
                 claimed.add(door.guid)
                 entrances.append(door)
-                features.append(_feature(ctx, door.guid, category.name, _door_front(door), door.ifc_class, door.name))
+                features.append(
+                    _feature(ctx, door.guid, category.name, _door_front(door), door.ifc_class, door.name)
+                )
         served: list[BaseGeometry] = []
         for body in own_bodies:
             near = any(

@@ -21,6 +21,7 @@ from bimtools.site.records import Obstacle, WallSegment
 
 _CLOSING = 0.35  # metres: gaps in the envelope up to twice this are closed for the outline
 _COLLINEAR = math.radians(1.0)
+_SLIVER = 2e-4  # metres
 
 
 @dataclass
@@ -49,8 +50,11 @@ class FloorPlan:
             for poly in polygons_of(shape.area):
                 records.append(
                     Obstacle(
-                        self.storey, shape.element, shape.ifc_class,
-                        tuple(poly.exterior.coords), tuple(tuple(r.coords) for r in poly.interiors),
+                        self.storey,
+                        shape.element,
+                        shape.ifc_class,
+                        tuple(poly.exterior.coords),
+                        tuple(tuple(r.coords) for r in poly.interiors),
                     )
                 )
         return records
@@ -114,29 +118,49 @@ def _merge_edges(
     if len(merged) > 1:
         first, last = merged[0], merged[-1]
         if first.element == last.element and _same_direction(last, first):
-            merged[0] = WallSegment(storey, first.element, first.ifc_class, last.x1, last.y1, first.x2, first.y2,
-                                    first.normal)
+            merged[0] = WallSegment(
+                storey, first.element, first.ifc_class, last.x1, last.y1, first.x2, first.y2, first.normal
+            )
             merged.pop()
     return [m for m in merged if m.length > 1e-3]
 
 
 def _same_direction(a: WallSegment, b: WallSegment) -> bool:
-    return abs(math.atan2(a.normal[0] * b.normal[1] - a.normal[1] * b.normal[0],
-                          a.normal[0] * b.normal[0] + a.normal[1] * b.normal[1])) < _COLLINEAR
+    return (
+        abs(
+            math.atan2(
+                a.normal[0] * b.normal[1] - a.normal[1] * b.normal[0],
+                a.normal[0] * b.normal[0] + a.normal[1] * b.normal[1],
+            )
+        )
+        < _COLLINEAR
+    )
 
 
 def _segment(storey: str, start: np.ndarray, end: np.ndarray, owner: ObstacleShape) -> WallSegment:
     dx, dy = float(end[0] - start[0]), float(end[1] - start[1])
     length = math.hypot(dx, dy) or 1.0
     normal = (dy / length, -dx / length)  # right of travel = away from the solid
-    return WallSegment(storey, owner.element, owner.ifc_class, float(start[0]), float(start[1]),
-                       float(end[0]), float(end[1]), normal)
+    return WallSegment(
+        storey,
+        owner.element,
+        owner.ifc_class,
+        float(start[0]),
+        float(start[1]),
+        float(end[0]),
+        float(end[1]),
+        normal,
+    )
 
 
 def build_floorplan(
     storey: str, cut_height: float, obstacles: list[ObstacleShape], spaces: list[BaseGeometry]
 ) -> FloorPlan:
     solid = shapely.union_all([o.area for o in obstacles]) if obstacles else Polygon()
+    # Remove zero-width slits and spikes where touching elements meet, keep corners sharp.
+    solid = (
+        solid.buffer(-_SLIVER, join_style="mitre").buffer(_SLIVER, join_style="mitre").simplify(_SLIVER / 2)
+    )
     outline = building_outline(solid, spaces)
     plan = FloorPlan(storey, cut_height, obstacles, outline, solid)
     plan.walls = wall_surfaces(storey, obstacles, solid)

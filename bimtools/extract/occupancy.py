@@ -27,8 +27,10 @@ class GridFrame:
     def __init__(self, bounds: tuple[float, float, float, float], resolution: float):
         minx, miny, maxx, maxy = bounds
         self.resolution = resolution
-        self.origin = (math.floor((minx - _MARGIN) / resolution) * resolution,
-                       math.floor((miny - _MARGIN) / resolution) * resolution)
+        self.origin = (
+            math.floor((minx - _MARGIN) / resolution) * resolution,
+            math.floor((miny - _MARGIN) / resolution) * resolution,
+        )
         self.cols = int(math.ceil((maxx + _MARGIN - self.origin[0]) / resolution))
         self.rows = int(math.ceil((maxy + _MARGIN - self.origin[1]) / resolution))
 
@@ -42,30 +44,41 @@ class GridFrame:
         return np.full((self.rows, self.cols), value, dtype=np.uint8)
 
 
-def _rings(geometry: BaseGeometry, frame: GridFrame) -> tuple[list[np.ndarray], list[np.ndarray]]:
-    exteriors, holes = [], []
-    for poly in polygons_of(geometry):
-        exteriors.append(frame.to_pixels(np.asarray(poly.exterior.coords)[:, :2]))
-        holes.extend(frame.to_pixels(np.asarray(r.coords)[:, :2]) for r in poly.interiors)
-    return exteriors, holes
+def _pixel_rings(poly, frame: GridFrame) -> tuple[np.ndarray, list[np.ndarray]]:
+    exterior = frame.to_pixels(np.asarray(poly.exterior.coords)[:, :2])
+    holes = [frame.to_pixels(np.asarray(r.coords)[:, :2]) for r in poly.interiors]
+    return exterior, holes
 
 
 def fill(cells: np.ndarray, geometry: BaseGeometry, frame: GridFrame, value: int) -> None:
-    """Fill a polygonal area (holes left as they were)."""
-    exteriors, holes = _rings(geometry, frame)
-    if not exteriors:
-        return
-    mask = np.zeros_like(cells)
-    cv2.fillPoly(mask, exteriors, 1, lineType=cv2.LINE_8, shift=_SHIFT)
-    if holes:
-        cv2.fillPoly(mask, holes, 0, lineType=cv2.LINE_8, shift=_SHIFT)
-    cells[mask == 1] = value
+    """Fill a polygonal area, holes excluded.
+
+    Each polygon is filled on its own: cv2 fills several contours even-odd, which would cancel
+    a part standing inside another part's hole (a block of rooms inside a corridor loop).
+    """
+    for poly in polygons_of(geometry):
+        exterior, holes = _pixel_rings(poly, frame)
+        x, y, w, h = cv2.boundingRect(exterior >> _SHIFT)
+        x0, y0 = max(x - 1, 0), max(y - 1, 0)
+        x1, y1 = min(x + w + 2, cells.shape[1]), min(y + h + 2, cells.shape[0])
+        if x1 <= x0 or y1 <= y0:
+            continue
+        offset = np.array([x0, y0], dtype=np.int32) << _SHIFT
+        mask = np.zeros((y1 - y0, x1 - x0), dtype=np.uint8)
+        cv2.fillPoly(mask, [exterior - offset], 1, lineType=cv2.LINE_8, shift=_SHIFT)
+        if holes:
+            for hole in holes:
+                cv2.fillPoly(mask, [hole - offset], 0, lineType=cv2.LINE_8, shift=_SHIFT)
+        cells[y0:y1, x0:x1][mask == 1] = value
 
 
 def outline(cells: np.ndarray, geometry: BaseGeometry, frame: GridFrame, value: int) -> None:
-    exteriors, holes = _rings(geometry, frame)
-    if exteriors or holes:
-        cv2.polylines(cells, exteriors + holes, True, value, thickness=1, lineType=cv2.LINE_8, shift=_SHIFT)
+    rings: list[np.ndarray] = []
+    for poly in polygons_of(geometry):
+        exterior, holes = _pixel_rings(poly, frame)
+        rings += [exterior, *holes]
+    if rings:
+        cv2.polylines(cells, rings, True, value, thickness=1, lineType=cv2.LINE_8, shift=_SHIFT)
 
 
 def rasterise(plan: FloorPlan, resolution: float) -> tuple[OccupancyGrid, GridFrame]:

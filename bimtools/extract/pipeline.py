@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -32,8 +31,8 @@ OBSTACLE_CLASSES = ("IfcWall", "IfcColumn", "IfcCurtainWall", "IfcDoor", "IfcWin
 CURTAIN_PART_CLASSES = ("IfcPlate", "IfcMember")
 DEFAULT_SECTION_HEIGHT = 1.0
 DEFAULT_RESOLUTION = 0.05
-BODY_BAND = (-0.2, 2.2)
-LIFT_MIN_SPAN = 1.8  # metres a lift body must reach above a storey's floor to serve it  # metres around a storey's elevation where a lift/stair is "on" it
+BODY_BAND = (-0.2, 2.2)  # metres around a storey's elevation where a lift/stair is "on" it
+LIFT_MIN_SPAN = 1.8  # metres a lift body must reach above a storey's floor to serve it
 
 
 @dataclass
@@ -99,7 +98,11 @@ def collect_candidates(model: ifcopenshell.file, categories: CategorySet) -> Can
     for cls in sorted(body_classes):
         for element in model.by_type(cls):
             for cat in categories.categories:
-                if cat.kind in ("lift", "stairs") and cat.is_body(element) and element.id() not in body_category:
+                if (
+                    cat.kind in ("lift", "stairs")
+                    and cat.is_body(element)
+                    and element.id() not in body_category
+                ):
                     body_category[element.id()] = cat.name
                     bodies.append(element)
     unique_doors = list({d.id(): d for d in doors}.values())
@@ -183,6 +186,8 @@ def extract_site(
     model = open_model(path)
     info = describe_model(path, model)
     storeys = list_storeys(model, info.unit_scale)
+    if not storeys:
+        raise InputError(f"{path}: model has no storeys (IfcBuildingStorey)")
     if storey not in (None, "all") and storey not in {s.name for s in storeys}:
         valid = ", ".join(repr(s.name) for s in storeys)
         raise InputError(f"{path}: no storey {storey!r}; valid storeys: {valid}")
@@ -194,8 +199,9 @@ def extract_site(
     for s in storeys:
         if storey not in (None, "all") and s.name != storey:
             continue
-        storey_result = _extract_storey(s, storeys, candidates, meshes, where, categories, section_height,
-                                        resolution, info.unit_scale)
+        storey_result = _extract_storey(
+            s, storeys, candidates, meshes, where, categories, section_height, resolution, info.unit_scale
+        )
         if storey_result.features or storey is not None:
             result.storeys.append(storey_result)
     if not result.features:
@@ -240,7 +246,9 @@ def _extract_storey(
 
     plan = build_floorplan(s.name, cut, obstacles, space_areas)
     grid, _ = rasterise(plan, resolution)
-    ctx = StoreyContext(s.name, s.elevation, FreeRegions(grid), SpaceIndex(space_names, space_areas), categories)
+    ctx = StoreyContext(
+        s.name, s.elevation, FreeRegions(grid), SpaceIndex(space_names, space_areas), categories
+    )
 
     doors: list[DoorCandidate] = []
     for element in candidates.doors:
@@ -259,8 +267,17 @@ def _extract_storey(
     for entity, name, area in zip(space_entities, space_names, space_areas, strict=True):
         for cat in categories.categories:
             if cat.kind in ("lift", "stairs") and cat.is_space(name) and not categories.is_circulation(name):
-                bodies.append(BodyCandidate(entity.GlobalId, entity.is_a(), name, cat.name, area, _area_points(area),
-                                            starts_here=cat.kind == "lift"))
+                bodies.append(
+                    BodyCandidate(
+                        entity.GlobalId,
+                        entity.is_a(),
+                        name,
+                        cat.name,
+                        area,
+                        _area_points(area),
+                        starts_here=cat.kind == "lift",
+                    )
+                )
                 break
     features = storey_features(ctx, doors, bodies)
     order = {c.name: i for i, c in enumerate(categories.categories)}
@@ -306,7 +323,16 @@ def _bodies_on_storey(
         footprint = shapely.convex_hull(shapely.multipoints(points))
         starts_here = storey_at_elevation(storeys, zmin) is s
         bodies.append(
-            BodyCandidate(element.GlobalId, element.is_a(), element_name(element), category, footprint, points,
-                          parts=parts, starts_here=starts_here, height=min(zmax - zmin, 2.1) if zmax > zmin else 2.1)
+            BodyCandidate(
+                element.GlobalId,
+                element.is_a(),
+                element_name(element),
+                category,
+                footprint,
+                points,
+                parts=parts,
+                starts_here=starts_here,
+                height=min(zmax - zmin, 2.1) if zmax > zmin else 2.1,
+            )
         )
     return bodies

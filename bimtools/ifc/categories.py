@@ -113,7 +113,9 @@ def _rule(doc: object, where: str) -> ElementRule:
         raise InputError(f"{where}: a rule needs at least one of classes, predefined_types, text")
     return ElementRule(
         classes=classes,
-        predefined_types=tuple(t.upper() for t in _names(doc.get("predefined_types"), f"{where}.predefined_types")),
+        predefined_types=tuple(
+            t.upper() for t in _names(doc.get("predefined_types"), f"{where}.predefined_types")
+        ),
         text=_regex(doc.get("text"), f"{where}.text"),
         not_text=_regex(doc.get("not_text"), f"{where}.not_text"),
     )
@@ -174,5 +176,7 @@ def load_categories(path: Path | None = None) -> CategorySet:
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         line = f":{mark.line + 1}" if mark is not None else ""
-        raise InputError(f"{path}{line}: invalid YAML in categories file ({getattr(exc, 'problem', exc)})") from None
+        raise InputError(
+            f"{path}{line}: invalid YAML in categories file ({getattr(exc, 'problem', exc)})"
+        ) from None
     return parse_categories(doc, str(path))

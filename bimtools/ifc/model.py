@@ -41,8 +41,14 @@ def open_model(path: Path) -> ifcopenshell.file:
         raise InputError(f"{path}: is a folder, expected an .ifc file")
     with open(path, "rb") as handle:
         head = handle.read(64)
+        handle.seek(0, 2)
+        size = handle.tell()
+        handle.seek(max(0, size - 1024))
+        tail = handle.read()
     if not head.lstrip().startswith(b"ISO-10303-21"):
         raise InputError(f"{path}: not an IFC file (no ISO-10303-21 header)")
+    if b"END-ISO-10303-21" not in tail:
+        raise InputError(f"{path}: truncated IFC file (no END-ISO-10303-21 at the end)")
     try:
         model = ifcopenshell.open(str(path))
     except Exception as exc:  # ifcopenshell raises a variety of types for parse errors
@@ -52,7 +58,9 @@ def open_model(path: Path) -> ifcopenshell.file:
         raise InputError(f"{path}: cannot parse IFC file ({text}); is it truncated?") from None
     schema = model.schema_identifier if hasattr(model, "schema_identifier") else model.schema
     if not any(str(schema).upper().startswith(s) for s in SUPPORTED_SCHEMAS):
-        raise InputError(f"{path}: unsupported IFC schema {schema}; supported: {', '.join(SUPPORTED_SCHEMAS)}")
+        raise InputError(
+            f"{path}: unsupported IFC schema {schema}; supported: {', '.join(SUPPORTED_SCHEMAS)}"
+        )
     if not model.by_type("IfcProject"):
         raise InputError(f"{path}: IFC file has no IfcProject; is it truncated?")
     return model

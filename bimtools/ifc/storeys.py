@@ -9,8 +9,6 @@ import ifcopenshell
 import ifcopenshell.util.element
 import ifcopenshell.util.placement
 
-from bimtools.errors import InputError
-
 
 @dataclass
 class Storey:
@@ -42,8 +40,6 @@ def list_storeys(model: ifcopenshell.file, scale: float) -> list[Storey]:
     without an elevation are common in files from some tools).
     """
     entities = model.by_type("IfcBuildingStorey")
-    if not entities:
-        raise InputError("model has no IfcBuildingStorey")
     storeys: list[Storey] = []
     for index, entity in enumerate(entities):
         elevation: float | None = None
@@ -56,10 +52,14 @@ def list_storeys(model: ifcopenshell.file, scale: float) -> list[Storey]:
                 elevation = placed
         else:
             elevation = _placement_z(entity, scale)
-        name = (entity.Name or entity.LongName or f"Storey {index + 1}").strip() if hasattr(entity, "LongName") else (
-            entity.Name or f"Storey {index + 1}"
+        name = (
+            (entity.Name or entity.LongName or f"Storey {index + 1}").strip()
+            if hasattr(entity, "LongName")
+            else (entity.Name or f"Storey {index + 1}")
         )
-        storeys.append(Storey(name=name, elevation=elevation if elevation is not None else float("nan"), entity=entity))
+        storeys.append(
+            Storey(name=name, elevation=elevation if elevation is not None else float("nan"), entity=entity)
+        )
     # Storeys with neither Elevation nor placement keep file order, spaced 3 m apart.
     for index, storey in enumerate(storeys):
         if storey.elevation != storey.elevation:  # NaN

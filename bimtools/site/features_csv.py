@@ -23,8 +23,18 @@ def format_features(features: Iterable[Feature]) -> str:
     for f in features:
         writer.writerow(
             [
-                f.id, f.category, f"{f.x:.4f}", f"{f.y:.4f}", f"{round(f.norm_x, 6) + 0.0:.6f}", f"{round(f.norm_y, 6) + 0.0:.6f}",
-                f"{f.width:.3f}", f"{f.height:.3f}", f.storey, f"{f.elevation:.4f}", f.ifc_class, f.name,
+                f.id,
+                f.category,
+                f"{f.x:.4f}",
+                f"{f.y:.4f}",
+                f"{round(f.norm_x, 6) + 0.0:.6f}",
+                f"{round(f.norm_y, 6) + 0.0:.6f}",
+                f"{f.width:.3f}",
+                f"{f.height:.3f}",
+                f.storey,
+                f"{f.elevation:.4f}",
+                f.ifc_class,
+                f.name,
             ]
         )
     return out.getvalue()
@@ -55,7 +65,9 @@ def read_features(path: Path) -> list[Feature]:
     header = [h.strip() for h in (reader.fieldnames or [])]
     missing = [c for c in TABLE1_COLUMNS if c not in header]
     if missing:
-        raise InputError(f"{path}:1: missing column(s) {', '.join(missing)} (Table 1 needs {','.join(TABLE1_COLUMNS)})")
+        raise InputError(
+            f"{path}:1: missing column(s) {', '.join(missing)} (Table 1 needs {','.join(TABLE1_COLUMNS)})"
+        )
     reader.fieldnames = header
     features: list[Feature] = []
     for row in reader:
@@ -83,7 +95,9 @@ def read_features(path: Path) -> list[Feature]:
                 width=_number(path, line, "Width", values["Width"]),
                 height=_number(path, line, "Height", values["Height"]),
                 storey=values["Storey"],
-                elevation=_number(path, line, "Elevation", values["Elevation"]) if values["Elevation"] else 0.0,
+                elevation=_number(path, line, "Elevation", values["Elevation"])
+                if values["Elevation"]
+                else 0.0,
                 ifc_class=values["IfcClass"],
                 name=values["Name"],
             )

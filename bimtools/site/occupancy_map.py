@@ -28,7 +28,8 @@ class OccupancyGrid:
     origin: tuple[float, float, float]
     negate: int = 0
     occupied_thresh: float = 0.65
-    free_thresh: float = 0.25
+    # 0.196, not 0.25: with 0.25 the unknown value 205 ((255-205)/255 = 0.196) would load as free.
+    free_thresh: float = 0.196
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -131,5 +132,5 @@ def read_map(yaml_path: Path) -> OccupancyGrid:
         origin=tuple(float(v) for v in meta["origin"]),  # type: ignore[arg-type]
         negate=int(meta.get("negate", 0)),
         occupied_thresh=float(meta.get("occupied_thresh", 0.65)),
-        free_thresh=float(meta.get("free_thresh", 0.25)),
+        free_thresh=float(meta.get("free_thresh", 0.196)),
     )

@@ -24,7 +24,10 @@ def walls_to_geojson(walls: Iterable[WallSegment], obstacles: Iterable[Obstacle]
         features.append(
             {
                 "type": "Feature",
-                "geometry": {"type": "LineString", "coordinates": [[_r(w.x1), _r(w.y1)], [_r(w.x2), _r(w.y2)]]},
+                "geometry": {
+                    "type": "LineString",
+                    "coordinates": [[_r(w.x1), _r(w.y1)], [_r(w.x2), _r(w.y2)]],
+                },
                 "properties": {
                     "kind": "wall_surface",
                     "storey": w.storey,
@@ -40,14 +43,21 @@ def walls_to_geojson(walls: Iterable[WallSegment], obstacles: Iterable[Obstacle]
             {
                 "type": "Feature",
                 "geometry": {"type": "Polygon", "coordinates": rings},
-                "properties": {"kind": "obstacle", "storey": o.storey, "element": o.element, "ifc_class": o.ifc_class},
+                "properties": {
+                    "kind": "obstacle",
+                    "storey": o.storey,
+                    "element": o.element,
+                    "ifc_class": o.ifc_class,
+                },
             }
         )
     return {"type": "FeatureCollection", "features": features}
 
 
 def write_walls(path: Path, walls: Iterable[WallSegment], obstacles: Iterable[Obstacle]) -> None:
-    Path(path).write_text(json.dumps(walls_to_geojson(walls, obstacles), separators=(",", ":")), encoding="utf-8")
+    Path(path).write_text(
+        json.dumps(walls_to_geojson(walls, obstacles), separators=(",", ":")), encoding="utf-8"
+    )
 
 
 def read_walls(path: Path, storey: str | None = None) -> tuple[list[WallSegment], list[Obstacle]]:
@@ -74,15 +84,26 @@ def read_walls(path: Path, storey: str | None = None) -> tuple[list[WallSegment]
                 nx, ny = props["normal"]
                 walls.append(
                     WallSegment(
-                        props.get("storey", ""), props.get("element", ""), props.get("ifc_class", ""),
-                        float(x1), float(y1), float(x2), float(y2), (float(nx), float(ny)),
+                        props.get("storey", ""),
+                        props.get("element", ""),
+                        props.get("ifc_class", ""),
+                        float(x1),
+                        float(y1),
+                        float(x2),
+                        float(y2),
+                        (float(nx), float(ny)),
                     )
                 )
             elif geom["type"] == "Polygon":
                 rings = [tuple((float(x), float(y)) for x, y in ring) for ring in geom["coordinates"]]
                 obstacles.append(
-                    Obstacle(props.get("storey", ""), props.get("element", ""), props.get("ifc_class", ""),
-                             rings[0], tuple(rings[1:]))
+                    Obstacle(
+                        props.get("storey", ""),
+                        props.get("element", ""),
+                        props.get("ifc_class", ""),
+                        rings[0],
+                        tuple(rings[1:]),
+                    )
                 )
         except (KeyError, TypeError, ValueError) as exc:
             raise InputError(f"{path}: features[{index}]: malformed wall or obstacle ({exc})") from None

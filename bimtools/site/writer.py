@@ -22,8 +22,15 @@ def build_manifest(site: ExtractedSite, files: list[str]) -> SiteManifest:
         for f in result.features:
             counts[f.category] = counts.get(f.category, 0) + 1
         slug = result.storey.slug
-        storeys.append(StoreyInfo(result.storey.name, round(result.storey.elevation, 4), counts,
-                                  f"map_{slug}.yaml", f"preview_{slug}.png"))
+        storeys.append(
+            StoreyInfo(
+                result.storey.name,
+                round(result.storey.elevation, 4),
+                counts,
+                f"map_{slug}.yaml",
+                f"preview_{slug}.png",
+            )
+        )
     return SiteManifest(
         source_file=site.info.path.name,
         source_sha256=site.info.sha256,
@@ -55,7 +62,9 @@ def write_site(outdir: Path, site: ExtractedSite, preview: bool = True) -> SiteM
                 render_preview(
                     stage / f"preview_{slug}.png",
                     f"{site.info.path.name} - {result.storey.name} (cut at {result.plan.cut_height:.2f} m)",
-                    [o.area for o in result.plan.obstacles], result.plan.walls, result.features,
+                    [o.area for o in result.plan.obstacles],
+                    result.plan.walls,
+                    result.features,
                     result.plan.outline,
                 )
                 files.append(f"preview_{slug}.png")
