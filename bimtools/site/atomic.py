@@ -27,7 +27,10 @@ def staged_directory(target: Path) -> Iterator[Path]:
         raise
     target.mkdir(exist_ok=True)
     for item in stage.iterdir():
-        os.replace(item, target / item.name)
+        destination = target / item.name
+        if destination.is_dir() and not destination.is_symlink():
+            shutil.rmtree(destination)
+        os.replace(item, destination)
     shutil.rmtree(stage, ignore_errors=True)
 
 

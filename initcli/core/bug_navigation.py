@@ -1,0 +1,66 @@
+"""BIM-based active exploration: drive to a target with the modified bug algorithm (§3.3.3).
+
+Turn toward the target (Eq. 15-16) and drive straight; when an obstacle blocks the way, follow
+its wall on the side that keeps the target closest; leave the wall when the target is in line of
+sight and closer than where the wall was met.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from initcli.core.geometry import Pose2D, wrap_angle
+from initcli.core.wall_following import ScanView, WallFollowParams, wall_follow
+
+
+@dataclass(frozen=True)
+class BugParams:
+    arrive: float = 0.5  # m: target reached
+    yaw_tolerance: float = math.radians(20)  # turn in place above this heading error
+    k_yaw: float = 1.5
+    follow: WallFollowParams = field(default_factory=WallFollowParams)
+
+
+@dataclass
+class BugNavigator:
+    """Small state machine: ``go`` straight to the target, or ``follow`` a wall around an obstacle."""
+
+    target: np.ndarray  # (x, y) in the odom frame
+    params: BugParams = field(default_factory=BugParams)
+    mode: str = "go"
+    side: int = 1
+    hit_distance: float = math.inf
+
+    def step(self, pose: Pose2D, scan: ScanView) -> tuple[float, float, bool]:
+        """(v, w, arrived)."""
+        p = self.params
+        dx, dy = float(self.target[0] - pose.x), float(self.target[1] - pose.y)
+        distance = math.hypot(dx, dy)
+        if distance < p.arrive:
+            return 0.0, 0.0, True
+        yaw_d = math.atan2(dy, dx)  # Eq. 15
+        d_yaw = float(wrap_angle(yaw_d - pose.yaw))  # Eq. 16
+        fp = p.follow
+        if self.mode == "follow":
+            clear = scan.sector_min(d_yaw - 0.15, d_yaw + 0.15, default=math.inf)
+            if distance < self.hit_distance - 0.3 and clear > min(distance, 3.0):
+                self.mode = "go"
+            else:
+                v, w = wall_follow(scan, self.side, fp)
+                return v, w, False
+        if scan.front() < fp.front_stop + 0.1 and abs(d_yaw) < math.pi / 2 and scan.front() < distance:
+            self.mode = "follow"
+            self.side = 1 if d_yaw <= 0 else -1  # target to the right: keep the obstacle on the left
+            self.hit_distance = distance
+            v, w = wall_follow(scan, self.side, fp)
+            return v, w, False
+        if abs(d_yaw) > p.yaw_tolerance:
+            return 0.0, math.copysign(fp.max_turn * min(1.0, abs(d_yaw) / 0.6 + 0.3), d_yaw), False
+        speed = fp.speed * float(
+            np.clip((scan.front() - fp.front_stop) / (fp.slow_down - fp.front_stop), 0.3, 1.0)
+        )
+        speed = min(speed, max(0.15, distance))
+        return speed, float(np.clip(p.k_yaw * d_yaw, -fp.max_turn, fp.max_turn)), False

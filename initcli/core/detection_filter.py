@@ -1,0 +1,245 @@
+"""Detection filter (§3.3.1, §3.3.4): raw per-image sightings -> confirmed features S_object (Eq. 3).
+
+Rules, applied to the sightings in time order:
+
+1. A sighting is used only if its score is >= ``score_threshold``, its depth lies in
+   ``[min_depth, max_depth]`` (depth noise grows with range; zero/invalid depth is dropped) and
+   its box does not touch or cross the left/right image border (within ``edge_margin`` px): a
+   box cut by the border has its centre off the object's centre, which biases Eq. 1 sideways.
+2. It joins the nearest *track* of the same class whose mean position is within
+   ``merge_radius``; otherwise it starts a new track. One image adds at most one sighting to a
+   track (two boxes on one door in the same image count once).
+3. A track is *confirmed* when it has ``min_sightings`` sightings (k), at the time of that
+   sighting. S_object is ordered by confirmation time (Eq. 3), ties by creation order.
+4. Duplicate suppression: when two same-class tracks drift to within ``merge_radius`` of each
+   other they are merged into the older one (sightings summed; the earlier confirmation kept).
+5. ``feature`` records of the log (a robot that aggregates itself) are confirmed at their time
+   with their given position, which later sightings do not move.
+
+Positions are the mean of the sightings' odom positions (Eq. 1-2 results).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class FilterParams:
+    """Documented defaults of the detection filter."""
+
+    merge_radius: float = 1.0  # m: same-class sightings closer than this are the same feature
+    min_sightings: int = 3  # k: sightings needed to confirm a feature
+    score_threshold: float = 0.5  # detector score below this is ignored
+    min_depth: float = 0.1  # m: depth window readings outside [min, max] are ignored
+    max_depth: float = 10.0  # m
+    edge_margin: float = 2.0  # px: boxes this close to the left/right border are truncated; < 0 keeps them
+
+
+@dataclass(frozen=True)
+class Sighting:
+    """One detected object localised in the odom frame by Eq. 1-2."""
+
+    t: float
+    cls: str
+    x: float
+    y: float
+    score: float = 1.0
+    depth: float = 1.0
+    frame: int = -1  # index of the image (detections record); -1: unknown
+    truncated: bool = False  # the box touches the left/right image border (see is_truncated)
+
+
+@dataclass(frozen=True)
+class GivenFeature:
+    """An already aggregated feature (log record ``feature``)."""
+
+    t: float
+    cls: str
+    x: float
+    y: float
+
+
+@dataclass(frozen=True)
+class ConfirmedFeature:
+    """A confirmed detected feature s_i of S_object (Eq. 3), in the odom frame."""
+
+    index: int  # position in S_object (0-based)
+    cls: str
+    x: float
+    y: float
+    sightings: int
+    t_first: float
+    t_confirmed: float
+    given: bool = False  # True if it came from a ``feature`` record
+
+    @property
+    def xy(self) -> np.ndarray:
+        return np.array([self.x, self.y])
+
+
+@dataclass
+class _Track:
+    cls: str
+    sum_x: float
+    sum_y: float
+    n: int
+    t_first: float
+    created: int
+    last_frame: int
+    confirmed_at: float | None = None
+    fixed: tuple[float, float] | None = None
+    frames: set[int] = field(default_factory=set)
+    n_pos: int = 1  # positions summed in sum_x, sum_y (n counts sightings: one per image)
+
+    @property
+    def pos(self) -> tuple[float, float]:
+        if self.fixed is not None:
+            return self.fixed
+        return self.sum_x / self.n_pos, self.sum_y / self.n_pos
+
+
+@dataclass
+class FilterResult:
+    features: list[ConfirmedFeature]
+    used: int = 0
+    rejected_score: int = 0
+    rejected_depth: int = 0
+    rejected_truncated: int = 0
+    unconfirmed_tracks: int = 0
+
+
+def is_truncated(bbox: Sequence[float], image_width: float, margin: float) -> bool:
+    """Does the box ``[u1, v1, u2, v2]`` touch or cross the left or right image border?"""
+    return bool(margin >= 0 and (bbox[0] <= margin or bbox[2] >= image_width - margin))
+
+
+def filter_detections(
+    sightings: Iterable[Sighting],
+    params: FilterParams | None = None,
+    given: Sequence[GivenFeature] = (),
+) -> FilterResult:
+    """Aggregate sightings (and given features) into S_object, ordered by confirmation time."""
+    p = params or FilterParams()
+    k = max(1, int(p.min_sightings))
+    events: list[tuple[float, int, object]] = []
+    for order, s in enumerate(sightings):
+        events.append((s.t, 1, (order, s)))
+    for order, g in enumerate(given):
+        events.append((g.t, 0, (order, g)))
+    events.sort(key=lambda e: (e[0], e[1], e[2][0]))  # type: ignore[index]
+
+    tracks: list[_Track] = []
+    result = FilterResult(features=[])
+    created = 0
+    for _t, kind, (_order, item) in events:  # type: ignore[misc]
+        if kind == 0:
+            g: GivenFeature = item  # type: ignore[assignment]
+            track = _nearest(tracks, g.cls, g.x, g.y, p.merge_radius, frame=None)
+            if track is None:
+                tracks.append(
+                    _Track(g.cls, g.x, g.y, k, g.t, created, -1, confirmed_at=g.t, fixed=(g.x, g.y))
+                )
+                created += 1
+            else:
+                track.fixed = (g.x, g.y)
+                track.n = max(track.n, k)
+                if track.confirmed_at is None:
+                    track.confirmed_at = g.t
+            continue
+        s: Sighting = item  # type: ignore[assignment]
+        if not (s.score >= p.score_threshold):
+            result.rejected_score += 1
+            continue
+        if not (math.isfinite(s.depth) and p.min_depth <= s.depth <= p.max_depth):
+            result.rejected_depth += 1
+            continue
+        if s.truncated and p.edge_margin >= 0:
+            result.rejected_truncated += 1
+            continue
+        result.used += 1
+        track = _nearest(tracks, s.cls, s.x, s.y, p.merge_radius, frame=s.frame)
+        if track is None:
+            track = _Track(s.cls, s.x, s.y, 1, s.t, created, s.frame, frames={s.frame})
+            created += 1
+            tracks.append(track)
+        else:
+            track.sum_x += s.x
+            track.sum_y += s.y
+            track.n_pos += 1
+            track.n += 1
+            track.last_frame = s.frame
+            track.frames.add(s.frame)
+        if track.confirmed_at is None and track.n >= k:
+            track.confirmed_at = s.t
+        _suppress_duplicates(tracks, track, p.merge_radius, s.t, k)
+
+    confirmed = [tr for tr in tracks if tr.confirmed_at is not None]
+    confirmed.sort(key=lambda tr: (tr.confirmed_at, tr.created))
+    result.unconfirmed_tracks = len(tracks) - len(confirmed)
+    for i, tr in enumerate(confirmed):
+        x, y = tr.pos
+        result.features.append(
+            ConfirmedFeature(
+                index=i,
+                cls=tr.cls,
+                x=float(x),
+                y=float(y),
+                sightings=int(tr.n),
+                t_first=float(tr.t_first),
+                t_confirmed=float(tr.confirmed_at),
+                given=tr.fixed is not None,  # type: ignore[arg-type]
+            )
+        )
+    return result
+
+
+def _nearest(
+    tracks: list[_Track], cls: str, x: float, y: float, radius: float, frame: int | None
+) -> _Track | None:
+    best: _Track | None = None
+    best_d = radius
+    for tr in tracks:
+        if tr.cls != cls:
+            continue
+        if frame is not None and frame >= 0 and frame in tr.frames:
+            continue  # one sighting per image per track
+        tx, ty = tr.pos
+        d = math.hypot(tx - x, ty - y)
+        if d <= best_d:
+            best, best_d = tr, d
+    return best
+
+
+def _suppress_duplicates(tracks: list[_Track], moved: _Track, radius: float, t: float, k: int) -> None:
+    """Merge same-class tracks that came within ``radius`` of ``moved`` into the older one."""
+    while True:
+        mx, my = moved.pos
+        other = None
+        for tr in tracks:
+            if tr is moved or tr.cls != moved.cls:
+                continue
+            tx, ty = tr.pos
+            if math.hypot(tx - mx, ty - my) <= radius:
+                other = tr
+                break
+        if other is None:
+            return
+        keep, drop = (moved, other) if moved.created < other.created else (other, moved)
+        keep.sum_x += drop.sum_x
+        keep.sum_y += drop.sum_y
+        keep.n_pos += drop.n_pos
+        shared = len((keep.frames & drop.frames) - {-1})  # one sighting per image, also after a merge
+        keep.n += drop.n - shared
+        keep.frames |= drop.frames
+        keep.t_first = min(keep.t_first, drop.t_first)
+        if keep.fixed is None:
+            keep.fixed = drop.fixed
+        times = [c for c in (keep.confirmed_at, drop.confirmed_at) if c is not None]
+        keep.confirmed_at = min(times) if times else (t if keep.n >= k else None)
+        tracks.remove(drop)
+        moved = keep

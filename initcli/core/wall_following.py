@@ -1,0 +1,103 @@
+"""Wall following on a 2D laser scan (§3.3.4 random exploration, §3.3.3 obstacle avoidance).
+
+The controller tracks the nearest obstacle point on the followed side: it keeps that point at
+the desired distance and straight abeam (90 degrees). With the left wall followed this turns
+right at an inner corner (the nearest point moves ahead) and left around an outer corner (the
+corner becomes the nearest point and drifts behind), as the paper's random exploration does.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from initcli.core.geometry import wrap_angle
+
+
+@dataclass(frozen=True)
+class WallFollowParams:
+    distance: float = 0.7  # m kept to the followed wall
+    speed: float = 0.5  # m/s cruise
+    max_turn: float = 1.0  # rad/s
+    front_stop: float = 0.6  # m: closer than this ahead -> turn in place away from the wall
+    slow_down: float = 1.2  # m: speed falls off linearly inside this distance ahead
+    k_distance: float = 1.5
+    k_angle: float = 1.8
+    lost: float = 2.0  # m: no wall point this close on the side -> arc toward it
+
+
+@dataclass(frozen=True)
+class ScanView:
+    """Valid beams of a scan in the robot frame."""
+
+    angles: np.ndarray
+    ranges: np.ndarray
+
+    @staticmethod
+    def of(angles: np.ndarray, ranges: np.ndarray, max_range: float) -> ScanView:
+        ok = np.isfinite(ranges) & (ranges > 0.05) & (ranges < max_range - 1e-6)
+        return ScanView(np.asarray(wrap_angle(angles[ok])), ranges[ok])
+
+    def sector_min(self, lo: float, hi: float, default: float = math.inf) -> float:
+        mask = (self.angles >= lo) & (self.angles <= hi)
+        return float(self.ranges[mask].min()) if mask.any() else default
+
+    def front(self, half_width: float = 0.35) -> float:
+        """Distance ahead within a corridor of ``half_width`` metres (robot width + margin)."""
+        x = self.ranges * np.cos(self.angles)
+        y = self.ranges * np.sin(self.angles)
+        mask = (x > 0) & (np.abs(y) <= half_width)
+        return float(x[mask].min()) if mask.any() else math.inf
+
+
+def wall_follow(scan: ScanView, side: int, p: WallFollowParams) -> tuple[float, float]:
+    """Velocity command (v, w) that follows the wall on ``side`` (+1 left, -1 right)."""
+    front = scan.front()
+    if front < p.front_stop:
+        return 0.0, -side * p.max_turn
+    phi = side * scan.angles  # bearing measured toward the followed side
+    mask = (phi > -math.radians(20)) & (phi < math.radians(170))
+    speed = p.speed * float(
+        np.clip((front - p.front_stop) / max(p.slow_down - p.front_stop, 1e-6), 0.25, 1.0)
+    )
+    if not mask.any() or scan.ranges[mask].min() > p.lost:
+        # Lost the wall (outer corner or open space): arc toward the followed side.
+        return speed * 0.6, side * min(p.max_turn, 0.6 * speed / max(p.distance, 0.1))
+    i = int(np.argmin(np.where(mask, scan.ranges, np.inf)))
+    d, bearing = float(scan.ranges[i]), float(phi[i])
+    turn = p.k_angle * (bearing - math.pi / 2) + p.k_distance * (d - p.distance)
+    w = float(np.clip(side * turn, -p.max_turn, p.max_turn))
+    v = speed * max(0.3, 1.0 - abs(w) / (2 * p.max_turn))
+    return v, w
+
+
+@dataclass
+class MovingObstacleWait:
+    """Stop for people: when something blocks the way, watch it for a moment before turning away.
+
+    A wall ahead keeps its distance while the robot stands still; a worker walking by does not.
+    The robot waits while the distance ahead keeps changing (up to ``max_wait`` seconds).
+    """
+
+    watch: float = 0.6  # s standing still to tell a wall from a person
+    max_wait: float = 6.0  # s
+    moving: float = 0.04  # m change of the distance ahead that counts as motion
+    since: float | None = None
+    first: float = 0.0
+
+    def hold(self, t: float, front: float, stop: float) -> bool:
+        """True while the robot should stand still and wait."""
+        if front >= stop:
+            self.since = None
+            return False
+        if self.since is None:
+            self.since, self.first = t, front
+            return True
+        waited = t - self.since
+        if waited < self.watch:
+            return True
+        if abs(front - self.first) > self.moving and waited < self.max_wait:
+            return True
+        return False

@@ -1,0 +1,104 @@
+"""The embedded robot: a simulator built from the BIM, behind the :class:`RobotDriver` interface.
+
+Differential drive at 10 Hz in the storey's walls, drifting wheel odometry, a 2D lidar ray-cast
+against walls, clutter and workers, and a camera + detector reporting detections at its rate.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from initcli.core.geometry import Pose2D
+from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.drivers.base import LaserScan, SensorFrame
+from initcli.io.detection_log import DetectedObject
+from initcli.sim.robot import DiffDriveRobot
+from initcli.sim.world import SimWorld
+
+CONTROL_RATE = 10.0  # Hz
+
+
+@dataclass(frozen=True)
+class LidarSpec:
+    beams: int = 360
+    fov: float = 2 * math.pi
+    max_range: float = 20.0
+    noise: float = 0.02
+    dropout: float = 0.01
+
+    @property
+    def angle_min(self) -> float:
+        return -self.fov / 2
+
+    @property
+    def angle_increment(self) -> float:
+        full = abs(self.fov - 2 * math.pi) < 1e-9
+        return self.fov / (self.beams if full else max(self.beams - 1, 1))
+
+
+Detector = Callable[[Pose2D, float], list[DetectedObject]]
+
+
+class SimDriver:
+    """Commands in; odometry, scans and detections out (see :class:`initcli.drivers.base.RobotDriver`)."""
+
+    control_rate = CONTROL_RATE
+
+    def __init__(self, world: SimWorld, robot: DiffDriveRobot, lidar: LidarSpec, camera: CameraIntrinsics,
+                 mount: CameraMount, detector: Detector, detector_rate: float, max_linear: float,
+                 max_angular: float, rng: np.random.Generator, depth_window: int = 2):
+        self.world = world
+        self.robot = robot
+        self.lidar = lidar
+        self.camera = camera
+        self.mount = mount
+        self.detector = detector
+        self.image_every = max(1, round(CONTROL_RATE / detector_rate))
+        self.max_linear = max_linear
+        self.max_angular = max_angular
+        self.rng = rng
+        self.depth_window = depth_window
+        self.t = 0.0
+        self.steps = 0
+        self._angles = lidar.angle_min + lidar.angle_increment * np.arange(lidar.beams)
+
+    @property
+    def distance(self) -> float:
+        return self.robot.distance
+
+    def scan(self) -> LaserScan:
+        p = self.robot.pose
+        ranges = self.world.raycast(np.array([p.x, p.y]), self._angles + p.yaw, self.lidar.max_range, self.t)
+        hit = ranges < self.lidar.max_range
+        noisy = ranges + self.rng.normal(0.0, self.lidar.noise, len(ranges)) * hit
+        noisy = np.where(hit, np.clip(noisy, 0.05, self.lidar.max_range - 1e-3), self.lidar.max_range)
+        if self.lidar.dropout > 0:
+            noisy = np.where(self.rng.random(len(noisy)) < self.lidar.dropout, self.lidar.max_range, noisy)
+        return LaserScan(self.lidar.angle_min, self.lidar.angle_increment, self.lidar.max_range, noisy)
+
+    def _frame(self) -> SensorFrame:
+        detections = None
+        if self.steps % self.image_every == 0:
+            detections = self.detector(self.robot.pose, self.t)
+        return SensorFrame(self.t, self.robot.odom, self.scan(), detections, self.robot.pose)
+
+    def start(self) -> SensorFrame:
+        return self._frame()
+
+    def step(self, v: float, w: float) -> SensorFrame:
+        v = float(np.clip(v, -self.max_linear, self.max_linear))
+        w = float(np.clip(w, -self.max_angular, self.max_angular))
+        dt = 1.0 / CONTROL_RATE
+        target = self.robot.proposed(v, w, dt)
+        if abs(v) > 1e-9 and self.world.clearance(target.x, target.y, self.t, 1.0) < self.robot.radius:
+            # Bumped: only the rotation happens.
+            target = Pose2D(self.robot.pose.x, self.robot.pose.y, target.yaw)
+            self.robot.collisions += 1
+        self.robot.move_to(target)
+        self.t += dt
+        self.steps += 1
+        return self._frame()

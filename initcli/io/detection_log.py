@@ -1,0 +1,511 @@
+"""The detection log, version 1: JSON Lines, one record per line, ordered by time ``t`` (seconds).
+
+Schema: ``schemas/detection_log.schema.json`` (one line = one instance). Records:
+
+- ``meta`` (first line): version 1, frame ``odom``, camera intrinsics, camera pose on the robot,
+  optional ``depth_window`` n and ``source``.
+- ``odom``: robot pose (x, y, yaw) in the odometry frame (origin: start pose, x: initial heading).
+- ``detections``: one image's raw detector output, with the odom pose when it was taken; each
+  object has ``class``, ``score``, ``bbox`` [u1, v1, u2, v2] and ``depth`` (mean over the
+  (2n+1)x(2n+1) window at the box centre).
+- ``feature`` (optional): an already aggregated feature in the odom frame.
+- ``scan`` (optional), ``truth`` (optional, simulation only: true pose in the BIM frame).
+- ``state``, ``hypotheses`` (optional, written by ``bim-init run``): kept as plain data.
+
+Unknown record types are skipped with one warning (forward compatibility); unknown keys in a
+known record are ignored. A malformed line raises :class:`bimtools.errors.InputError` naming
+``file:line`` and the problem, or is skipped and counted with ``skip_bad=True``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO, Any, Union
+
+from bimtools.errors import InputError
+from initcli.core.geometry import Pose2D
+from initcli.core.projection import CameraIntrinsics, CameraMount
+
+LOG_VERSION = 1
+RECORD_TYPES = ("meta", "odom", "detections", "feature", "scan", "truth", "state", "hypotheses")
+
+
+@dataclass(frozen=True)
+class Meta:
+    camera: CameraIntrinsics
+    camera_pose: CameraMount
+    version: int = LOG_VERSION
+    frame: str = "odom"
+    depth_window: int | None = None
+    source: str | None = None
+
+
+@dataclass(frozen=True)
+class Odom:
+    t: float
+    x: float
+    y: float
+    yaw: float
+
+    @property
+    def pose(self) -> Pose2D:
+        return Pose2D(self.x, self.y, self.yaw)
+
+
+@dataclass(frozen=True)
+class DetectedObject:
+    cls: str
+    score: float
+    bbox: tuple[float, float, float, float]
+    depth: float | None  # None: no valid depth in the window
+
+
+@dataclass(frozen=True)
+class Detections:
+    t: float
+    pose: Pose2D
+    objects: tuple[DetectedObject, ...] = ()
+
+
+@dataclass(frozen=True)
+class FeatureRecord:
+    t: float
+    cls: str
+    x: float
+    y: float
+
+
+@dataclass(frozen=True)
+class Scan:
+    t: float
+    angle_min: float
+    angle_increment: float
+    range_max: float
+    ranges: tuple[float, ...]  # nan for a missing reading (null in the file)
+
+
+@dataclass(frozen=True)
+class Truth:
+    t: float
+    x: float
+    y: float
+    yaw: float
+
+    @property
+    def pose(self) -> Pose2D:
+        return Pose2D(self.x, self.y, self.yaw)
+
+
+@dataclass(frozen=True)
+class State:
+    """Whatever ``bim-init run`` decided; ``data`` is the record without ``type``."""
+
+    t: float | None
+    data: dict[str, Any] = field(default_factory=dict, compare=False)
+
+
+@dataclass(frozen=True)
+class HypothesesRecord:
+    t: float | None
+    data: dict[str, Any] = field(default_factory=dict, compare=False)
+
+
+Record = Union[Meta, Odom, Detections, FeatureRecord, Scan, Truth, State, HypothesesRecord]  # noqa: UP007
+
+
+@dataclass
+class DetectionLog:
+    """A parsed log: the meta record, the other records in time order, and what was skipped."""
+
+    path: Path
+    meta: Meta
+    records: list[Record]
+    lines: list[int]  # source line of each record
+    warnings: list[str] = field(default_factory=list)
+    skipped_bad: int = 0
+    skipped_unknown: dict[str, int] = field(default_factory=dict)
+
+    def of_type(self, kind: type) -> list[Any]:
+        return [r for r in self.records if isinstance(r, kind)]
+
+    @property
+    def odom(self) -> list[Odom]:
+        return self.of_type(Odom)
+
+    @property
+    def detections(self) -> list[Detections]:
+        return self.of_type(Detections)
+
+    @property
+    def features(self) -> list[FeatureRecord]:
+        return self.of_type(FeatureRecord)
+
+    @property
+    def truth(self) -> list[Truth]:
+        return self.of_type(Truth)
+
+
+class _Bad(ValueError):
+    """A problem with one line (message without the file:line prefix)."""
+
+
+# --- field readers ---------------------------------------------------------------------------------
+
+
+def _num(obj: dict, key: str, where: str = "") -> float:
+    if key not in obj:
+        raise _Bad(f"missing field {where}{key!r}")
+    v = obj[key]
+    if isinstance(v, bool) or not isinstance(v, int | float):
+        raise _Bad(f"field {where}{key!r} must be a number, got {json.dumps(v)}")
+    if not math.isfinite(v):
+        raise _Bad(f"field {where}{key!r} must be finite, got {v}")
+    return float(v)
+
+
+def _str(obj: dict, key: str, where: str = "") -> str:
+    if key not in obj:
+        raise _Bad(f"missing field {where}{key!r}")
+    v = obj[key]
+    if not isinstance(v, str) or not v.strip():
+        raise _Bad(f"field {where}{key!r} must be a non-empty string, got {json.dumps(v)}")
+    return v
+
+
+def _obj(obj: dict, key: str) -> dict:
+    if key not in obj:
+        raise _Bad(f"missing field {key!r}")
+    v = obj[key]
+    if not isinstance(v, dict):
+        raise _Bad(f"field {key!r} must be an object, got {json.dumps(v)[:40]}")
+    return v
+
+
+def _parse_meta(o: dict) -> Meta:
+    if "version" not in o:
+        raise _Bad("meta record has no 'version'")
+    version = o["version"]
+    if isinstance(version, bool) or version != LOG_VERSION:
+        raise _Bad(
+            f"unsupported detection log version {json.dumps(version)}; bim-init reads version {LOG_VERSION}"
+        )
+    frame = o.get("frame", "odom")
+    if frame != "odom":
+        raise _Bad(f"meta 'frame' must be \"odom\", got {json.dumps(frame)}")
+    cam = _obj(o, "camera")
+    intr = CameraIntrinsics(
+        fx=_num(cam, "fx", "camera."),
+        fy=_num(cam, "fy", "camera."),
+        cx=_num(cam, "cx", "camera."),
+        cy=_num(cam, "cy", "camera."),
+        width=int(_num(cam, "width", "camera.")),
+        height=int(_num(cam, "height", "camera.")),
+    )
+    if intr.fx <= 0 or intr.fy <= 0:
+        raise _Bad("camera fx and fy must be positive")
+    if intr.width <= 0 or intr.height <= 0:
+        raise _Bad("camera width and height must be positive")
+    cp = _obj(o, "camera_pose")
+    mount = CameraMount(*(_num(cp, k, "camera_pose.") for k in ("x", "y", "z", "roll", "pitch", "yaw")))
+    depth_window = o.get("depth_window")
+    if depth_window is not None and (
+        isinstance(depth_window, bool) or not isinstance(depth_window, int) or depth_window < 0
+    ):
+        raise _Bad(f"'depth_window' must be a non-negative integer, got {json.dumps(depth_window)}")
+    source = o.get("source")
+    if source is not None and not isinstance(source, str):
+        raise _Bad(f"'source' must be a string, got {json.dumps(source)}")
+    return Meta(
+        camera=intr,
+        camera_pose=mount,
+        version=LOG_VERSION,
+        frame="odom",
+        depth_window=depth_window,
+        source=source,
+    )
+
+
+def _parse_object(o: Any, i: int) -> DetectedObject:
+    where = f"objects[{i}]."
+    if not isinstance(o, dict):
+        raise _Bad(f"objects[{i}] must be an object")
+    bbox = o.get("bbox")
+    if not isinstance(bbox, list) or len(bbox) != 4:
+        raise _Bad(f"field {where}'bbox' must be a list of 4 numbers [u1, v1, u2, v2]")
+    box = tuple(_num({"v": b}, "v", f"{where}bbox.") for b in bbox)
+    if box[2] < box[0] or box[3] < box[1]:
+        raise _Bad(f"field {where}'bbox' must have u1 <= u2 and v1 <= v2, got {list(box)}")
+    depth = o.get("depth", None)
+    if depth is not None:
+        depth = _num(o, "depth", where)
+    return DetectedObject(cls=_str(o, "class", where), score=_num(o, "score", where), bbox=box, depth=depth)  # type: ignore[arg-type]
+
+
+def _parse_body(kind: str, o: dict) -> Record:
+    if kind == "odom":
+        return Odom(_num(o, "t"), _num(o, "x"), _num(o, "y"), _num(o, "yaw"))
+    if kind == "detections":
+        pose = _obj(o, "pose")
+        objects = o.get("objects")
+        if not isinstance(objects, list):
+            raise _Bad("field 'objects' must be a list")
+        return Detections(
+            _num(o, "t"),
+            Pose2D(_num(pose, "x", "pose."), _num(pose, "y", "pose."), _num(pose, "yaw", "pose.")),
+            tuple(_parse_object(obj, i) for i, obj in enumerate(objects)),
+        )
+    if kind == "feature":
+        return FeatureRecord(_num(o, "t"), _str(o, "class"), _num(o, "x"), _num(o, "y"))
+    if kind == "scan":
+        ranges = o.get("ranges")
+        if not isinstance(ranges, list):
+            raise _Bad("field 'ranges' must be a list")
+        values: list[float] = []
+        for r in ranges:
+            if r is None:
+                values.append(math.nan)
+            elif isinstance(r, bool) or not isinstance(r, int | float):
+                raise _Bad(f"field 'ranges' must hold numbers or null, got {json.dumps(r)}")
+            else:
+                values.append(float(r))
+        return Scan(
+            _num(o, "t"),
+            _num(o, "angle_min"),
+            _num(o, "angle_increment"),
+            _num(o, "range_max"),
+            tuple(values),
+        )
+    if kind == "truth":
+        return Truth(_num(o, "t"), _num(o, "x"), _num(o, "y"), _num(o, "yaw"))
+    if kind in ("state", "hypotheses"):
+        t = _num(o, "t") if "t" in o else None
+        data = {k: v for k, v in o.items() if k != "type"}
+        return State(t, data) if kind == "state" else HypothesesRecord(t, data)
+    raise _Bad(f"unknown record type {kind!r}")  # not reached
+
+
+def parse_record(o: Any) -> Record | None:
+    """One decoded JSON value -> a record; None for an unknown (future) record type.
+
+    Raises ``ValueError`` (with a message for the user) when the record is malformed.
+    """
+    if not isinstance(o, dict):
+        raise _Bad(f"expected a JSON object, got {type(o).__name__}")
+    kind = o.get("type")
+    if not isinstance(kind, str):
+        raise _Bad(
+            "missing field 'type'"
+            if kind is None
+            else f"field 'type' must be a string, got {json.dumps(kind)}"
+        )
+    if kind == "meta":
+        return _parse_meta(o)
+    if kind not in RECORD_TYPES:
+        return None
+    return _parse_body(kind, o)
+
+
+def _record_time(rec: Record) -> float | None:
+    return None if isinstance(rec, Meta) else rec.t
+
+
+def read_log(path: Path | str, skip_bad: bool = False) -> DetectionLog:
+    """Read a detection log; raise :class:`InputError` (``file:line: problem``) on bad input."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise InputError(f"{path}: is a folder, expected a detection log (.jsonl)") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a text file (UTF-8 JSON Lines expected)") from None
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read: {exc.strerror or exc}") from None
+
+    meta: Meta | None = None
+    records: list[Record] = []
+    lines: list[int] = []
+    unknown: dict[str, int] = {}
+    bad: list[str] = []
+    saw_any = False
+    for number, raw in enumerate(text.splitlines(), start=1):
+        if not raw.strip():
+            continue
+        saw_any = True
+        try:
+            try:
+                value = json.loads(raw)
+            except json.JSONDecodeError as exc:
+                raise _Bad(f"not valid JSON: {exc.msg} (column {exc.colno})") from None
+            rec = parse_record(value)
+            if rec is None:
+                kind = str(value.get("type"))
+                unknown[kind] = unknown.get(kind, 0) + 1
+                continue
+            if isinstance(rec, Meta):
+                if meta is not None:
+                    raise _Bad("a second meta record (only the first line may be meta)")
+                if records:
+                    raise _Bad("the meta record must be the first record")
+                meta = rec
+                continue
+            if meta is None:
+                raise InputError(
+                    f"{path}:{number}: missing meta record: the first record must be "
+                    f'{{"type":"meta","version":{LOG_VERSION},...}}, got type {value.get("type")!r}'
+                )
+        except _Bad as exc:
+            if not skip_bad or _safe_type(raw) == "meta":  # a bad meta record is never skipped
+                raise InputError(f"{path}:{number}: {exc}") from None
+            bad.append(f"{path}:{number}: {exc}")
+            continue
+        records.append(rec)
+        lines.append(number)
+
+    if not saw_any:
+        raise InputError(f"{path}: empty log (no records)")
+    if meta is None:
+        raise InputError(
+            f'{path}: missing meta record (the first line must be {{"type":"meta","version":{LOG_VERSION}}})'
+        )
+
+    log = DetectionLog(
+        path=path, meta=meta, records=records, lines=lines, skipped_bad=len(bad), skipped_unknown=unknown
+    )
+    if bad:
+        log.warnings.append(f"skipped {len(bad)} malformed line(s) (--skip-bad); first: {bad[0]}")
+    if unknown:
+        kinds = ", ".join(f"{k!r} x{n}" for k, n in sorted(unknown.items()))
+        log.warnings.append(f"{path}: skipped record(s) of unknown type: {kinds}")
+    times = [_record_time(r) for r in records]
+    out_of_order = sum(
+        1 for a, b in zip(times, times[1:], strict=False) if a is not None and b is not None and b < a
+    )
+    if out_of_order:
+        log.warnings.append(f"{path}: {out_of_order} record(s) out of time order; sorted by t")
+        order = sorted(
+            range(len(records)), key=lambda i: (times[i] if times[i] is not None else -math.inf, i)
+        )
+        # records without t keep their place relative to their neighbours as well as possible
+        log.records = [records[i] for i in order]
+        log.lines = [lines[i] for i in order]
+    return log
+
+
+def _safe_type(raw: str) -> str | None:
+    try:
+        value = json.loads(raw)
+    except ValueError:
+        return None
+    return value.get("type") if isinstance(value, dict) else None
+
+
+# --- writer ----------------------------------------------------------------------------------------
+
+
+def record_to_dict(rec: Record) -> dict[str, Any]:
+    """A record as the JSON object of its line."""
+    if isinstance(rec, Meta):
+        c, m = rec.camera, rec.camera_pose
+        out: dict[str, Any] = {
+            "type": "meta",
+            "version": rec.version,
+            "frame": rec.frame,
+            "camera": {
+                "fx": c.fx,
+                "fy": c.fy,
+                "cx": c.cx,
+                "cy": c.cy,
+                "width": int(c.width),
+                "height": int(c.height),
+            },
+            "camera_pose": {"x": m.x, "y": m.y, "z": m.z, "roll": m.roll, "pitch": m.pitch, "yaw": m.yaw},
+        }
+        if rec.depth_window is not None:
+            out["depth_window"] = int(rec.depth_window)
+        if rec.source is not None:
+            out["source"] = rec.source
+        return out
+    if isinstance(rec, Odom):
+        return {"type": "odom", "t": rec.t, "x": rec.x, "y": rec.y, "yaw": rec.yaw}
+    if isinstance(rec, Detections):
+        return {
+            "type": "detections",
+            "t": rec.t,
+            "pose": {"x": rec.pose.x, "y": rec.pose.y, "yaw": rec.pose.yaw},
+            "objects": [
+                {"class": o.cls, "score": o.score, "bbox": list(o.bbox), "depth": o.depth}
+                for o in rec.objects
+            ],
+        }
+    if isinstance(rec, FeatureRecord):
+        return {"type": "feature", "t": rec.t, "class": rec.cls, "x": rec.x, "y": rec.y}
+    if isinstance(rec, Scan):
+        return {
+            "type": "scan",
+            "t": rec.t,
+            "angle_min": rec.angle_min,
+            "angle_increment": rec.angle_increment,
+            "range_max": rec.range_max,
+            "ranges": [None if not math.isfinite(r) else r for r in rec.ranges],
+        }
+    if isinstance(rec, Truth):
+        return {"type": "truth", "t": rec.t, "x": rec.x, "y": rec.y, "yaw": rec.yaw}
+    if isinstance(rec, State | HypothesesRecord):
+        kind = "state" if isinstance(rec, State) else "hypotheses"
+        out = {"type": kind, **{k: v for k, v in rec.data.items() if k != "type"}}
+        if rec.t is not None:
+            out["t"] = rec.t
+        return out
+    raise TypeError(f"not a detection log record: {rec!r}")
+
+
+def format_record(rec: Record) -> str:
+    """One line of the log (no newline)."""
+    return json.dumps(record_to_dict(rec), separators=(",", ":"), allow_nan=False)
+
+
+class LogWriter:
+    """Append records to a log, one line each, flushing after every record (for ``bim-init run``)."""
+
+    def __init__(self, target: Path | str | IO[str]) -> None:
+        if isinstance(target, str | Path):
+            self._handle: IO[str] = open(target, "w", encoding="utf-8")  # noqa: SIM115
+            self._owned = True
+        else:
+            self._handle = target
+            self._owned = False
+
+    def write(self, rec: Record) -> None:
+        self._handle.write(format_record(rec) + "\n")
+        self._handle.flush()
+
+    def write_all(self, records: Iterable[Record]) -> None:
+        for rec in records:
+            self.write(rec)
+
+    def close(self) -> None:
+        if self._owned:
+            self._handle.close()
+
+    def __enter__(self) -> LogWriter:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def write_log(path: Path | str, records: Iterable[Record]) -> None:
+    """Write a whole log (the first record must be the :class:`Meta`)."""
+    with LogWriter(path) as writer:
+        writer.write_all(records)
+
+
+def iter_lines(records: Iterable[Record]) -> Iterator[str]:
+    for rec in records:
+        yield format_record(rec)

@@ -1,0 +1,140 @@
+"""``bim-init run --config site.yaml``: a whole initialisation session, on the simulated robot by default."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+from datetime import datetime
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.live import Live
+from rich.table import Table
+
+from bimtools.errors import EXIT_BAD_INPUT, InputError
+from bimtools.site.atomic import staged_directory
+from initcli.core.geometry import Pose2D
+from initcli.session.config import SessionConfig, config_to_dict, load_config
+from initcli.session.outputs import render_report, summary_document, write_summary
+from initcli.session.runner import Session, SessionResult
+from initcli.session.setup import build_sim, choose_storey, prepare_site
+
+EXIT_FAILED = 1
+
+
+def parse_start(text: str) -> Pose2D:
+    try:
+        x, y, yaw = (float(v) for v in text.split(","))
+    except ValueError:
+        raise InputError(f"--start: expected x,y,yaw_degrees (e.g. 12.5,3.0,90), got {text!r}") from None
+    return Pose2D(x, y, math.radians(yaw))
+
+
+class LiveView:
+    """A rich table of the session's state, refreshed a few times a second."""
+
+    def __init__(self, console: Console):
+        self.console = console
+        self.live = Live(self._table({}), console=console, refresh_per_second=4, transient=True)
+        self.last = 0.0
+
+    @staticmethod
+    def _table(status: dict) -> Table:
+        table = Table(title="bim-init run", show_header=False)
+        table.add_column("", style="bold")
+        table.add_column("")
+        table.add_row("time", f"{status.get('t', 0.0):.1f} s")
+        table.add_row("state", str(status.get("state", "starting")))
+        table.add_row("distance", f"{status.get('distance', 0.0):.1f} m")
+        table.add_row("features", str(status.get("features", 0)))
+        table.add_row("hypotheses", str(status.get("hypotheses", 0)))
+        if "covariance" in status:
+            table.add_row("pose sigma", f"{math.sqrt(status['covariance']):.3f} m")
+        return table
+
+    def __call__(self, status: dict) -> None:
+        now = time.monotonic()
+        if now - self.last > 0.2:
+            self.last = now
+            self.live.update(self._table(status))
+
+
+def result_table(doc: dict) -> Table:
+    table = Table(title="initialisation result")
+    table.add_column("")
+    table.add_column("value")
+    table.add_row("success", "[green]yes[/green]" if doc["success"] else "[red]no[/red]")
+    table.add_row("reason", doc["reason"])
+    table.add_row("storey", str(doc["storey"]))
+    for key in ("coarse_pose", "rectified_pose", "pose"):
+        p = doc.get(key)
+        table.add_row(key.replace("_", " "), "-" if p is None else f"x {p['x']:.3f}  y {p['y']:.3f}  yaw {p['yaw_deg']:.2f} deg")
+    table.add_row("features detected", str(doc["features_detected"]))
+    table.add_row("distance to coarse / total", f"{doc['distance_coarse_m']} m / {doc['distance_total_m']} m")
+    table.add_row("session time", f"{doc['duration_s']} s (simulated in {doc['wall_clock_s']} s)")
+    if "error_translation_m" in doc:
+        for stage in ("coarse", "rectified", "fine"):
+            e, r = doc["error_translation_m"][stage], doc["error_rotation_deg"][stage]
+            table.add_row(f"error {stage}", "-" if e is None else f"{e:.3f} m, {r:.2f} deg")
+    return table
+
+
+def run_session(config: SessionConfig, out: Path, seed: int, start: Pose2D | None, quiet: bool,
+                console: Console) -> dict:
+    """Run one session into ``out`` (staged: nothing half-written on failure). Returns the summary."""
+    with staged_directory(out) as stage:
+        site = prepare_site(config, stage)
+        simulated_storey, matched_storey = choose_storey(config, site)
+        setup = build_sim(config, site, simulated_storey, seed, start)
+        view = None if quiet else LiveView(console)
+        session = Session(config, site, matched_storey, setup.driver, stage / "session.jsonl",
+                          np.random.default_rng(seed + 7919), observer=view,
+                          meta_source=f"bim-init run (sim, seed {seed})")
+        if view is not None:
+            with view.live:
+                result: SessionResult = session.run()
+        else:
+            result = session.run()
+        extra = {"seed": seed, "start_pose": {"x": setup.start.x, "y": setup.start.y,
+                                               "yaw_deg": round(math.degrees(setup.start.yaw), 3)},
+                 "config": config_to_dict(config)}
+        doc = summary_document(result, simulated=True, extra=extra)
+        write_summary(stage / "summary.json", doc)
+        render_report(stage / "report.png", result, site.storeys[result.storey or simulated_storey],
+                      f"{config.site.path}: {'success' if result.success else 'failure'} - {result.reason}")
+    return doc
+
+
+def run(
+    config: Annotated[Path, typer.Option("--config", metavar="site.yaml", help="Session config (schemas/site_config.schema.json).")],
+    out: Annotated[Path | None, typer.Option("--out", metavar="DIR", help="Output folder [default: ./runs/<timestamp>/].")] = None,
+    seed: Annotated[int | None, typer.Option("--seed", help="Override sim.seed.")] = None,
+    start: Annotated[str | None, typer.Option("--start", metavar="x,y,yaw", help="Override sim.start (BIM frame, yaw in degrees).")] = None,
+    quiet: Annotated[bool, typer.Option("--quiet", help="No live view or table; print the summary path only.")] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="Print summary.json.")] = False,
+) -> None:
+    """Run a whole initialisation session: explore, detect, match, actively explore, rectify, fine-tune."""
+    console = Console()
+    try:
+        cfg = load_config(config)
+        start_pose = parse_start(start) if start else None
+        the_seed = int(cfg.sim.seed if seed is None else seed)
+        target = out or Path("runs") / datetime.now().strftime("%Y%m%d-%H%M%S")
+        doc = run_session(cfg, target, the_seed, start_pose, quiet or as_json, console)
+    except InputError as exc:
+        print(f"bim-init: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        raise typer.Exit(EXIT_BAD_INPUT) from None
+    if as_json:
+        print(json.dumps(doc, indent=2))
+    elif quiet:
+        print(target / "summary.json")
+    else:
+        console.print(result_table(doc))
+        console.print(f"wrote {target}/session.jsonl, summary.json, report.png")
+    if not doc["success"]:
+        raise typer.Exit(EXIT_FAILED)

@@ -1,0 +1,283 @@
+"""The session config (``site.yaml``): sections, documented defaults, validation.
+
+Validated against ``schemas/site_config.schema.json`` before anything runs; an error names the
+YAML path and the problem (``camera.fx: expected a number, got "abc"``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import jsonschema
+import yaml
+
+from bimtools.errors import InputError
+
+SCHEMA_PATH = Path(__file__).resolve().parents[2] / "schemas" / "site_config.schema.json"
+
+
+@dataclass
+class SiteSection:
+    path: str = ""  # an IFC file or a bim-extract OUTDIR, relative to the config file
+    storey: str = "auto"
+
+
+@dataclass
+class RobotSection:
+    driver: str = "sim"
+    radius: float = 0.3  # m
+    max_linear: float = 0.5  # m/s
+    max_angular: float = 1.0  # rad/s
+
+
+@dataclass
+class CameraPose:
+    x: float = 0.2
+    y: float = 0.0
+    z: float = 1.0
+    roll: float = 0.0
+    pitch: float = 0.0
+    yaw: float = 0.0
+
+
+@dataclass
+class CameraSection:
+    fx: float = 320.0  # 640x480 at ~90 degrees horizontal field of view (Intel D455 colour)
+    fy: float = 320.0
+    cx: float = 320.0
+    cy: float = 240.0
+    width: int = 640
+    height: int = 480
+    pose: CameraPose = field(default_factory=CameraPose)
+    depth_noise: float = 0.005  # sigma = depth_noise * d^2: 2 % at 4 m (D455)
+    range: float = 6.0  # m: objects are detected up to this distance
+    max_view_angle: float = 75.0  # degrees from an element's normal
+    depth_window: int = 2  # n of the (2n+1)x(2n+1) depth window
+
+
+@dataclass
+class LidarSection:
+    beams: int = 360
+    fov: float = 360.0  # degrees
+    max_range: float = 20.0  # m
+    noise: float = 0.02  # m standard deviation
+    dropout: float = 0.01  # fraction of beams returning nothing
+
+
+@dataclass
+class DetectorSection:
+    kind: str = "simulated"  # simulated | onnx
+    model: str = "default"
+    score_threshold: float = 0.5
+    rate: float = 5.0  # Hz
+    classes: dict[str, str] = field(default_factory=dict)  # detector class -> feature category
+
+
+@dataclass
+class MatchingSection:
+    alpha: float = 0.5  # m, Eq. 7
+    beta: float = 15.0  # degrees, Eq. 9
+    m_thre: int = 12  # active exploration only with fewer hypotheses than this
+    max_outliers: int = 1
+    pose_method: str = "rigid"
+    min_sightings: int = 3
+    merge_radius: float = 1.0
+
+
+@dataclass
+class ExplorationSection:
+    wall_side: str = "left"
+    wall_distance: float = 0.7  # m kept to the followed wall
+    d_thre: float = 0.5  # m, Eq. 17
+    t_thre: float = 25.0  # s without a new feature during active exploration -> recovery
+    recovery: bool = True
+
+
+@dataclass
+class FineTuningSection:
+    enabled: bool = True
+    particles: int = 2000
+    covariance: float = 0.01  # m^2: x and y variance must fall below this
+    yaw_covariance: float = 0.0012  # rad^2 (2 degrees)
+    distance: float = 6.0  # m followed along the wall at most
+    seed_sigma_xy: float = 0.5  # m
+    seed_sigma_yaw: float = 10.0  # degrees
+
+
+@dataclass
+class LimitsSection:
+    max_distance: float = 150.0  # m driven without a unique match -> failure (paper §4.3)
+    max_time: float = 1200.0  # s of session time
+
+
+@dataclass
+class OdometryNoiseSection:
+    """Drift of the robot's odometry (wheels fused with the IMU, as on the paper's robot); variances
+    grow with each step's motion: rotation alpha1 rad^2/rad + alpha2 rad^2/m, translation
+    alpha3 m^2/m + alpha4 m^2/rad (see initcli.sim.robot)."""
+
+    alpha1: float = 0.0001
+    alpha2: float = 0.00001
+    alpha3: float = 0.0004
+    alpha4: float = 0.0001
+
+
+@dataclass
+class SimSection:
+    start: Any = "random"  # "random" or [x, y, yaw_degrees] in the BIM frame
+    odometry_noise: OdometryNoiseSection = field(default_factory=OdometryNoiseSection)
+    clutter: float = 0.05  # material stacks per metre of corridor wall
+    workers: int = 2
+    miss_rate: float = 0.1  # chance a visible feature is not detected in an image
+    false_positives_per_minute: float = 1.0
+    confusion_rate: float = 0.02  # chance a detection gets another class
+    phantoms: int = 0  # persistent door-like things that are not in the BIM (posters, openings)
+    seed: int = 1
+
+
+@dataclass
+class SessionConfig:
+    site: SiteSection = field(default_factory=SiteSection)
+    robot: RobotSection = field(default_factory=RobotSection)
+    camera: CameraSection = field(default_factory=CameraSection)
+    lidar: LidarSection = field(default_factory=LidarSection)
+    detector: DetectorSection = field(default_factory=DetectorSection)
+    matching: MatchingSection = field(default_factory=MatchingSection)
+    exploration: ExplorationSection = field(default_factory=ExplorationSection)
+    fine_tuning: FineTuningSection = field(default_factory=FineTuningSection)
+    limits: LimitsSection = field(default_factory=LimitsSection)
+    sim: SimSection = field(default_factory=SimSection)
+    source: Path | None = None  # the YAML file
+
+    def site_path(self) -> Path:
+        base = self.source.parent if self.source else Path.cwd()
+        return (base / self.site.path).resolve()
+
+
+def _describe(value: Any) -> str:
+    if isinstance(value, str):
+        return json.dumps(value)
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, dict):
+        return "a mapping"
+    if isinstance(value, list):
+        return "a list"
+    return repr(value)
+
+
+_TYPE_WORDS = {
+    "number": "a number",
+    "integer": "an integer",
+    "string": "a string",
+    "boolean": "true or false",
+    "object": "a mapping",
+    "array": "a list",
+    "null": "null",
+}
+
+
+def _message(error: jsonschema.ValidationError) -> tuple[str, str]:
+    path = ".".join(str(p) for p in error.absolute_path)
+    v = error.validator
+    if v == "type":
+        types = error.validator_value if isinstance(error.validator_value, list) else [error.validator_value]
+        want = " or ".join(_TYPE_WORDS.get(t, t) for t in types)
+        return path, f"expected {want}, got {_describe(error.instance)}"
+    if v == "enum":
+        return (
+            path,
+            f"expected one of {', '.join(map(str, error.validator_value))}, got {_describe(error.instance)}",
+        )
+    if v in ("minimum", "exclusiveMinimum", "maximum", "exclusiveMaximum"):
+        words = {"minimum": ">=", "exclusiveMinimum": ">", "maximum": "<=", "exclusiveMaximum": "<"}[v]
+        return path, f"expected a number {words} {error.validator_value}, got {_describe(error.instance)}"
+    if v == "additionalProperties":
+        extra = sorted(set(error.instance) - set(error.schema.get("properties", {})))
+        where = f"{path}." if path else ""
+        return f"{where}{extra[0]}" if extra else path, "unknown key (not in the config schema)"
+    if v == "required":
+        missing = [k for k in error.validator_value if k not in error.instance]
+        where = f"{path}." if path else ""
+        return f"{where}{missing[0]}" if missing else path, "required"
+    if v in ("oneOf", "anyOf"):
+        return (
+            path,
+            f"invalid value {_describe(error.instance)} ({error.schema.get('description', 'see schema')})",
+        )
+    return path, error.message
+
+
+def _merge(instance: Any, doc: dict) -> Any:
+    for f in dataclasses.fields(instance):
+        if f.name not in doc:
+            continue
+        value = doc[f.name]
+        current = getattr(instance, f.name)
+        if dataclasses.is_dataclass(current) and isinstance(value, dict):
+            _merge(current, value)
+        else:
+            setattr(instance, f.name, value)
+    return instance
+
+
+def parse_config(doc: Any, source: Path | None = None) -> SessionConfig:
+    where = str(source) if source else "config"
+    if doc is None:
+        doc = {}
+    schema = json.loads(SCHEMA_PATH.read_text(encoding="utf-8"))
+    validator = jsonschema.Draft202012Validator(schema)
+    errors = sorted(
+        validator.iter_errors(doc), key=lambda e: (len(list(e.absolute_path)), str(e.absolute_path))
+    )
+    if errors:
+        error = max(errors, key=lambda e: len(list(e.absolute_path)))
+        path, message = _message(error)
+        raise InputError(f"{where}: {path or '(top level)'}: {message}")
+    config = _merge(SessionConfig(), doc)
+    config.source = source
+    start = config.sim.start
+    if start != "random" and not (isinstance(start, list) and len(start) == 3):
+        raise InputError(
+            f'{where}: sim.start: expected "random" or [x, y, yaw_degrees], got {_describe(start)}'
+        )
+    if not config.site.path:
+        raise InputError(f"{where}: site.path: required (an IFC file or a bim-extract output folder)")
+    return config
+
+
+def load_config(path: Path) -> SessionConfig:
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read config: {exc.strerror or exc}") from None
+    try:
+        doc = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        line = f":{mark.line + 1}" if mark is not None else ""
+        raise InputError(f"{path}{line}: invalid YAML ({getattr(exc, 'problem', exc)})") from None
+    if doc is not None and not isinstance(doc, dict):
+        raise InputError(f"{path}: expected a mapping of sections (site, robot, camera, ...)")
+    return parse_config(doc, path)
+
+
+def start_pose_degrees(config: SessionConfig) -> tuple[float, float, float] | None:
+    if config.sim.start == "random":
+        return None
+    x, y, yaw = config.sim.start
+    return float(x), float(y), math.radians(float(yaw))
+
+
+def config_to_dict(config: SessionConfig) -> dict:
+    doc = dataclasses.asdict(config)
+    doc.pop("source", None)
+    return doc

@@ -1,0 +1,125 @@
+"""What a session leaves behind: ``summary.json`` and ``report.png``."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from bimtools.site.load import StoreyModel
+from initcli.core.geometry import Pose2D
+from initcli.session.runner import SessionResult
+
+
+def _pose(p: Pose2D | None) -> dict | None:
+    if p is None:
+        return None
+    return {"x": round(p.x, 4), "y": round(p.y, 4), "yaw": round(p.yaw, 5), "yaw_deg": round(math.degrees(p.yaw), 3)}
+
+
+def summary_document(result: SessionResult, simulated: bool, extra: dict | None = None) -> dict:
+    trans, rot = result.errors()
+    doc = {
+        "success": result.success,
+        "reason": result.reason,
+        "storey": result.storey,
+        "pose": _pose(result.pose),
+        "covariance": None if result.covariance is None else [[round(float(v), 6) for v in row]
+                                                              for row in result.covariance],
+        "coarse_pose": _pose(result.coarse_pose),
+        "rectified_pose": _pose(result.rectified_pose),
+        "features_detected": result.features_detected,
+        "matched_ids": result.matched_ids,
+        "distance_coarse_m": result.distance_coarse_m,
+        "distance_total_m": round(result.distance_total_m, 3),
+        "duration_s": round(result.duration_s, 2),
+        "wall_clock_s": round(result.wall_seconds, 2),
+        "active_explorations": result.active_explorations,
+        "recoveries": result.recoveries,
+        "loop_escapes": result.loop_escapes,
+    }
+    if simulated:
+        doc["truth_pose"] = _pose(result.truth_pose)
+        doc["error_translation_m"] = trans
+        doc["error_rotation_deg"] = rot
+    if extra:
+        doc.update(extra)
+    return doc
+
+
+def write_summary(path: Path, document: dict) -> None:
+    Path(path).write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
+
+
+def _ellipse(cov: np.ndarray, scale: float = 2.0) -> np.ndarray:
+    values, vectors = np.linalg.eigh(cov[:2, :2])
+    values = np.sqrt(np.maximum(values, 0.0)) * scale
+    t = np.linspace(0, 2 * math.pi, 60)
+    return (vectors @ np.vstack([values[0] * np.cos(t), values[1] * np.sin(t)])).T
+
+
+def render_report(path: Path, result: SessionResult, storey: StoreyModel, title: str) -> None:
+    """Floor plan, true path, odometry path mapped through the final pose, features, hypotheses
+    at each matching step, and the final pose with its covariance ellipse."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    fig, ax = plt.subplots(figsize=(13, 8))
+    lines = [((w.x1, w.y1), (w.x2, w.y2)) for w in storey.walls]
+    ax.add_collection(LineCollection(lines, colors="0.25", linewidths=0.6, label="walls (BIM)"))
+    markers = {"Door": "s", "Lift": "^", "Stairs": "D"}
+    for category in sorted({f.category for f in storey.features}):
+        fs = [f for f in storey.features if f.category == category]
+        ax.scatter([f.x for f in fs], [f.y for f in fs], marker=markers.get(category, "o"), s=22,
+                   facecolors="none", edgecolors="tab:gray", label=f"BIM {category}")
+    if result.true_path:
+        true = np.array(result.true_path)
+        ax.plot(true[:, 0], true[:, 1], color="tab:green", lw=1.2, label="true path")
+    transform = result.transform
+    if transform is not None and result.odom_path:
+        mapped = transform.apply(np.array(result.odom_path)[:, :2])
+        ax.plot(mapped[:, 0], mapped[:, 1], color="tab:blue", lw=1.0, ls="--", label="odometry through final pose")
+        if result.features:
+            fx = transform.apply(np.array([f.xy for f in result.features]))
+            ax.scatter(fx[:, 0], fx[:, 1], marker="x", color="tab:red", s=40, zorder=5, label="detected features")
+            by_id = {f.id: f for f in storey.features}
+            for (x, y), fid in zip(fx, result.matched_ids, strict=False):
+                if fid in by_id:
+                    ax.plot([x, by_id[fid].x], [y, by_id[fid].y], color="tab:red", lw=0.8)
+    cmap = plt.get_cmap("viridis")
+    steps = [s for s in result.match_steps if s.poses]
+    for k, step in enumerate(steps):
+        colour = cmap(k / max(1, len(steps) - 1))
+        poses = np.array(step.poses)
+        ax.quiver(poses[:, 0], poses[:, 1], np.cos(poses[:, 2]), np.sin(poses[:, 2]), color=colour, scale=40,
+                  width=0.003, alpha=0.8, label=f"hypotheses, {step.features} features ({step.verdict})")
+    for label, pose, colour in (("coarse", result.coarse_pose, "tab:orange"),
+                                ("rectified (Eq. 17)", result.rectified_pose, "tab:purple"),
+                                ("final", result.pose, "tab:red")):
+        if pose is not None:
+            ax.quiver([pose.x], [pose.y], [math.cos(pose.yaw)], [math.sin(pose.yaw)], color=colour, scale=18,
+                      width=0.006, label=f"{label} pose", zorder=6)
+    if result.pose is not None and result.covariance is not None:
+        ring = _ellipse(result.covariance) + [result.pose.x, result.pose.y]
+        ax.plot(ring[:, 0], ring[:, 1], color="tab:red", lw=1.0, label="2-sigma covariance")
+    if result.truth_pose is not None:
+        t = result.truth_pose
+        ax.plot([t.x], [t.y], marker="*", color="tab:green", ms=12, ls="none", label="true final pose", zorder=7)
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.set_xlabel("x (m, BIM frame)")
+    ax.set_ylabel("y (m)")
+    ax.set_title(title)
+    handles, labels = ax.get_legend_handles_labels()
+    seen: dict[str, object] = {}
+    for h, lab in zip(handles, labels, strict=True):
+        seen.setdefault(lab, h)
+    ax.legend(seen.values(), seen.keys(), fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)

@@ -1,0 +1,129 @@
+"""Assemble a session from its config: the site model, the storey, the simulated robot."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from bimtools.errors import InputError
+from bimtools.site.load import Site, load_site
+from initcli.classes import ClassMap
+from initcli.core.geometry import Pose2D
+from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.drivers.sim import LidarSpec, SimDriver
+from initcli.session.config import SessionConfig, start_pose_degrees
+from initcli.sim.camera import CameraNoise, SimulatedDetector
+from initcli.sim.robot import DiffDriveRobot, OdometryNoise
+from initcli.sim.scenario import Circulation, place_clutter, place_workers, random_start
+from initcli.sim.world import SimWorld
+from initcli.synthetic_log import sim_features_from_bim
+
+
+def prepare_site(config: SessionConfig, workdir: Path) -> Site:
+    """Load the site: a bim-extract OUTDIR as is, an IFC file extracted into ``workdir/site``."""
+    path = config.site_path()
+    where = f"{config.source}: site.path" if config.source else "site.path"
+    if not path.exists():
+        raise InputError(f"{where}: {path} does not exist")
+    if path.is_file() and path.suffix.lower() == ".ifc":
+        from bimtools.extract.pipeline import extract_site
+        from bimtools.site.writer import write_site
+
+        target = workdir / "site"
+        write_site(target, extract_site(path), preview=False)
+        path = target
+    site = load_site(path)
+    if not any(s.grid is not None for s in site.storeys.values()):
+        raise InputError(f"{where}: {path} has no occupancy maps (run bim-extract on the IFC model)")
+    return site
+
+
+def choose_storey(config: SessionConfig, site: Site) -> tuple[str, str | None]:
+    """(storey simulated, storey matched or None for every storey)."""
+    wanted = config.site.storey
+    if wanted != "auto":
+        site.storey(wanted)  # raises with the valid names
+        return wanted, wanted
+    with_maps = [s for s in site.storeys.values() if s.grid is not None]
+    simulated = max(with_maps, key=lambda s: len(s.features)).name
+    return simulated, (None if len(site.storeys) > 1 else simulated)
+
+
+def camera_of(config: SessionConfig) -> tuple[CameraIntrinsics, CameraMount]:
+    c = config.camera
+    intrinsics = CameraIntrinsics(c.fx, c.fy, c.cx, c.cy, int(c.width), int(c.height))
+    p = c.pose
+    return intrinsics, CameraMount(p.x, p.y, p.z, p.roll, p.pitch, p.yaw)
+
+
+@dataclass
+class SimSetup:
+    driver: SimDriver
+    start: Pose2D
+    world: SimWorld
+    storey: str
+
+
+def build_sim(config: SessionConfig, site: Site, storey: str, seed: int,
+              start: Pose2D | None = None) -> SimSetup:
+    rng = np.random.default_rng(seed)
+    model = site.storeys[storey]
+    circulation = Circulation.of(model)
+    clutter = place_clutter(model, circulation, config.sim.clutter, rng)
+    static = SimWorld.from_obstacles(model.obstacles, clutter)
+    workers = place_workers(circulation, static.static, int(config.sim.workers), rng)
+    world = SimWorld.from_obstacles(model.obstacles, clutter, workers)
+    if start is None:
+        explicit = start_pose_degrees(config)
+        start = Pose2D(*explicit) if explicit is not None else None
+    if start is None:
+        for _ in range(200):
+            start = random_start(circulation, rng, clearance=config.robot.radius + 0.3)
+            if world.clearance(start.x, start.y, 0.0, 1.0) > config.robot.radius + 0.2:
+                break
+    elif world.clearance(start.x, start.y, 0.0, 1.0) < config.robot.radius:
+        raise InputError(f"sim.start: ({start.x:.2f}, {start.y:.2f}) is inside or against an obstacle")
+    assert start is not None
+    n = config.sim.odometry_noise
+    robot = DiffDriveRobot(start, config.robot.radius, OdometryNoise(n.alpha1, n.alpha2, n.alpha3, n.alpha4), rng)
+    camera, mount = camera_of(config)
+    cmap = ClassMap(config.detector.classes)
+    features = sim_features_from_bim(model.features, cmap)
+    phantoms = _phantoms(model, circulation, int(config.sim.phantoms), rng)
+    noise = CameraNoise(
+        miss_rate=config.sim.miss_rate,
+        false_positives_per_minute=config.sim.false_positives_per_minute,
+        confusion_rate=config.sim.confusion_rate,
+        depth_noise_quad=config.camera.depth_noise,
+        range=config.camera.range,
+        max_view_angle_deg=config.camera.max_view_angle,
+    )
+    if config.detector.kind == "onnx":
+        from initcli.sim.onnx_camera import OnnxCamera
+
+        detector = OnnxCamera(config, model, world, camera, mount, rng).detect
+    else:
+        detector = SimulatedDetector(features + phantoms, camera, mount, noise, config.detector.rate, world, rng).detect
+    l = config.lidar
+    lidar = LidarSpec(int(l.beams), math.radians(l.fov), l.max_range, l.noise, l.dropout)
+    driver = SimDriver(world, robot, lidar, camera, mount, detector, config.detector.rate, config.robot.max_linear,
+                       config.robot.max_angular, rng, depth_window=int(config.camera.depth_window))
+    return SimSetup(driver, start, world, storey)
+
+
+def _phantoms(model, circulation: Circulation, count: int, rng: np.random.Generator):
+    """Door-like things on corridor walls that are not in the BIM (posters, temporary openings)."""
+    from initcli.synthetic_log import SimFeature
+
+    walls = [w for w in model.walls if w.length > 2.0
+             and circulation.contains((w.x1 + w.x2) / 2 + 0.4 * w.normal[0], (w.y1 + w.y2) / 2 + 0.4 * w.normal[1])]
+    out = []
+    for i in range(min(count, len(walls))):
+        w = walls[int(rng.integers(len(walls)))]
+        s = rng.uniform(0.2, 0.8)
+        out.append(SimFeature(f"phantom-{i}", "door", w.x1 + s * (w.x2 - w.x1), w.y1 + s * (w.y2 - w.y1),
+                              w.normal[0], w.normal[1], 1.0, 2.1))
+    return out

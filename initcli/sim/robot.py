@@ -1,0 +1,95 @@
+"""A differential-drive robot: true motion in the world, and wheel odometry that drifts.
+
+Odometry noise follows the odometry motion model of probabilistic robotics / AMCL (rot1, trans,
+rot2), with variances that grow linearly with the motion of each step, so the drift does not
+depend on the control rate:
+
+    var(rot)   = alpha1 * |d_rot|   + alpha2 * |d_trans|     (rad^2)
+    var(trans) = alpha3 * |d_trans| + alpha4 * |d_rot|       (m^2)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from initcli.core.geometry import Pose2D, wrap_angle
+
+
+@dataclass(frozen=True)
+class OdometryNoise:
+    alpha1: float = 0.0001  # rad^2 per rad turned (a 90 degree turn: sigma 0.7 degrees)
+    alpha2: float = 0.00001  # rad^2 per metre driven (50 m: sigma 1.3 degrees)
+    alpha3: float = 0.0004  # m^2 per metre driven
+    alpha4: float = 0.0001  # m^2 per rad turned
+
+    def scaled(self, factor: float) -> OdometryNoise:
+        return OdometryNoise(
+            self.alpha1 * factor, self.alpha2 * factor, self.alpha3 * factor, self.alpha4 * factor
+        )
+
+
+def motion_delta(a: Pose2D, b: Pose2D) -> tuple[float, float, float]:
+    """The (rot1, trans, rot2) decomposition of the motion from ``a`` to ``b``."""
+    dx, dy = b.x - a.x, b.y - a.y
+    trans = math.hypot(dx, dy)
+    rot1 = float(wrap_angle(math.atan2(dy, dx) - a.yaw)) if trans > 1e-6 else 0.0
+    # Driving backwards: express as a backward translation rather than a half turn.
+    if abs(rot1) > math.pi / 2:
+        rot1 = float(wrap_angle(rot1 - math.pi))
+        trans = -trans
+    rot2 = float(wrap_angle(b.yaw - a.yaw - rot1))
+    return rot1, trans, rot2
+
+
+def apply_delta(pose: Pose2D, rot1: float, trans: float, rot2: float) -> Pose2D:
+    heading = pose.yaw + rot1
+    return Pose2D(
+        pose.x + trans * math.cos(heading),
+        pose.y + trans * math.sin(heading),
+        float(wrap_angle(heading + rot2)),
+    )
+
+
+class DiffDriveRobot:
+    """True pose in the BIM frame, odometry pose in the odom frame (origin = start pose)."""
+
+    def __init__(self, start: Pose2D, radius: float, noise: OdometryNoise, rng: np.random.Generator):
+        self.pose = start
+        self.odom = Pose2D.identity()
+        self.radius = radius
+        self.noise = noise
+        self.rng = rng
+        self.distance = 0.0
+        self.collisions = 0
+
+    def proposed(self, v: float, w: float, dt: float) -> Pose2D:
+        """Where the commands (v, w) would take the robot in ``dt`` (exact arc)."""
+        p = self.pose
+        if abs(w) < 1e-9:
+            return Pose2D(p.x + v * dt * math.cos(p.yaw), p.y + v * dt * math.sin(p.yaw), p.yaw)
+        yaw = p.yaw + w * dt
+        r = v / w
+        return Pose2D(
+            p.x + r * (math.sin(yaw) - math.sin(p.yaw)),
+            p.y - r * (math.cos(yaw) - math.cos(p.yaw)),
+            float(wrap_angle(yaw)),
+        )
+
+    def move_to(self, new: Pose2D) -> None:
+        """Move to ``new`` and integrate the noisy odometry of that motion."""
+        rot1, trans, rot2 = motion_delta(self.pose, new)
+        n = self.noise
+        s_rot1 = math.sqrt(n.alpha1 * abs(rot1) + n.alpha2 * abs(trans))
+        s_trans = math.sqrt(n.alpha3 * abs(trans) + n.alpha4 * (abs(rot1) + abs(rot2)))
+        s_rot2 = math.sqrt(n.alpha1 * abs(rot2) + n.alpha2 * abs(trans))
+        measured = (
+            rot1 + self.rng.normal(0.0, s_rot1) if s_rot1 > 0 else rot1,
+            trans + self.rng.normal(0.0, s_trans) if s_trans > 0 else trans,
+            rot2 + self.rng.normal(0.0, s_rot2) if s_rot2 > 0 else rot2,
+        )
+        self.odom = apply_delta(self.odom, *measured)
+        self.distance += abs(trans)
+        self.pose = new

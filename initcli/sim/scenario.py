@@ -1,0 +1,113 @@
+"""A simulated scenario from the BIM: the circulation area, random starts, clutter and workers."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from bimtools.site.load import StoreyModel
+from bimtools.site.occupancy_map import FREE, OccupancyGrid
+from initcli.core.geometry import Pose2D
+from initcli.sim.world import SimWorld, Worker, ray_segment_distances
+
+STACK_SIZE = (1.2, 0.5)  # m: a pallet of material against a wall
+
+
+@dataclass
+class Circulation:
+    """Free cells of the connected region that most features face (corridors, lobbies)."""
+
+    grid: OccupancyGrid
+    label: np.ndarray  # bool mask of the region
+    clearance: np.ndarray  # metres to the nearest non-free cell
+
+    @staticmethod
+    def of(storey: StoreyModel) -> Circulation:
+        grid = storey.grid
+        if grid is None:
+            raise ValueError(f"storey {storey.name!r} has no occupancy map")
+        free = (grid.cells == FREE).astype(np.uint8)
+        _, labels = cv2.connectedComponents(free, connectivity=4)
+        votes: dict[int, int] = {}
+        for f in storey.features:
+            row, col = grid.world_to_cell(f.x + 0.6 * f.norm_x, f.y + 0.6 * f.norm_y)
+            if 0 <= row < labels.shape[0] and 0 <= col < labels.shape[1] and labels[row, col]:
+                votes[int(labels[row, col])] = votes.get(int(labels[row, col]), 0) + 1
+        main = max(votes, key=votes.get) if votes else int(np.bincount(labels.ravel())[1:].argmax() + 1)
+        clearance = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * grid.resolution
+        return Circulation(grid, labels == main, clearance)
+
+    def cells(self, min_clearance: float) -> np.ndarray:
+        rows, cols = np.nonzero(self.label & (self.clearance >= min_clearance))
+        x, y = self.grid.cell_centre(rows, cols)
+        return np.column_stack([x, y])
+
+    def contains(self, x: float, y: float, min_clearance: float = 0.0) -> bool:
+        row, col = self.grid.world_to_cell(x, y)
+        if not (0 <= row < self.label.shape[0] and 0 <= col < self.label.shape[1]):
+            return False
+        return bool(self.label[row, col] and self.clearance[row, col] >= min_clearance)
+
+
+def random_start(circulation: Circulation, rng: np.random.Generator, clearance: float = 0.6) -> Pose2D:
+    cells = circulation.cells(clearance)
+    if len(cells) == 0:
+        raise ValueError("no free corridor cell with enough clearance for a start pose")
+    x, y = cells[int(rng.integers(len(cells)))]
+    return Pose2D(float(x), float(y), float(rng.uniform(-math.pi, math.pi)))
+
+
+def place_clutter(storey: StoreyModel, circulation: Circulation, density: float,
+                  rng: np.random.Generator) -> list[np.ndarray]:
+    """Material stacks against corridor walls, ``density`` per metre of corridor wall, kept off doors."""
+    walls = [w for w in storey.walls if w.length >= STACK_SIZE[0] + 2.0
+             and circulation.contains((w.x1 + w.x2) / 2 + 0.4 * w.normal[0], (w.y1 + w.y2) / 2 + 0.4 * w.normal[1])]
+    if not walls or density <= 0:
+        return []
+    lengths = np.array([w.length for w in walls])
+    count = int(rng.poisson(density * lengths.sum()))
+    features = np.array([[f.x, f.y] for f in storey.features]).reshape(-1, 2)
+    boxes: list[np.ndarray] = []
+    for _ in range(count * 5):
+        if len(boxes) >= count:
+            break
+        w = walls[int(rng.choice(len(walls), p=lengths / lengths.sum()))]
+        s = rng.uniform(1.0, w.length - 1.0) / w.length
+        px, py = w.x1 + s * (w.x2 - w.x1), w.y1 + s * (w.y2 - w.y1)
+        if len(features) and np.hypot(features[:, 0] - px, features[:, 1] - py).min() < 1.8:
+            continue
+        if any(np.hypot(*(b.mean(axis=0)[:2] - [px, py])) < 3.0 for b in boxes):
+            continue
+        ux, uy = (w.x2 - w.x1) / w.length, (w.y2 - w.y1) / w.length
+        nx, ny = w.normal
+        half_l, depth = STACK_SIZE[0] / 2, STACK_SIZE[1]
+        corners = np.array([
+            [px - ux * half_l + nx * 0.05, py - uy * half_l + ny * 0.05],
+            [px + ux * half_l + nx * 0.05, py + uy * half_l + ny * 0.05],
+            [px + ux * half_l + nx * (0.05 + depth), py + uy * half_l + ny * (0.05 + depth)],
+            [px - ux * half_l + nx * (0.05 + depth), py - uy * half_l + ny * (0.05 + depth)],
+        ])
+        boxes.append(np.vstack([corners, corners[:1]]))
+    return boxes
+
+
+def place_workers(circulation: Circulation, world_static: np.ndarray, count: int,
+                  rng: np.random.Generator) -> list[Worker]:
+    """People walking back and forth along free corridor stretches."""
+    cells = circulation.cells(0.8)
+    workers: list[Worker] = []
+    for _ in range(count * 10):
+        if len(workers) >= count or len(cells) == 0:
+            break
+        a = cells[int(rng.integers(len(cells)))]
+        heading = float(rng.choice([0.0, math.pi / 2, math.pi, -math.pi / 2]))
+        free = float(ray_segment_distances(a, np.array([heading]), world_static, 12.0)[0])
+        length = min(8.0, free - 0.8)
+        if length < 3.0:
+            continue
+        b = a + length * np.array([math.cos(heading), math.sin(heading)])
+        workers.append(Worker(a=a, b=b, speed=float(rng.uniform(0.4, 1.0)), phase=float(rng.uniform(0, 2 * length))))
+    return workers

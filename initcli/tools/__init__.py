@@ -1,0 +1,1 @@
+"""Plotting and other tools around the core algorithms."""
