@@ -16,6 +16,7 @@ $(STAMP): pyproject.toml
 
 run: install
 	$(BIN)/bim-extract sample_models/block_a.ifc -o runs/block_a_site
+	$(BIN)/bim-init run --config sample_models/block_a.site.yaml --out runs/block_a_session
 
 test: install
 	$(BIN)/python -m pytest -q
@@ -28,6 +29,8 @@ samples: install
 
 bench: install
 	$(BIN)/python benchmarks/bench_extract.py ../shared/ifc/*.ifc sample_models/*.ifc
+	$(BIN)/python benchmarks/bench_match.py --quick
+	$(BIN)/python benchmarks/bench_session.py --starts 20
 
 clean:
 	rm -rf $(VENV) runs *_site .pytest_cache

@@ -402,7 +402,8 @@ def match_log(log: DetectionLog, site: Site, opts: MatchOptions) -> MatchReport:
         row = assign[h]
         inl = np.flatnonzero(row != OUTLIER)
         bim_xy = index.xy[row[inl]]
-        pose = estimate_pose(opts.pose_method, bim_xy, s_xy[inl], odom_pose, opts.pose_window)  # Eq. 10-13 or rigid
+        # Eq. 10-13 or rigid
+        pose = estimate_pose(opts.pose_method, bim_xy, s_xy[inl], odom_pose, opts.pose_window)
         rect_pose, moved = None, False
         if model.walls:
             walls = WallArray.from_segments([(w.x1, w.y1, w.x2, w.y2, *w.normal) for w in model.walls])

@@ -73,7 +73,10 @@ def result_table(doc: dict) -> Table:
     table.add_row("storey", str(doc["storey"]))
     for key in ("coarse_pose", "rectified_pose", "pose"):
         p = doc.get(key)
-        table.add_row(key.replace("_", " "), "-" if p is None else f"x {p['x']:.3f}  y {p['y']:.3f}  yaw {p['yaw_deg']:.2f} deg")
+        table.add_row(
+            key.replace("_", " "),
+            "-" if p is None else f"x {p['x']:.3f}  y {p['y']:.3f}  yaw {p['yaw_deg']:.2f} deg",
+        )
     table.add_row("features detected", str(doc["features_detected"]))
     table.add_row("distance to coarse / total", f"{doc['distance_coarse_m']} m / {doc['distance_total_m']} m")
     table.add_row("session time", f"{doc['duration_s']} s (simulated in {doc['wall_clock_s']} s)")
@@ -84,38 +87,69 @@ def result_table(doc: dict) -> Table:
     return table
 
 
-def run_session(config: SessionConfig, out: Path, seed: int, start: Pose2D | None, quiet: bool,
-                console: Console) -> dict:
+def run_session(
+    config: SessionConfig, out: Path, seed: int, start: Pose2D | None, quiet: bool, console: Console
+) -> dict:
     """Run one session into ``out`` (staged: nothing half-written on failure). Returns the summary."""
     with staged_directory(out) as stage:
         site = prepare_site(config, stage)
         simulated_storey, matched_storey = choose_storey(config, site)
         setup = build_sim(config, site, simulated_storey, seed, start)
         view = None if quiet else LiveView(console)
-        session = Session(config, site, matched_storey, setup.driver, stage / "session.jsonl",
-                          np.random.default_rng(seed + 7919), observer=view,
-                          meta_source=f"bim-init run (sim, seed {seed})")
+        session = Session(
+            config,
+            site,
+            matched_storey,
+            setup.driver,
+            stage / "session.jsonl",
+            np.random.default_rng(seed + 7919),
+            observer=view,
+            meta_source=f"bim-init run (sim, seed {seed})",
+        )
         if view is not None:
             with view.live:
                 result: SessionResult = session.run()
         else:
             result = session.run()
-        extra = {"seed": seed, "start_pose": {"x": setup.start.x, "y": setup.start.y,
-                                               "yaw_deg": round(math.degrees(setup.start.yaw), 3)},
-                 "config": config_to_dict(config)}
+        extra = {
+            "seed": seed,
+            "start_pose": {
+                "x": setup.start.x,
+                "y": setup.start.y,
+                "yaw_deg": round(math.degrees(setup.start.yaw), 3),
+            },
+            "config": config_to_dict(config),
+        }
         doc = summary_document(result, simulated=True, extra=extra)
         write_summary(stage / "summary.json", doc)
-        render_report(stage / "report.png", result, site.storeys[result.storey or simulated_storey],
-                      f"{config.site.path}: {'success' if result.success else 'failure'} - {result.reason}")
+        render_report(
+            stage / "report.png",
+            result,
+            site.storeys[result.storey or simulated_storey],
+            f"{config.site.path}: {'success' if result.success else 'failure'} - {result.reason}",
+        )
     return doc
 
 
 def run(
-    config: Annotated[Path, typer.Option("--config", metavar="site.yaml", help="Session config (schemas/site_config.schema.json).")],
-    out: Annotated[Path | None, typer.Option("--out", metavar="DIR", help="Output folder [default: ./runs/<timestamp>/].")] = None,
+    config: Annotated[
+        Path,
+        typer.Option(
+            "--config", metavar="site.yaml", help="Session config (schemas/site_config.schema.json)."
+        ),
+    ],
+    out: Annotated[
+        Path | None,
+        typer.Option("--out", metavar="DIR", help="Output folder [default: ./runs/<timestamp>/]."),
+    ] = None,
     seed: Annotated[int | None, typer.Option("--seed", help="Override sim.seed.")] = None,
-    start: Annotated[str | None, typer.Option("--start", metavar="x,y,yaw", help="Override sim.start (BIM frame, yaw in degrees).")] = None,
-    quiet: Annotated[bool, typer.Option("--quiet", help="No live view or table; print the summary path only.")] = False,
+    start: Annotated[
+        str | None,
+        typer.Option("--start", metavar="x,y,yaw", help="Override sim.start (BIM frame, yaw in degrees)."),
+    ] = None,
+    quiet: Annotated[
+        bool, typer.Option("--quiet", help="No live view or table; print the summary path only.")
+    ] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print summary.json.")] = False,
 ) -> None:
     """Run a whole initialisation session: explore, detect, match, actively explore, rectify, fine-tune."""

@@ -88,3 +88,20 @@ def test_given_features_are_confirmed_and_fixed() -> None:
     )
     assert [(f.x, f.given) for f in out.features] == [(3.0, True), (7.0, False)]
     assert out.features[0].sightings == 5  # k for the record + 2 sightings
+
+
+def test_class_confusion_does_not_create_a_feature():
+    """Rule 6: a door seen 20 times and called a lift 3 times is one door."""
+    from initcli.core.detection_filter import FilterParams, Sighting, filter_detections
+
+    sightings = [Sighting(t=0.1 * i, cls="door", x=2.0, y=1.0, frame=i) for i in range(20)]
+    sightings += [Sighting(t=0.1 * i + 0.05, cls="lift", x=2.1, y=1.0, frame=100 + i) for i in range(3)]
+    features = filter_detections(sightings, FilterParams()).features
+    assert [f.cls for f in features] == ["door"]
+    # A real lift next to the door, seen about as often, is kept.
+    sightings += [Sighting(t=5 + 0.1 * i, cls="lift", x=2.5, y=1.0, frame=200 + i) for i in range(10)]
+    assert sorted(f.cls for f in filter_detections(sightings, FilterParams()).features) == ["door", "lift"]
+    assert [f.cls for f in filter_detections(sightings[:23], FilterParams(class_dominance=0)).features] == [
+        "door",
+        "lift",
+    ]

@@ -64,3 +64,29 @@ class BugNavigator:
         )
         speed = min(speed, max(0.15, distance))
         return speed, float(np.clip(p.k_yaw * d_yaw, -fp.max_turn, fp.max_turn)), False
+
+
+@dataclass
+class RouteNavigator:
+    """Follow waypoints (odom frame) one after the other with the bug navigator."""
+
+    waypoints: list[np.ndarray]
+    params: BugParams = field(default_factory=BugParams)
+    pass_radius: float = 0.8  # m: an intermediate waypoint counts as passed this close
+    current: BugNavigator | None = None
+
+    def step(self, pose: Pose2D, scan: ScanView) -> tuple[float, float, bool]:
+        while self.waypoints:
+            last = len(self.waypoints) == 1
+            if self.current is None:
+                arrive = self.params.arrive if last else self.pass_radius
+                self.current = BugNavigator(
+                    self.waypoints[0],
+                    BugParams(arrive, self.params.yaw_tolerance, self.params.k_yaw, self.params.follow),
+                )
+            v, w, arrived = self.current.step(pose, scan)
+            if not arrived:
+                return v, w, False
+            self.waypoints.pop(0)
+            self.current = None
+        return 0.0, 0.0, True

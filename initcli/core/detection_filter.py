@@ -15,6 +15,9 @@ Rules, applied to the sightings in time order:
    other they are merged into the older one (sightings summed; the earlier confirmation kept).
 5. ``feature`` records of the log (a robot that aggregates itself) are confirmed at their time
    with their given position, which later sightings do not move.
+6. Class confusion: a track is not confirmed while a track of another class within
+   ``merge_radius`` has ``class_dominance`` times its sightings (a door seen 40 times and called a
+   lift twice is one door), and a confirmed track that ends up so dominated is dropped.
 
 Positions are the mean of the sightings' odom positions (Eq. 1-2 results).
 """
@@ -38,6 +41,9 @@ class FilterParams:
     min_depth: float = 0.1  # m: depth window readings outside [min, max] are ignored
     max_depth: float = 10.0  # m
     edge_margin: float = 2.0  # px: boxes this close to the left/right border are truncated; < 0 keeps them
+    # A track with a track of another class within merge_radius that has this many times its
+    # sightings is a misclassification of that object (rule 6), not a feature of its own.
+    class_dominance: float = 4.0
 
 
 @dataclass(frozen=True)
@@ -174,11 +180,15 @@ def filter_detections(
             track.n += 1
             track.last_frame = s.frame
             track.frames.add(s.frame)
-        if track.confirmed_at is None and track.n >= k:
+        if track.confirmed_at is None and track.n >= k and not _misclassified(tracks, track, p):
             track.confirmed_at = s.t
         _suppress_duplicates(tracks, track, p.merge_radius, s.t, k)
 
-    confirmed = [tr for tr in tracks if tr.confirmed_at is not None]
+    confirmed = [
+        tr
+        for tr in tracks
+        if tr.confirmed_at is not None and (tr.fixed is not None or not _misclassified(tracks, tr, p))
+    ]
     confirmed.sort(key=lambda tr: (tr.confirmed_at, tr.created))
     result.unconfirmed_tracks = len(tracks) - len(confirmed)
     for i, tr in enumerate(confirmed):
@@ -196,6 +206,20 @@ def filter_detections(
             )
         )
     return result
+
+
+def _misclassified(tracks: list[_Track], track: _Track, p: FilterParams) -> bool:
+    """Rule 6: is ``track`` dominated by a nearby track of another class (detector class confusion)?"""
+    if p.class_dominance <= 0:
+        return False
+    x, y = track.pos
+    for other in tracks:
+        if other is track or other.cls == track.cls:
+            continue
+        ox, oy = other.pos
+        if math.hypot(ox - x, oy - y) <= p.merge_radius and other.n >= p.class_dominance * track.n:
+            return True
+    return False
 
 
 def _nearest(

@@ -157,8 +157,9 @@ class ParticleFilter:
         self.particles = np.column_stack([xy[pick] + jitter, self.rng.uniform(-math.pi, math.pi, self.n)])
         self.weights = np.full(self.n, 1.0 / self.n)
 
-    def weight_by_landmarks(self, robot_odom: Pose2D, odom_xy: np.ndarray, bim_xy: np.ndarray,
-                            sigma: float) -> None:
+    def weight_by_landmarks(
+        self, robot_odom: Pose2D, odom_xy: np.ndarray, bim_xy: np.ndarray, sigma: float
+    ) -> None:
         """Weight particles by how well their implied odom->BIM transform maps the matched features.
 
         A particle at BIM pose P implies T = P * odom^-1; the matched features s_j (odom frame) should
@@ -185,7 +186,9 @@ class ParticleFilter:
         logw -= logw.max()
         w = np.exp(logw)
         self.weights = w / w.sum()
-        self.last_likelihood = float(np.exp(loglik.max() * self.model.temperature / self._beams_used(ranges, range_max)))
+        self.last_likelihood = float(
+            np.exp(loglik.max() * self.model.temperature / self._beams_used(ranges, range_max))
+        )
         if self.effective_size() < self.n / 2:
             self.resample()
 

@@ -157,7 +157,9 @@ def rigid_align_batch(
     return yaw, t
 
 
-def rigid_pose(bim_xy: np.ndarray, odom_xy: np.ndarray, robot_odom: Pose2D, window: int | None = None) -> Pose2D:
+def rigid_pose(
+    bim_xy: np.ndarray, odom_xy: np.ndarray, robot_odom: Pose2D, window: int | None = None
+) -> Pose2D:
     """The rigid alternative: Kabsch over the matched features, then T_bim_odom * robot_odom.
 
     ``window``: only the last ``window`` matched features (at least 2) are aligned. Odometry drifts

@@ -48,9 +48,20 @@ class SimDriver:
 
     control_rate = CONTROL_RATE
 
-    def __init__(self, world: SimWorld, robot: DiffDriveRobot, lidar: LidarSpec, camera: CameraIntrinsics,
-                 mount: CameraMount, detector: Detector, detector_rate: float, max_linear: float,
-                 max_angular: float, rng: np.random.Generator, depth_window: int = 2):
+    def __init__(
+        self,
+        world: SimWorld,
+        robot: DiffDriveRobot,
+        lidar: LidarSpec,
+        camera: CameraIntrinsics,
+        mount: CameraMount,
+        detector: Detector,
+        detector_rate: float,
+        max_linear: float,
+        max_angular: float,
+        rng: np.random.Generator,
+        depth_window: int = 2,
+    ):
         self.world = world
         self.robot = robot
         self.lidar = lidar
@@ -99,6 +110,7 @@ class SimDriver:
             target = Pose2D(self.robot.pose.x, self.robot.pose.y, target.yaw)
             self.robot.collisions += 1
         self.robot.move_to(target)
+        self.world.advance(dt, np.array([target.x, target.y]))
         self.t += dt
         self.steps += 1
         return self._frame()

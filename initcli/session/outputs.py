@@ -16,7 +16,12 @@ from initcli.session.runner import SessionResult
 def _pose(p: Pose2D | None) -> dict | None:
     if p is None:
         return None
-    return {"x": round(p.x, 4), "y": round(p.y, 4), "yaw": round(p.yaw, 5), "yaw_deg": round(math.degrees(p.yaw), 3)}
+    return {
+        "x": round(p.x, 4),
+        "y": round(p.y, 4),
+        "yaw": round(p.yaw, 5),
+        "yaw_deg": round(math.degrees(p.yaw), 3),
+    }
 
 
 def summary_document(result: SessionResult, simulated: bool, extra: dict | None = None) -> dict:
@@ -26,8 +31,9 @@ def summary_document(result: SessionResult, simulated: bool, extra: dict | None 
         "reason": result.reason,
         "storey": result.storey,
         "pose": _pose(result.pose),
-        "covariance": None if result.covariance is None else [[round(float(v), 6) for v in row]
-                                                              for row in result.covariance],
+        "covariance": None
+        if result.covariance is None
+        else [[round(float(v), 6) for v in row] for row in result.covariance],
         "coarse_pose": _pose(result.coarse_pose),
         "rectified_pose": _pose(result.rectified_pose),
         "features_detected": result.features_detected,
@@ -75,18 +81,29 @@ def render_report(path: Path, result: SessionResult, storey: StoreyModel, title:
     markers = {"Door": "s", "Lift": "^", "Stairs": "D"}
     for category in sorted({f.category for f in storey.features}):
         fs = [f for f in storey.features if f.category == category]
-        ax.scatter([f.x for f in fs], [f.y for f in fs], marker=markers.get(category, "o"), s=22,
-                   facecolors="none", edgecolors="tab:gray", label=f"BIM {category}")
+        ax.scatter(
+            [f.x for f in fs],
+            [f.y for f in fs],
+            marker=markers.get(category, "o"),
+            s=22,
+            facecolors="none",
+            edgecolors="tab:gray",
+            label=f"BIM {category}",
+        )
     if result.true_path:
         true = np.array(result.true_path)
         ax.plot(true[:, 0], true[:, 1], color="tab:green", lw=1.2, label="true path")
     transform = result.transform
     if transform is not None and result.odom_path:
         mapped = transform.apply(np.array(result.odom_path)[:, :2])
-        ax.plot(mapped[:, 0], mapped[:, 1], color="tab:blue", lw=1.0, ls="--", label="odometry through final pose")
+        ax.plot(
+            mapped[:, 0], mapped[:, 1], color="tab:blue", lw=1.0, ls="--", label="odometry through final pose"
+        )
         if result.features:
             fx = transform.apply(np.array([f.xy for f in result.features]))
-            ax.scatter(fx[:, 0], fx[:, 1], marker="x", color="tab:red", s=40, zorder=5, label="detected features")
+            ax.scatter(
+                fx[:, 0], fx[:, 1], marker="x", color="tab:red", s=40, zorder=5, label="detected features"
+            )
             by_id = {f.id: f for f in storey.features}
             for (x, y), fid in zip(fx, result.matched_ids, strict=False):
                 if fid in by_id:
@@ -96,20 +113,42 @@ def render_report(path: Path, result: SessionResult, storey: StoreyModel, title:
     for k, step in enumerate(steps):
         colour = cmap(k / max(1, len(steps) - 1))
         poses = np.array(step.poses)
-        ax.quiver(poses[:, 0], poses[:, 1], np.cos(poses[:, 2]), np.sin(poses[:, 2]), color=colour, scale=40,
-                  width=0.003, alpha=0.8, label=f"hypotheses, {step.features} features ({step.verdict})")
-    for label, pose, colour in (("coarse", result.coarse_pose, "tab:orange"),
-                                ("rectified (Eq. 17)", result.rectified_pose, "tab:purple"),
-                                ("final", result.pose, "tab:red")):
+        ax.quiver(
+            poses[:, 0],
+            poses[:, 1],
+            np.cos(poses[:, 2]),
+            np.sin(poses[:, 2]),
+            color=colour,
+            scale=40,
+            width=0.003,
+            alpha=0.8,
+            label=f"hypotheses, {step.features} features ({step.verdict})",
+        )
+    for label, pose, colour in (
+        ("coarse", result.coarse_pose, "tab:orange"),
+        ("rectified (Eq. 17)", result.rectified_pose, "tab:purple"),
+        ("final", result.pose, "tab:red"),
+    ):
         if pose is not None:
-            ax.quiver([pose.x], [pose.y], [math.cos(pose.yaw)], [math.sin(pose.yaw)], color=colour, scale=18,
-                      width=0.006, label=f"{label} pose", zorder=6)
+            ax.quiver(
+                [pose.x],
+                [pose.y],
+                [math.cos(pose.yaw)],
+                [math.sin(pose.yaw)],
+                color=colour,
+                scale=18,
+                width=0.006,
+                label=f"{label} pose",
+                zorder=6,
+            )
     if result.pose is not None and result.covariance is not None:
         ring = _ellipse(result.covariance) + [result.pose.x, result.pose.y]
         ax.plot(ring[:, 0], ring[:, 1], color="tab:red", lw=1.0, label="2-sigma covariance")
     if result.truth_pose is not None:
         t = result.truth_pose
-        ax.plot([t.x], [t.y], marker="*", color="tab:green", ms=12, ls="none", label="true final pose", zorder=7)
+        ax.plot(
+            [t.x], [t.y], marker="*", color="tab:green", ms=12, ls="none", label="true final pose", zorder=7
+        )
     ax.set_aspect("equal")
     ax.autoscale_view()
     ax.set_xlabel("x (m, BIM frame)")

@@ -25,9 +25,10 @@ import numpy as np
 
 from bimtools.site.load import Site
 from initcli.classes import ClassMap
-from initcli.core.bug_navigation import BugNavigator, BugParams
+from initcli.core.bug_navigation import BugNavigator, BugParams, RouteNavigator
 from initcli.core.detection_filter import ConfirmedFeature, Sighting, filter_detections, is_truncated
 from initcli.core.geometry import Pose2D, wrap_angle
+from initcli.core.grid_planner import PlanningGrid
 from initcli.core.particle_filter import FilterNoise, LaserModel, LikelihoodField, ParticleFilter
 from initcli.core.projection import detections_to_odom
 from initcli.core.wall_following import MovingObstacleWait, ScanView, WallFollowParams, wall_follow
@@ -43,7 +44,7 @@ from initcli.io.detection_log import (
     State,
     Truth,
 )
-from initcli.match import MatchOptions, MatchReport, match_log
+from initcli.match import Hypothesis, MatchOptions, MatchReport, match_log
 from initcli.session.config import SessionConfig
 from initcli.sim.robot import motion_delta
 
@@ -52,11 +53,15 @@ RECOVERY_TURN = 2 * math.pi  # rad turned in place by the recovery behaviour
 PF_UPDATE_D = 0.25  # m (AMCL update_min_d)
 PF_UPDATE_A = 0.2  # rad (AMCL update_min_a)
 LOST_LIKELIHOOD = 0.12
+VIEW_DISTANCE = 1.8  # m in front of a target feature where active exploration goes to look at it
+VISITED_RADIUS = 2.0  # m: an active-exploration target this close to a visited one is skipped
+STALL_S = 15.0  # s without getting closer to the route's next waypoint: the route is blocked
+TRAVEL_CAP_S = 120.0  # s of travel allowed toward one target on top of t_thre
 LANDMARKS = 4  # matched features that weight the particle filter's seed
 LANDMARK_SIGMA = 0.3  # m: how far a matched feature may land from its BIM feature
 LOOP_WINDOW_S = 45.0  # s of path checked for a loop (circling an island of clutter, a chicane)
 LOOP_RADIUS = 2.5  # m: a path that long staying this close to its centre is a loop
-LOOP_ESCAPE_S = 25.0  # s following the other wall after a loop  # geometric-mean beam likelihood of the best particle below which it is lost
+LOOP_ESCAPE_S = 25.0  # s driving out of a loop toward open space
 
 
 @dataclass
@@ -101,9 +106,11 @@ class SessionResult:
         """Translational (m) and rotational (deg) errors of the coarse, rectified and fine poses."""
         trans: dict[str, float | None] = {"coarse": None, "rectified": None, "fine": None}
         rot: dict[str, float | None] = {"coarse": None, "rectified": None, "fine": None}
-        for key, pose, truth in (("coarse", self.coarse_pose, self.truth_at_coarse),
-                                 ("rectified", self.rectified_pose, self.truth_at_coarse),
-                                 ("fine", self.pose if self.covariance is not None else None, self.truth_pose)):
+        for key, pose, truth in (
+            ("coarse", self.coarse_pose, self.truth_at_coarse),
+            ("rectified", self.rectified_pose, self.truth_at_coarse),
+            ("fine", self.pose if self.covariance is not None else None, self.truth_pose),
+        ):
             if pose is not None and truth is not None:
                 trans[key] = round(math.hypot(pose.x - truth.x, pose.y - truth.y), 4)
                 rot[key] = round(math.degrees(abs(float(wrap_angle(pose.yaw - truth.yaw)))), 3)
@@ -116,9 +123,17 @@ Observer = Callable[[dict], None]
 class Session:
     """One initialisation session on a driver, against a site model."""
 
-    def __init__(self, config: SessionConfig, site: Site, storey: str | None, driver: RobotDriver,
-                 log_path: Path | None, rng: np.random.Generator, observer: Observer | None = None,
-                 meta_source: str = "bim-init run"):
+    def __init__(
+        self,
+        config: SessionConfig,
+        site: Site,
+        storey: str | None,
+        driver: RobotDriver,
+        log_path: Path | None,
+        rng: np.random.Generator,
+        observer: Observer | None = None,
+        meta_source: str = "bim-init run",
+    ):
         self.config = config
         self.site = site
         self.storey = storey  # None: match against every storey
@@ -128,18 +143,33 @@ class Session:
         self.cmap = ClassMap(config.detector.classes)
         m = config.matching
         self.options = MatchOptions(
-            storey=storey, alpha=m.alpha, beta_deg=m.beta, max_outliers=m.max_outliers, pose_method=m.pose_method,
-            d_thre=config.exploration.d_thre, merge_radius=m.merge_radius, min_sightings=m.min_sightings,
-            score_threshold=config.detector.score_threshold, top=max(m.m_thre, 5),
+            storey=storey,
+            alpha=m.alpha,
+            beta_deg=m.beta,
+            max_outliers=m.max_outliers,
+            pose_method=m.pose_method,
+            d_thre=config.exploration.d_thre,
+            merge_radius=m.merge_radius,
+            min_sightings=m.min_sightings,
+            score_threshold=config.detector.score_threshold,
+            top=max(m.m_thre, 5),
         )
-        self.meta = Meta(camera=driver.camera, camera_pose=driver.mount, depth_window=driver.depth_window,
-                         source=meta_source)
+        self.meta = Meta(
+            camera=driver.camera,
+            camera_pose=driver.mount,
+            depth_window=driver.depth_window,
+            source=meta_source,
+        )
         self.log = DetectionLog(path=log_path or Path("session.jsonl"), meta=self.meta, records=[], lines=[])
         self._log_file = open(log_path, "w", encoding="utf-8") if log_path else None  # noqa: SIM115
         self._write(self.meta, keep=False)
         self.side = 1 if config.exploration.wall_side == "left" else -1
-        self.follow = WallFollowParams(distance=config.exploration.wall_distance, speed=config.robot.max_linear,
-                                       max_turn=config.robot.max_angular, front_stop=config.robot.radius + 0.2)
+        self.follow = WallFollowParams(
+            distance=config.exploration.wall_distance,
+            speed=config.robot.max_linear,
+            max_turn=config.robot.max_angular,
+            front_stop=config.robot.radius + 0.2,
+        )
         self.loop_escape_until = -1.0
         self.waiting = MovingObstacleWait()
         self.sightings: list[Sighting] = []
@@ -149,6 +179,14 @@ class Session:
         self.result = SessionResult(False, "", storey)
         self.detecting = True
         self._loop_trace: list[tuple[float, float, float]] = []
+        self.plan: list[Hypothesis] = []
+        self.visited: list[np.ndarray] = []
+        self.navigator: RouteNavigator | None = None
+        self._planners: dict[str, PlanningGrid | None] = {}
+        self.target_budget = config.exploration.t_thre
+        self.target_started = 0.0
+        self.target_reached_t: float | None = None
+        self.progress: tuple[float, float] = (0.0, math.inf)
         self._loop_checked = -1.0
 
     # -- logging -------------------------------------------------------------------------------------
@@ -181,8 +219,16 @@ class Session:
         self.result.odom_path.append(frame.odom.as_tuple())
         if frame.scan is not None and step % SCAN_LOG_EVERY == 0:
             s = frame.scan
-            self._write(Scan(t, s.angle_min, s.angle_increment, s.range_max,
-                             tuple(round(float(r), 3) for r in s.ranges)), keep=False)
+            self._write(
+                Scan(
+                    t,
+                    s.angle_min,
+                    s.angle_increment,
+                    s.range_max,
+                    tuple(round(float(r), 3) for r in s.ranges),
+                ),
+                keep=False,
+            )
         if frame.detections is not None and self.detecting:
             self._write(Detections(t, frame.odom, tuple(frame.detections)))
             self._add_sightings(t, frame.odom, frame.detections)
@@ -194,13 +240,26 @@ class Session:
         objs = [o for o in objects if o.depth is not None and math.isfinite(o.depth)]
         if not objs:
             return
-        pts = detections_to_odom(np.array([o.bbox for o in objs]), np.array([o.depth for o in objs]),
-                                 self.meta.camera, self.meta.camera_pose, odom)
+        pts = detections_to_odom(
+            np.array([o.bbox for o in objs]),
+            np.array([o.depth for o in objs]),
+            self.meta.camera,
+            self.meta.camera_pose,
+            odom,
+        )
         for o, p in zip(objs, pts, strict=True):
-            self.sightings.append(Sighting(t, self.cmap.canonical(o.cls), float(p[0]), float(p[1]), o.score,
-                                           float(o.depth), frame,
-                                           truncated=is_truncated(o.bbox, self.meta.camera.width,
-                                                                  self.options.edge_margin)))
+            self.sightings.append(
+                Sighting(
+                    t,
+                    self.cmap.canonical(o.cls),
+                    float(p[0]),
+                    float(p[1]),
+                    o.score,
+                    float(o.depth),
+                    frame,
+                    truncated=is_truncated(o.bbox, self.meta.camera.width, self.options.edge_margin),
+                )
+            )
 
     # -- matching ------------------------------------------------------------------------------------
 
@@ -215,46 +274,134 @@ class Session:
         self.result.match_steps.append(
             MatchStep(t, len(report.features), report.verdict, [h.pose.as_tuple() for h in report.hypotheses])
         )
-        self._write(HypothesesRecord(round(t, 3), {
-            "verdict": report.verdict,
-            "count": report.n_hypotheses,
-            "storey": report.storey,
-            "hypotheses": [
-                {"matches": h.matches, "cost": round(h.cost, 4), "storey": h.storey,
-                 "pose": [round(v, 4) for v in h.pose.as_tuple()]}
-                for h in report.hypotheses[:5]
-            ],
-        }))
+        self._write(
+            HypothesesRecord(
+                round(t, 3),
+                {
+                    "verdict": report.verdict,
+                    "count": report.n_hypotheses,
+                    "storey": report.storey,
+                    "hypotheses": [
+                        {
+                            "matches": h.matches,
+                            "cost": round(h.cost, 4),
+                            "storey": h.storey,
+                            "pose": [round(v, 4) for v in h.pose.as_tuple()],
+                        }
+                        for h in report.hypotheses[:5]
+                    ],
+                },
+            )
+        )
         return report
 
-    def _target(self, report: MatchReport, odom: Pose2D, visited: set[str]) -> np.ndarray | None:
-        """Odom-frame viewpoint in front of the nearest feature of the highest-priority category."""
-        best = report.hypotheses[0]
-        features = self.site.storeys[best.storey].features
+    def _planner(self, storey: str) -> PlanningGrid | None:
+        if storey not in self._planners:
+            grid = self.site.storeys[storey].grid
+            self._planners[storey] = (
+                PlanningGrid.of(grid, self.config.robot.radius + 0.1) if grid is not None else None
+            )
+        return self._planners[storey]
+
+    def _target(self, hypothesis: Hypothesis, odom: Pose2D) -> tuple[list[np.ndarray], float] | None:
+        """A route (odom waypoints) to a viewpoint in front of the BIM feature of the highest-priority
+        category (fewest in the BIM) that ``hypothesis`` has not matched yet, nearest along the
+        BIM's corridors, not visited before; and its length."""
+        features = self.site.storeys[hypothesis.storey].features
         counts: dict[str, int] = {}
         for f in features:
             counts[f.category] = counts.get(f.category, 0) + 1
-        matched = {m for m in best.matches if m is not None}
-        here = best.transform * odom
+        matched = {m for m in hypothesis.matches if m is not None}
+        here = hypothesis.transform * odom
+        planner = self._planner(hypothesis.storey)
+        if planner is None:
+            return None
+        dist, pred, start = planner.distances_from(here.x, here.y)
         for category in sorted(counts, key=lambda c: (counts[c], c)):
-            options = [f for f in features if f.category == category and f.id not in matched and f.id not in visited]
-            if not options:
-                continue
-            f = min(options, key=lambda f: math.hypot(f.x - here.x, f.y - here.y))
-            visited.add(f.id)
-            view = np.array([f.x + 1.8 * f.norm_x, f.y + 1.8 * f.norm_y])
-            return best.transform.apply_inverse(view)
+            best: tuple[float, int, np.ndarray] | None = None
+            for f in features:
+                if f.category != category or f.id in matched:
+                    continue
+                view_bim = np.array([f.x + VIEW_DISTANCE * f.norm_x, f.y + VIEW_DISTANCE * f.norm_y])
+                view = hypothesis.transform.apply_inverse(view_bim)
+                if any(math.hypot(*(view - v)) <= VISITED_RADIUS for v in self.visited):
+                    continue
+                node = planner.node_at(*view_bim)
+                if node >= 0 and math.isfinite(dist[node]) and (best is None or dist[node] < best[0]):
+                    best = (float(dist[node]), node, view)
+            if best is not None:
+                self.visited.append(best[2])
+                route = planner.path(pred, start, best[1])
+                return [hypothesis.transform.apply_inverse(p) for p in route], best[0]
         return None
+
+    def _next_target(self, frame: SensorFrame) -> bool:
+        """Start active exploration toward the next hypothesis' target; False when none is left.
+
+        Targets of the remaining hypotheses are planned together and the nearest (along the BIM's
+        corridors) is validated first: a wrong hypothesis whose target is close is cheap to refute,
+        and the true one is confirmed as soon as its target feature is seen.
+        """
+        cfg = self.config
+        options = []
+        for hypothesis in self.plan:
+            planned = self._target(hypothesis, frame.odom)
+            if planned is not None:
+                options.append((planned[1], hypothesis.rank, hypothesis, planned[0]))
+        del self.visited[len(self.visited) - len(options):]  # _target marked them; only the chosen one is
+        if not options:
+            self.plan = []
+            return False
+        length, rank, hypothesis, route = min(options, key=lambda o: (o[0], o[1]))
+        self.plan = [h for h in self.plan if h is not hypothesis]
+        self.visited.append(route[-1])
+        self.navigator = RouteNavigator(route, BugParams(follow=self.follow))
+        # t_thre to find something, plus the time to get there (capped: under a wrong hypothesis the
+        # route may run into walls).
+        self.target_budget = cfg.exploration.t_thre + min(1.5 * length / cfg.robot.max_linear, TRAVEL_CAP_S)
+        self.target_started = frame.t
+        self.target_reached_t = None
+        self.progress = (frame.t, math.inf)
+        self.result.active_explorations += 1
+        self._set_state(
+            frame.t,
+            "active",
+            target=[round(float(c), 3) for c in route[-1]],
+            hypothesis=rank,
+            route_m=round(length, 1),
+            matches=hypothesis.matches,
+        )
+        return True
+
+    def _stalled(self, frame: SensorFrame) -> bool:
+        """No progress toward the route's current waypoint for STALL_S seconds."""
+        assert self.navigator is not None
+        if not self.navigator.waypoints:
+            return False
+        remaining = math.hypot(*(self.navigator.waypoints[0] - frame.odom.xy)) + 2.0 * len(
+            self.navigator.waypoints
+        )
+        since, best = self.progress
+        if remaining < best - 0.5:
+            self.progress = (frame.t, remaining)
+            return False
+        return frame.t - since > STALL_S
 
     # -- the loop ------------------------------------------------------------------------------------
 
     def _emit(self, frame: SensorFrame, extra: dict | None = None) -> None:
         if self.observer is None:
             return
-        self.observer({
-            "t": frame.t, "state": self.state, "distance": self.driver.distance,
-            "features": len(self.confirmed), "hypotheses": self._last_count, **(extra or {}),
-        })
+        self.observer(
+            {
+                "t": frame.t,
+                "state": self.state,
+                "distance": self.driver.distance,
+                "features": len(self.confirmed),
+                "hypotheses": self._last_count,
+                **(extra or {}),
+            }
+        )
 
     def run(self) -> SessionResult:
         started = time.perf_counter()
@@ -273,17 +420,16 @@ class Session:
         self._record_frame(frame, step)
         self._set_state(frame.t, "explore")
         self._last_count = 0
-        visited: set[str] = set()
-        navigator: BugNavigator | None = None
         escape: BugNavigator | None = None
-        target_budget = cfg.exploration.t_thre
-        target_reached_t: float | None = None
-        state_since = frame.t
         last_feature_t = frame.t
         turned = 0.0
         report: MatchReport | None = None
         while True:
-            scan = ScanView.of(frame.scan.angles, frame.scan.ranges, frame.scan.range_max) if frame.scan else None
+            scan = (
+                ScanView.of(frame.scan.angles, frame.scan.ranges, frame.scan.range_max)
+                if frame.scan
+                else None
+            )
             # Decide the command for this period.
             if self.state == "explore":
                 if escape is not None and frame.t < self.loop_escape_until:
@@ -301,25 +447,37 @@ class Session:
                     self.result.loop_escapes += 1
                     self._write(State(round(frame.t, 3), {"state": "explore", "why": "loop escape"}))
             elif self.state == "active":
-                assert navigator is not None
-                v, w, arrived = navigator.step(frame.odom, scan)
-                if arrived and target_reached_t is None:
-                    target_reached_t = frame.t
-                waited = frame.t - max(last_feature_t, target_reached_t or -math.inf)
-                overdue = frame.t - last_feature_t > target_budget
-                if (arrived and waited > 2.0) or overdue or (target_reached_t is None and waited > target_budget):
+                assert self.navigator is not None
+                if self.waiting.hold(frame.t, scan.front(), self.follow.front_stop):
+                    v, w, arrived = 0.0, 0.0, False
+                else:
+                    v, w, arrived = self.navigator.step(frame.odom, scan)
+                if arrived and self.target_reached_t is None:
+                    self.target_reached_t = frame.t
+                since = max(last_feature_t, self.target_started)
+                reached_and_looked = (
+                    self.target_reached_t is not None and frame.t - self.target_reached_t > 2.0
+                )
+                stalled = self.target_reached_t is None and self._stalled(frame)
+                if reached_and_looked or stalled or frame.t - since > self.target_budget:
+                    why = (
+                        "target reached, nothing new"
+                        if reached_and_looked
+                        else "no progress toward the target"
+                        if stalled
+                        else "time budget passed"
+                    )
                     if cfg.exploration.recovery:
-                        self._set_state(frame.t, "recovery", why="target reached" if arrived else "time budget passed")
+                        self._set_state(frame.t, "recovery", why=why)
                         self.result.recoveries += 1
-                        state_since, turned = frame.t, 0.0
-                    else:
-                        self._set_state(frame.t, "explore", why="nothing detected near the target")
+                        turned = 0.0
+                    elif not self._next_target(frame):
+                        self._set_state(frame.t, "explore", why=why)
                     v, w = 0.0, 0.0
             elif self.state == "recovery":
                 v, w = 0.0, 0.6 * cfg.robot.max_angular
-                if turned >= RECOVERY_TURN:
+                if turned >= RECOVERY_TURN and not self._next_target(frame):
                     self._set_state(frame.t, "explore", why="nothing detected after recovery")
-                    v, w = wall_follow(scan, self.side, self.follow)
             else:
                 raise RuntimeError(f"unexpected state {self.state}")
 
@@ -339,24 +497,21 @@ class Session:
                         self._coarse_done(frame, report)
                         return
                     if 1 < report.n_hypotheses < cfg.matching.m_thre:
-                        target = self._target(report, frame.odom, visited)
-                        if target is not None:
-                            navigator = BugNavigator(target, BugParams(follow=self.follow))
-                            # t_thre, plus the time to get there (twice the straight-line time).
-                            reach = math.hypot(target[0] - frame.odom.x, target[1] - frame.odom.y)
-                            target_budget = cfg.exploration.t_thre + 2.0 * reach / cfg.robot.max_linear
-                            target_reached_t = None
-                            self.result.active_explorations += 1
-                            self._set_state(frame.t, "active", target=[round(float(c), 3) for c in target],
-                                            hypotheses=report.n_hypotheses)
+                        # Validate the most probable hypothesis first, then the next ones (§3.3.3).
+                        self.plan = list(report.hypotheses)
+                        if not self._next_target(frame) and self.state != "explore":
+                            self._set_state(frame.t, "explore", why="no target left to validate")
                     elif self.state != "explore":
                         self._set_state(frame.t, "explore", why=report.verdict)
                 elif self.state == "recovery":
                     self._set_state(frame.t, "explore", why="new feature")
             self._emit(frame)
             if self.driver.distance > limits.max_distance:
-                self._fail(frame, f"moved {limits.max_distance:g} m without a unique match "
-                                  f"({len(self.confirmed)} features, {self._last_count} hypotheses)")
+                self._fail(
+                    frame,
+                    f"moved {limits.max_distance:g} m without a unique match "
+                    f"({len(self.confirmed)} features, {self._last_count} hypotheses)",
+                )
                 return
             if frame.t > limits.max_time:
                 self._fail(frame, f"no unique match within {limits.max_time:g} s")
@@ -411,10 +566,14 @@ class Session:
         r.features = list(self.confirmed)
         r.transform = r.rectified_pose * frame.odom.inverse()
         self.detecting = False  # the log ends its detections here: it replays to this verdict
-        self._set_state(frame.t, "coarse", verdict=report.verdict,
-                        pose=[round(v, 4) for v in best.pose.as_tuple()],
-                        rectified_pose=[round(v, 4) for v in r.rectified_pose.as_tuple()],
-                        matches=best.matches)
+        self._set_state(
+            frame.t,
+            "coarse",
+            verdict=report.verdict,
+            pose=[round(v, 4) for v in best.pose.as_tuple()],
+            rectified_pose=[round(v, 4) for v in r.rectified_pose.as_tuple()],
+            matches=best.matches,
+        )
         pose, cov = r.rectified_pose, None
         if cfg.fine_tuning.enabled and self.site.storeys[best.storey].grid is not None:
             outcome = self._fine_tune(frame, r.rectified_pose, best.storey)
@@ -429,7 +588,9 @@ class Session:
         elif r.fine_converged:
             r.reason = "initialised"
         else:
-            r.reason = "initialised (fine tuning stopped at its distance limit above the covariance threshold)"
+            r.reason = (
+                "initialised (fine tuning stopped at its distance limit above the covariance threshold)"
+            )
         r.pose, r.covariance = pose, cov
         r.transform = pose * frame.odom.inverse()
         r.truth_pose = frame.truth
@@ -440,14 +601,18 @@ class Session:
     def _matched_pairs(self, storey: str) -> tuple[np.ndarray, np.ndarray]:
         """(odom positions, BIM positions) of the confirmed features the coarse match matched."""
         by_id = {f.id: f for f in self.site.storeys[storey].features}
-        pairs = [(f.xy, (by_id[m].x, by_id[m].y)) for f, m in zip(self.result.features, self.result.matched_ids,
-                                                                   strict=False) if m in by_id]
+        pairs = [
+            (f.xy, (by_id[m].x, by_id[m].y))
+            for f, m in zip(self.result.features, self.result.matched_ids, strict=False)
+            if m in by_id
+        ]
         if not pairs:
             return np.zeros((0, 2)), np.zeros((0, 2))
         return np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs], dtype=float)
 
-    def _fine_tune(self, frame: SensorFrame, seed: Pose2D, storey: str
-                   ) -> tuple[SensorFrame, Pose2D, np.ndarray] | None:
+    def _fine_tune(
+        self, frame: SensorFrame, seed: Pose2D, storey: str
+    ) -> tuple[SensorFrame, Pose2D, np.ndarray] | None:
         """Eq. 18: track with a particle filter seeded at the rectified pose while following the wall."""
         cfg = self.config.fine_tuning
         grid = self.site.storeys[storey].grid
@@ -463,7 +628,11 @@ class Session:
         step = 0
         converged_at: float | None = None
         while True:
-            scan = ScanView.of(frame.scan.angles, frame.scan.ranges, frame.scan.range_max) if frame.scan else None
+            scan = (
+                ScanView.of(frame.scan.angles, frame.scan.ranges, frame.scan.range_max)
+                if frame.scan
+                else None
+            )
             v, w = wall_follow(scan, self.side, self.follow) if scan is not None else (0.0, 0.0)
             frame = self.driver.step(v, w)
             step += 1
@@ -481,8 +650,12 @@ class Session:
                     self._fail(frame, "lost during fine tuning (laser scans do not fit the map)")
                     return None
                 travelled = self.driver.distance - start_distance
-                if (cov[0, 0] < cfg.covariance and cov[1, 1] < cfg.covariance and cov[2, 2] < cfg.yaw_covariance
-                        and travelled >= 1.0):
+                if (
+                    cov[0, 0] < cfg.covariance
+                    and cov[1, 1] < cfg.covariance
+                    and cov[2, 2] < cfg.yaw_covariance
+                    and travelled >= 1.0
+                ):
                     converged_at = frame.t
                 if converged_at is not None or travelled >= cfg.distance:
                     self.result.fine_converged = converged_at is not None

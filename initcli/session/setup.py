@@ -67,14 +67,15 @@ class SimSetup:
     storey: str
 
 
-def build_sim(config: SessionConfig, site: Site, storey: str, seed: int,
-              start: Pose2D | None = None) -> SimSetup:
+def build_sim(
+    config: SessionConfig, site: Site, storey: str, seed: int, start: Pose2D | None = None
+) -> SimSetup:
     rng = np.random.default_rng(seed)
     model = site.storeys[storey]
     circulation = Circulation.of(model)
     clutter = place_clutter(model, circulation, config.sim.clutter, rng)
     static = SimWorld.from_obstacles(model.obstacles, clutter)
-    workers = place_workers(circulation, static.static, int(config.sim.workers), rng)
+    workers = place_workers(model, circulation, static.static, int(config.sim.workers), rng)
     world = SimWorld.from_obstacles(model.obstacles, clutter, workers)
     if start is None:
         explicit = start_pose_degrees(config)
@@ -88,7 +89,9 @@ def build_sim(config: SessionConfig, site: Site, storey: str, seed: int,
         raise InputError(f"sim.start: ({start.x:.2f}, {start.y:.2f}) is inside or against an obstacle")
     assert start is not None
     n = config.sim.odometry_noise
-    robot = DiffDriveRobot(start, config.robot.radius, OdometryNoise(n.alpha1, n.alpha2, n.alpha3, n.alpha4), rng)
+    robot = DiffDriveRobot(
+        start, config.robot.radius, OdometryNoise(n.alpha1, n.alpha2, n.alpha3, n.alpha4), rng
+    )
     camera, mount = camera_of(config)
     cmap = ClassMap(config.detector.classes)
     features = sim_features_from_bim(model.features, cmap)
@@ -106,11 +109,24 @@ def build_sim(config: SessionConfig, site: Site, storey: str, seed: int,
 
         detector = OnnxCamera(config, model, world, camera, mount, rng).detect
     else:
-        detector = SimulatedDetector(features + phantoms, camera, mount, noise, config.detector.rate, world, rng).detect
-    l = config.lidar
-    lidar = LidarSpec(int(l.beams), math.radians(l.fov), l.max_range, l.noise, l.dropout)
-    driver = SimDriver(world, robot, lidar, camera, mount, detector, config.detector.rate, config.robot.max_linear,
-                       config.robot.max_angular, rng, depth_window=int(config.camera.depth_window))
+        detector = SimulatedDetector(
+            features + phantoms, camera, mount, noise, config.detector.rate, world, rng
+        ).detect
+    spec = config.lidar
+    lidar = LidarSpec(int(spec.beams), math.radians(spec.fov), spec.max_range, spec.noise, spec.dropout)
+    driver = SimDriver(
+        world,
+        robot,
+        lidar,
+        camera,
+        mount,
+        detector,
+        config.detector.rate,
+        config.robot.max_linear,
+        config.robot.max_angular,
+        rng,
+        depth_window=int(config.camera.depth_window),
+    )
     return SimSetup(driver, start, world, storey)
 
 
@@ -118,12 +134,26 @@ def _phantoms(model, circulation: Circulation, count: int, rng: np.random.Genera
     """Door-like things on corridor walls that are not in the BIM (posters, temporary openings)."""
     from initcli.synthetic_log import SimFeature
 
-    walls = [w for w in model.walls if w.length > 2.0
-             and circulation.contains((w.x1 + w.x2) / 2 + 0.4 * w.normal[0], (w.y1 + w.y2) / 2 + 0.4 * w.normal[1])]
+    walls = [
+        w
+        for w in model.walls
+        if w.length > 2.0
+        and circulation.contains((w.x1 + w.x2) / 2 + 0.4 * w.normal[0], (w.y1 + w.y2) / 2 + 0.4 * w.normal[1])
+    ]
     out = []
     for i in range(min(count, len(walls))):
         w = walls[int(rng.integers(len(walls)))]
         s = rng.uniform(0.2, 0.8)
-        out.append(SimFeature(f"phantom-{i}", "door", w.x1 + s * (w.x2 - w.x1), w.y1 + s * (w.y2 - w.y1),
-                              w.normal[0], w.normal[1], 1.0, 2.1))
+        out.append(
+            SimFeature(
+                f"phantom-{i}",
+                "door",
+                w.x1 + s * (w.x2 - w.x1),
+                w.y1 + s * (w.y2 - w.y1),
+                w.normal[0],
+                w.normal[1],
+                1.0,
+                2.1,
+            )
+        )
     return out

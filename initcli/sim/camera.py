@@ -32,8 +32,16 @@ class CameraNoise:
 
 
 class SimulatedDetector:
-    def __init__(self, features: list[SimFeature], camera: CameraIntrinsics, mount: CameraMount,
-                 noise: CameraNoise, rate_hz: float, world: SimWorld, rng: np.random.Generator):
+    def __init__(
+        self,
+        features: list[SimFeature],
+        camera: CameraIntrinsics,
+        mount: CameraMount,
+        noise: CameraNoise,
+        rate_hz: float,
+        world: SimWorld,
+        rng: np.random.Generator,
+    ):
         self.features = features
         self.camera = camera
         self.mount = mount
@@ -56,11 +64,23 @@ class SimulatedDetector:
 
     def detect(self, truth: Pose2D, t: float) -> list[DetectedObject]:
         segments = self.world.segments_at(truth.x, truth.y, self.noise.range + 1.0, t)
-        found = render_image(self.features, truth, self.camera, self.mount, self.params, walls=segments,
-                             rng=self.rng, classes=self.classes)
+        found = render_image(
+            self.features,
+            truth,
+            self.camera,
+            self.mount,
+            self.params,
+            walls=segments,
+            rng=self.rng,
+            classes=self.classes,
+        )
         out: list[DetectedObject] = []
         for obj, _source in found:
-            if self.noise.confusion_rate > 0 and len(self.classes) > 1 and self.rng.random() < self.noise.confusion_rate:
+            if (
+                self.noise.confusion_rate > 0
+                and len(self.classes) > 1
+                and self.rng.random() < self.noise.confusion_rate
+            ):
                 others = [c for c in self.classes if c != obj.cls]
                 obj = replace(obj, cls=others[int(self.rng.integers(len(others)))])
             score = float(np.clip(self.rng.normal(0.85, 0.08), 0.3, 0.99))

@@ -11,7 +11,7 @@ import numpy as np
 from bimtools.site.load import StoreyModel
 from bimtools.site.occupancy_map import FREE, OccupancyGrid
 from initcli.core.geometry import Pose2D
-from initcli.sim.world import SimWorld, Worker, ray_segment_distances
+from initcli.sim.world import Worker, ray_segment_distances
 
 STACK_SIZE = (1.2, 0.5)  # m: a pallet of material against a wall
 
@@ -60,11 +60,16 @@ def random_start(circulation: Circulation, rng: np.random.Generator, clearance: 
     return Pose2D(float(x), float(y), float(rng.uniform(-math.pi, math.pi)))
 
 
-def place_clutter(storey: StoreyModel, circulation: Circulation, density: float,
-                  rng: np.random.Generator) -> list[np.ndarray]:
+def place_clutter(
+    storey: StoreyModel, circulation: Circulation, density: float, rng: np.random.Generator
+) -> list[np.ndarray]:
     """Material stacks against corridor walls, ``density`` per metre of corridor wall, kept off doors."""
-    walls = [w for w in storey.walls if w.length >= STACK_SIZE[0] + 2.0
-             and circulation.contains((w.x1 + w.x2) / 2 + 0.4 * w.normal[0], (w.y1 + w.y2) / 2 + 0.4 * w.normal[1])]
+    walls = [
+        w
+        for w in storey.walls
+        if w.length >= STACK_SIZE[0] + 2.0
+        and circulation.contains((w.x1 + w.x2) / 2 + 0.4 * w.normal[0], (w.y1 + w.y2) / 2 + 0.4 * w.normal[1])
+    ]
     if not walls or density <= 0:
         return []
     lengths = np.array([w.length for w in walls])
@@ -84,30 +89,51 @@ def place_clutter(storey: StoreyModel, circulation: Circulation, density: float,
         ux, uy = (w.x2 - w.x1) / w.length, (w.y2 - w.y1) / w.length
         nx, ny = w.normal
         half_l, depth = STACK_SIZE[0] / 2, STACK_SIZE[1]
-        corners = np.array([
-            [px - ux * half_l + nx * 0.05, py - uy * half_l + ny * 0.05],
-            [px + ux * half_l + nx * 0.05, py + uy * half_l + ny * 0.05],
-            [px + ux * half_l + nx * (0.05 + depth), py + uy * half_l + ny * (0.05 + depth)],
-            [px - ux * half_l + nx * (0.05 + depth), py - uy * half_l + ny * (0.05 + depth)],
-        ])
+        corners = np.array(
+            [
+                [px - ux * half_l + nx * 0.05, py - uy * half_l + ny * 0.05],
+                [px + ux * half_l + nx * 0.05, py + uy * half_l + ny * 0.05],
+                [px + ux * half_l + nx * (0.05 + depth), py + uy * half_l + ny * (0.05 + depth)],
+                [px - ux * half_l + nx * (0.05 + depth), py - uy * half_l + ny * (0.05 + depth)],
+            ]
+        )
         boxes.append(np.vstack([corners, corners[:1]]))
     return boxes
 
 
-def place_workers(circulation: Circulation, world_static: np.ndarray, count: int,
-                  rng: np.random.Generator) -> list[Worker]:
-    """People walking back and forth along free corridor stretches."""
-    cells = circulation.cells(0.8)
+def place_workers(
+    storey: StoreyModel,
+    circulation: Circulation,
+    world_static: np.ndarray,
+    count: int,
+    rng: np.random.Generator,
+) -> list[Worker]:
+    """People walking back and forth along corridor walls (0.5 m off the wall, up to 8 m)."""
+    walls = [
+        w
+        for w in storey.walls
+        if w.length >= 4.0
+        and circulation.contains((w.x1 + w.x2) / 2 + 0.5 * w.normal[0], (w.y1 + w.y2) / 2 + 0.5 * w.normal[1])
+    ]
     workers: list[Worker] = []
     for _ in range(count * 10):
-        if len(workers) >= count or len(cells) == 0:
+        if len(workers) >= count or not walls:
             break
-        a = cells[int(rng.integers(len(cells)))]
-        heading = float(rng.choice([0.0, math.pi / 2, math.pi, -math.pi / 2]))
-        free = float(ray_segment_distances(a, np.array([heading]), world_static, 12.0)[0])
-        length = min(8.0, free - 0.8)
-        if length < 3.0:
+        w = walls[int(rng.integers(len(walls)))]
+        length = min(8.0, w.length - 1.0)
+        s0 = rng.uniform(0.5, w.length - 0.5 - length)
+        ux, uy = (w.x2 - w.x1) / w.length, (w.y2 - w.y1) / w.length
+        offset = np.array(w.normal) * 0.5
+        a = np.array([w.x1 + ux * s0, w.y1 + uy * s0]) + offset
+        b = a + length * np.array([ux, uy])
+        mid = (a + b) / 2
+        if not circulation.contains(*a, 0.3) or not circulation.contains(*b, 0.3):
             continue
-        b = a + length * np.array([math.cos(heading), math.sin(heading)])
-        workers.append(Worker(a=a, b=b, speed=float(rng.uniform(0.4, 1.0)), phase=float(rng.uniform(0, 2 * length))))
+        heading = math.atan2(uy, ux)
+        free = float(ray_segment_distances(a, np.array([heading]), world_static, 12.0)[0])
+        if free < length or float(np.hypot(*(mid - a))) < 1.0:
+            continue  # clutter on the way
+        workers.append(
+            Worker(a=a, b=b, speed=float(rng.uniform(0.4, 1.0)), phase=float(rng.uniform(0, 2 * length)))
+        )
     return workers

@@ -50,19 +50,24 @@ def ray_segment_distances(
 
 @dataclass
 class Worker:
-    """A person walking back and forth between two points."""
+    """A person walking back and forth between two points; stops while the robot is close."""
 
     a: np.ndarray
     b: np.ndarray
     speed: float = 0.8
     radius: float = 0.25
-    phase: float = 0.0
+    phase: float = 0.0  # metres walked along the back-and-forth loop
+    yield_distance: float = 1.2  # m: closer than this to the robot the worker waits
 
-    def position(self, t: float) -> np.ndarray:
+    def position(self, t: float = 0.0) -> np.ndarray:
         length = float(np.hypot(*(self.b - self.a))) or 1.0
-        s = (self.phase + t * self.speed) % (2 * length)
+        s = self.phase % (2 * length)
         s = s if s <= length else 2 * length - s
         return self.a + (self.b - self.a) * (s / length)
+
+    def advance(self, dt: float, robot_xy: np.ndarray) -> None:
+        if float(np.hypot(*(self.position() - robot_xy))) > self.yield_distance:
+            self.phase += self.speed * dt
 
 
 @dataclass
@@ -81,9 +86,9 @@ class SimWorld:
         lo = np.floor(np.minimum(self.static[:, 0:2], self.static[:, 2:4]) / self.cell).astype(int)
         hi = np.floor(np.maximum(self.static[:, 0:2], self.static[:, 2:4]) / self.cell).astype(int)
         buckets: dict[tuple[int, int], list[int]] = {}
-        for i, (l, h) in enumerate(zip(lo, hi, strict=True)):
-            for gx in range(l[0], h[0] + 1):
-                for gy in range(l[1], h[1] + 1):
+        for i, (low, high) in enumerate(zip(lo, hi, strict=True)):
+            for gx in range(low[0], high[0] + 1):
+                for gy in range(low[1], high[1] + 1):
                     buckets.setdefault((gx, gy), []).append(i)
         self._index = {k: np.array(v) for k, v in buckets.items()}
 
@@ -120,6 +125,10 @@ class SimWorld:
         if not self.workers:
             return np.zeros((0, 4))
         return np.concatenate([box_edges(*w.position(t), w.radius, w.radius) for w in self.workers])
+
+    def advance(self, dt: float, robot_xy: np.ndarray) -> None:
+        for worker in self.workers:
+            worker.advance(dt, robot_xy)
 
     def segments_at(self, x: float, y: float, radius: float, t: float) -> np.ndarray:
         near = self.segments_near(x, y, radius)
