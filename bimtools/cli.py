@@ -73,7 +73,9 @@ def summary_table(manifest) -> Table:
 
 @app.command()
 def extract(
-    model: Annotated[Path, typer.Argument(help="IFC model (IFC2X3, IFC4, IFC4X3)", show_default=False)],
+    model: Annotated[
+        Path, typer.Argument(metavar="MODEL.ifc", help="IFC model (IFC2X3, IFC4, IFC4X3)", show_default=False)
+    ],
     outdir: Annotated[
         Path | None, typer.Option("-o", "--outdir", help="output folder [default: ./<model-stem>_site/]")
     ] = None,

@@ -82,7 +82,7 @@ class DetectorSection:
 class MatchingSection:
     alpha: float = 0.5  # m, Eq. 7
     beta: float = 15.0  # degrees, Eq. 9
-    m_thre: int = 12  # active exploration only with fewer hypotheses than this
+    m_thre: int = 40  # active exploration only with fewer hypotheses than this
     max_outliers: int = 1
     pose_method: str = "rigid"
     min_sightings: int = 3
