@@ -7,6 +7,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from bimtools.errors import InputError
+from bimtools.site.jsonfile import read_json
 from bimtools.site.records import StoreyInfo
 
 SITE_FORMAT = "bim-init.site/1"
@@ -69,10 +70,4 @@ def format_manifest(manifest: SiteManifest) -> str:
 
 def read_manifest(path: Path) -> SiteManifest:
     path = Path(path)
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read: {exc.strerror or exc}") from None
-    except json.JSONDecodeError as exc:
-        raise InputError(f"{path}:{exc.lineno}: not valid JSON: {exc.msg}") from None
-    return SiteManifest.from_dict(doc, str(path))
+    return SiteManifest.from_dict(read_json(path), str(path))

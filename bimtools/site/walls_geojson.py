@@ -11,6 +11,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from bimtools.errors import InputError
+from bimtools.site.jsonfile import read_json
 from bimtools.site.records import Obstacle, WallSegment
 
 
@@ -63,12 +64,7 @@ def write_walls(path: Path, walls: Iterable[WallSegment], obstacles: Iterable[Ob
 def read_walls(path: Path, storey: str | None = None) -> tuple[list[WallSegment], list[Obstacle]]:
     """Read wall surfaces and obstacles, optionally only those of one storey."""
     path = Path(path)
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read: {exc.strerror or exc}") from None
-    except json.JSONDecodeError as exc:
-        raise InputError(f"{path}:{exc.lineno}: not valid JSON: {exc.msg}") from None
+    doc = read_json(path)
     if not isinstance(doc, dict) or doc.get("type") != "FeatureCollection":
         raise InputError(f"{path}: expected a GeoJSON FeatureCollection")
     walls: list[WallSegment] = []
