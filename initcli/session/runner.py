@@ -54,6 +54,8 @@ PF_UPDATE_D = 0.25  # m (AMCL update_min_d)
 PF_UPDATE_A = 0.2  # rad (AMCL update_min_a)
 LOST_LIKELIHOOD = 0.12
 VIEW_DISTANCE = 1.8  # m in front of a target feature where active exploration goes to look at it
+ACTIVE_TOP = 5  # hypotheses (most probable first) whose targets active exploration validates
+DISCRIMINATION_RADIUS = 1.5  # m: another hypothesis predicting a same-category feature this close agrees
 VISITED_RADIUS = 2.0  # m: an active-exploration target this close to a visited one is skipped
 STALL_S = 15.0  # s without getting closer to the route's next waypoint: the route is blocked
 TRAVEL_CAP_S = 120.0  # s of travel allowed toward one target on top of t_thre
@@ -180,6 +182,7 @@ class Session:
         self.detecting = True
         self._loop_trace: list[tuple[float, float, float]] = []
         self.plan: list[Hypothesis] = []
+        self.plan_all: list[Hypothesis] = []
         self.visited: list[np.ndarray] = []
         self.navigator: RouteNavigator | None = None
         self._planners: dict[str, PlanningGrid | None] = {}
@@ -326,6 +329,8 @@ class Session:
                 view = hypothesis.transform.apply_inverse(view_bim)
                 if any(math.hypot(*(view - v)) <= VISITED_RADIUS for v in self.visited):
                     continue
+                if not self._discriminates(hypothesis, f):
+                    continue
                 node = planner.node_at(*view_bim)
                 if node >= 0 and math.isfinite(dist[node]) and (best is None or dist[node] < best[0]):
                     best = (float(dist[node]), node, view)
@@ -334,6 +339,28 @@ class Session:
                 route = planner.path(pred, start, best[1])
                 return [hypothesis.transform.apply_inverse(p) for p in route], best[0]
         return None
+
+    def _discriminates(self, hypothesis: Hypothesis, feature) -> bool:
+        """Would seeing ``feature`` where ``hypothesis`` puts it rule out some other hypothesis?
+
+        Not when every other hypothesis also has a feature of that category there (a symmetric
+        layout): the robot would see something either way and learn nothing.
+        """
+        others = [h for h in self.plan_all if h is not hypothesis]
+        if not others:
+            return True
+        where = hypothesis.transform.apply_inverse(np.array([feature.x, feature.y]))  # odom frame
+        for other in others:
+            p = other.transform.apply(where)
+            same = [
+                g
+                for g in self.site.storeys[other.storey].features
+                if g.category == feature.category
+                and math.hypot(g.x - p[0], g.y - p[1]) < DISCRIMINATION_RADIUS
+            ]
+            if not same:
+                return True
+        return False
 
     def _next_target(self, frame: SensorFrame) -> bool:
         """Start active exploration toward the next hypothesis' target; False when none is left.
@@ -348,7 +375,7 @@ class Session:
             planned = self._target(hypothesis, frame.odom)
             if planned is not None:
                 options.append((planned[1], hypothesis.rank, hypothesis, planned[0]))
-        del self.visited[len(self.visited) - len(options):]  # _target marked them; only the chosen one is
+        del self.visited[len(self.visited) - len(options) :]  # _target marked them; only the chosen one is
         if not options:
             self.plan = []
             return False
@@ -498,7 +525,8 @@ class Session:
                         return
                     if 1 < report.n_hypotheses < cfg.matching.m_thre:
                         # Validate the most probable hypothesis first, then the next ones (§3.3.3).
-                        self.plan = list(report.hypotheses)
+                        self.plan = list(report.hypotheses[:ACTIVE_TOP])
+                        self.plan_all = list(report.hypotheses)
                         if not self._next_target(frame) and self.state != "explore":
                             self._set_state(frame.t, "explore", why="no target left to validate")
                     elif self.state != "explore":
