@@ -1,0 +1,427 @@
+"""``bim-init detector``: synth, train, export, predict, eval.
+
+Heavy imports (torch, onnxruntime) happen inside the commands, so ``bim-init --help`` and the
+onnxruntime commands work without the ``[train]`` extra. Bad input: one line on stderr, exit 2.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from bimtools.errors import EXIT_BAD_INPUT, InputError
+
+if TYPE_CHECKING:
+    from initcli.detector.metrics import Metrics
+
+detector_app = typer.Typer(
+    name="detector",
+    help="The object detector (paper §3.2.2): synthetic data from the BIM, training, ONNX export, inference.",
+    add_completion=False,
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+)
+
+MODEL_HELP = "An .onnx model; 'default' is the model shipped in the package."
+TORCH_MISSING = "needs PyTorch, the [train] extra: pip install 'bim-init[train]'"
+
+
+def _fail(message: str) -> typer.Exit:
+    typer.echo(f"bim-init: error: {' '.join(str(message).split())}", err=True)
+    return typer.Exit(EXIT_BAD_INPUT)
+
+
+def _console() -> Console:
+    return Console(width=None if sys.stdout.isatty() else 120, soft_wrap=False)
+
+
+def _parse_size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise InputError(f"--size: expected WxH such as 320x240, got {text!r}") from None
+    if not (16 <= w <= 4096 and 16 <= h <= 4096):
+        raise InputError(f"--size: width and height must be 16-4096 pixels, got {text!r}")
+    return w, h
+
+
+def _require_torch(command: str) -> None:
+    # Idle OpenMP threads sleep instead of spinning: on a machine whose cores are shared (a robot, CI),
+    # spinning threads made training several times slower. Only effective before torch is imported.
+    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+    try:
+        import torch  # noqa: F401
+    except ImportError:
+        raise InputError(f"bim-init detector {command} {TORCH_MISSING}") from None
+
+
+def _metrics_table(metrics: Metrics, title: str) -> Table:
+    table = Table(title=title or None, title_justify="left")
+    for col in ("class", "instances", "precision", "recall", "AP@0.5"):
+        table.add_column(col, justify="left" if col == "class" else "right")
+
+    def f(v: float | None) -> str:
+        return "-" if v is None else f"{v:.3f}"
+
+    for c in metrics.classes:
+        table.add_row(c.name, str(c.instances), f(c.precision), f(c.recall), f(c.ap50))
+    table.add_row(
+        "all", str(sum(c.instances for c in metrics.classes)), "", "", f(metrics.map50), style="bold"
+    )
+    return table
+
+
+# --- synth -----------------------------------------------------------------------------------------
+
+
+@detector_app.command()
+def synth(
+    site: Annotated[
+        list[Path],
+        typer.Option("--site", metavar="SITE", help="bim-extract OUTDIR (repeat for several sites)."),
+    ],
+    out: Annotated[Path, typer.Option("--out", metavar="DATASET", help="Dataset folder to write.")],
+    images: Annotated[int, typer.Option("--images", metavar="N", help="Images to render.")] = 500,
+    size: Annotated[str, typer.Option("--size", metavar="WxH", help="Image size in pixels.")] = "320x240",
+    seed: Annotated[
+        int, typer.Option("--seed", metavar="S", help="Random seed (image i depends on S, i).")
+    ] = 0,
+    val_fraction: Annotated[
+        float, typer.Option("--val-fraction", metavar="F", help="Share of images in the val split.")
+    ] = 0.1,
+    preview: Annotated[
+        Path | None,
+        typer.Option("--preview", metavar="FILE.png", help="Write a contact sheet of labelled images."),
+    ] = None,
+    workers: Annotated[
+        int, typer.Option("--workers", metavar="N", help="Processes; 0 = one per core (max 2).")
+    ] = 0,
+    depth: Annotated[
+        bool, typer.Option("--depth/--no-depth", help="Also write 16-bit depth PNGs (mm).")
+    ] = True,
+    shuffle_classes: Annotated[
+        float,
+        typer.Option(
+            "--shuffle-classes",
+            metavar="P",
+            help="Draw each feature as a random class with this chance (training data; 0 for test sets).",
+        ),
+    ] = 0.0,
+) -> None:
+    """Render a YOLO dataset (RGB, depth, labels) from site models with domain randomisation."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeRemainingColumn
+
+    from initcli.detector.synth import SynthOptions, dataset_preview, write_dataset
+
+    try:
+        w, h = _parse_size(size)
+        opts = SynthOptions(
+            images=images,
+            width=w,
+            height=h,
+            seed=seed,
+            val_fraction=val_fraction,
+            workers=workers,
+            depth=depth,
+            shuffle_classes=shuffle_classes,
+            sites=[str(s) for s in site],
+        )
+        with Progress(
+            "[progress.description]{task.description}",
+            BarColumn(),
+            MofNCompleteColumn(),
+            TimeRemainingColumn(),
+            console=Console(stderr=True),
+            transient=True,
+        ) as bar:
+            task = bar.add_task("rendering", total=images)
+            doc = write_dataset(site, out, opts, progress=lambda n: bar.advance(task, n))
+        if preview is not None:
+            dataset_preview(out, preview)
+    except InputError as exc:
+        raise _fail(str(exc)) from None
+    inst = doc["instances"]
+    typer.echo(
+        f"wrote {out}: {doc['images']['train']} train + {doc['images']['val']} val images "
+        f"({doc['background_images']} without features)"
+    )
+    for split in ("train", "val"):
+        typer.echo(f"  {split}: " + ", ".join(f"{k} {v}" for k, v in inst[split].items()))
+    typer.echo(f"  data.yaml: {out / 'data.yaml'}")
+    if preview is not None:
+        typer.echo(f"  preview: {preview}")
+
+
+# --- train -----------------------------------------------------------------------------------------
+
+
+@detector_app.command()
+def train(
+    data: Annotated[
+        Path, typer.Option("--data", metavar="data.yaml|COCO.json", help="YOLO data.yaml or COCO json.")
+    ],
+    epochs: Annotated[int, typer.Option("--epochs", metavar="N")] = 30,
+    imgsz: Annotated[
+        int, typer.Option("--imgsz", metavar="PX", help="Square input size, a multiple of 32.")
+    ] = 320,
+    out: Annotated[
+        Path, typer.Option("--out", metavar="model.pt", help="Checkpoint written after every epoch.")
+    ] = Path("model.pt"),
+    resume: Annotated[bool, typer.Option("--resume", help="Continue the checkpoint at --out.")] = False,
+    batch: Annotated[int, typer.Option("--batch", metavar="N")] = 16,
+    lr: Annotated[float, typer.Option("--lr", metavar="LR", help="AdamW learning rate.")] = 2e-3,
+    device: Annotated[
+        str, typer.Option("--device", metavar="auto|cpu|cuda", help="auto: a GPU when present.")
+    ] = "auto",
+    workers: Annotated[
+        int, typer.Option("--workers", metavar="N", help="Data loader processes; -1: auto.")
+    ] = -1,
+    time_limit: Annotated[
+        float,
+        typer.Option(
+            "--time-limit", metavar="MIN", help="Stop after this many minutes (schedule follows time)."
+        ),
+    ] = 0.0,
+    val_max: Annotated[
+        int, typer.Option("--val-max", metavar="N", help="Validate on at most N images.")
+    ] = 500,
+    seed: Annotated[int, typer.Option("--seed", metavar="S")] = 0,
+    weights: Annotated[
+        Path | None,
+        typer.Option("--weights", metavar="model.pt", help="Start from this checkpoint (fine-tuning)."),
+    ] = None,
+) -> None:
+    """Train the compact detector; validates precision, recall and AP@0.5 per class each epoch."""
+    try:
+        _require_torch("train")
+    except InputError as exc:
+        raise _fail(str(exc)) from None
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from initcli.detector.train import TrainOptions
+    from initcli.detector.train import train as run_training
+
+    console = _console()
+    opts = TrainOptions(
+        data=data,
+        epochs=epochs,
+        imgsz=imgsz,
+        batch=batch,
+        lr=lr,
+        out=out,
+        resume=resume,
+        device=device,
+        workers=workers,
+        time_limit=time_limit,
+        val_max=val_max,
+        seed=seed,
+        weights=weights,
+    )
+    progress = Progress(
+        TextColumn("[progress.description]{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.fields[losses]}"),
+        TimeElapsedColumn(),
+        console=Console(stderr=True),
+    )
+    state: dict = {}
+
+    def on_event(kind: str, info: dict) -> None:
+        if kind == "start":
+            ds = info["dataset"]
+            console.print(
+                f"data: {len(ds.train)} train / {len(ds.val)} val images, classes {ds.names}; "
+                f"device {info['device']}; {info['params']:,} parameters"
+            )
+            state["steps"] = info["steps_per_epoch"]
+        elif kind == "step":
+            epoch = info["epoch"]
+            if state.get("epoch") != epoch:
+                if "task" in state:
+                    progress.remove_task(state["task"])
+                state["epoch"] = epoch
+                state["task"] = progress.add_task(
+                    f"epoch {epoch + 1}/{epochs}", total=state["steps"], losses=""
+                )
+            progress.update(
+                state["task"],
+                advance=1,
+                losses=f"loss {info['loss']:.3f} hm {info['hm']:.3f} box {info['box']:.3f}",
+            )
+        elif kind == "epoch":
+            r = info["record"]
+            if info["metrics"] is not None:
+                progress.console.print(
+                    _metrics_table(
+                        info["metrics"], f"epoch {r.epoch}: loss {r.loss:.3f}, {r.seconds:.0f} s, val"
+                    )
+                )
+            else:
+                progress.console.print(
+                    f"epoch {r.epoch}: loss {r.loss:.3f}, {r.seconds:.0f} s (no val split)"
+                )
+
+    try:
+        with progress:
+            run_training(opts, on_event)
+    except InputError as exc:
+        raise _fail(str(exc)) from None
+    console.print(
+        f"wrote {out} (history in {out.with_suffix('.csv')}); next: bim-init detector export {out} "
+        f"-o {out.with_suffix('.onnx')}"
+    )
+
+
+# --- export ----------------------------------------------------------------------------------------
+
+
+@detector_app.command()
+def export(
+    model: Annotated[Path, typer.Argument(metavar="MODEL.pt", help="A checkpoint written by train.")],
+    out: Annotated[Path | None, typer.Option("-o", "--out", metavar="model.onnx")] = None,
+    imgsz: Annotated[
+        int | None, typer.Option("--imgsz", metavar="PX", help="Input size (default: training size).")
+    ] = None,
+) -> None:
+    """Export a single-file ONNX model (static 1x3xHxW input, metadata) and verify it against PyTorch."""
+    try:
+        _require_torch("export")
+        try:
+            import onnx  # noqa: F401
+        except ImportError:
+            raise InputError(
+                "bim-init detector export needs the onnx package: pip install 'bim-init[train]'"
+            ) from None
+        from initcli.detector.export import export_onnx
+
+        report = export_onnx(model, out or model.with_suffix(".onnx"), imgsz)
+    except InputError as exc:
+        raise _fail(str(exc)) from None
+    typer.echo(
+        f"wrote {report.path} ({report.bytes / 1e6:.1f} MB): input [1, 3, {report.imgsz}, {report.imgsz}], "
+        f"classes {report.names}; onnxruntime matches PyTorch within {report.max_abs_diff:.1e}"
+    )
+
+
+# --- predict / eval --------------------------------------------------------------------------------
+
+
+def _images(paths: list[Path]) -> list[Path]:
+    from initcli.detector.datasets import IMAGE_SUFFIXES
+
+    out: list[Path] = []
+    for p in paths:
+        if p.is_dir():
+            out += sorted(q for q in p.rglob("*") if q.suffix.lower() in IMAGE_SUFFIXES)
+        elif p.exists():
+            out.append(p)
+        else:
+            raise InputError(f"{p}: no such image")
+    if not out:
+        raise InputError("no images given")
+    return out
+
+
+@detector_app.command()
+def predict(
+    model: Annotated[str, typer.Argument(metavar="MODEL.onnx", help=MODEL_HELP)],
+    images: Annotated[list[Path], typer.Argument(metavar="IMAGE...", help="Images or folders of images.")],
+    out: Annotated[
+        Path | None, typer.Option("--out", metavar="DIR", help="Write the images with boxes here.")
+    ] = None,
+    conf: Annotated[float, typer.Option("--conf", metavar="S", help="Score threshold.")] = 0.25,
+    iou: Annotated[float, typer.Option("--iou", metavar="T", help="NMS IoU threshold.")] = 0.5,
+    threads: Annotated[int, typer.Option("--threads", metavar="N", help="onnxruntime intra-op threads.")] = 2,
+    json_out: Annotated[bool, typer.Option("--json", help="One JSON line per image.")] = False,
+) -> None:
+    """Detect doors, lifts and stairs in images; print the detections, optionally draw them."""
+    import cv2
+
+    from initcli.detector.runtime import Detector
+    from initcli.detector.synth import draw_boxes
+
+    try:
+        det = Detector(model, conf=conf, iou=iou, threads=threads)
+        files = _images(images)
+        if out is not None:
+            out.mkdir(parents=True, exist_ok=True)
+        for f in files:
+            img = cv2.imread(str(f), cv2.IMREAD_COLOR)
+            if img is None:
+                raise InputError(f"{f}: cannot read image")
+            found = det.detect(img)
+            if json_out:
+                typer.echo(
+                    json.dumps(
+                        {
+                            "image": str(f),
+                            "detections": [
+                                {
+                                    "class": d.class_name,
+                                    "score": round(d.score, 4),
+                                    "bbox": [round(v, 1) for v in d.box],
+                                }
+                                for d in found
+                            ],
+                        }
+                    )
+                )
+            else:
+                typer.echo(f"{f}: {len(found)} detection{'s' if len(found) != 1 else ''}")
+                for d in found:
+                    b = ", ".join(f"{v:.0f}" for v in d.box)
+                    typer.echo(f"  {d.class_name:<8} {d.score:.2f}  [{b}]")
+            if out is not None:
+                drawn = draw_boxes(
+                    img, [(d.class_id, d.box, f"{d.class_name} {d.score:.2f}") for d in found], thickness=2
+                )
+                target = out / (f.stem + ".jpg")
+                if not cv2.imwrite(str(target), drawn):
+                    raise InputError(f"{target}: cannot write image")
+    except InputError as exc:
+        raise _fail(str(exc)) from None
+
+
+@detector_app.command("eval")
+def evaluate(
+    model: Annotated[str, typer.Argument(metavar="MODEL.onnx", help=MODEL_HELP)],
+    data: Annotated[Path, typer.Option("--data", metavar="data.yaml|COCO.json", help="Dataset with labels.")],
+    split: Annotated[
+        str, typer.Option("--split", metavar="val|train", help="Which split to evaluate.")
+    ] = "val",
+    conf: Annotated[
+        float, typer.Option("--conf", metavar="S", help="Score for precision and recall.")
+    ] = 0.25,
+    iou: Annotated[float, typer.Option("--iou", metavar="T", help="NMS IoU threshold.")] = 0.5,
+    max_images: Annotated[int, typer.Option("--max-images", metavar="N", help="0 = all.")] = 0,
+    threads: Annotated[int, typer.Option("--threads", metavar="N")] = 2,
+    json_out: Annotated[bool, typer.Option("--json", help="Print one JSON document.")] = False,
+) -> None:
+    """Precision and recall (at --conf) and AP@0.5 per class of an ONNX model on a labelled dataset."""
+    from initcli.detector.evaluate import evaluate_model
+
+    if split not in ("val", "train"):
+        raise _fail(f"--split: expected val or train, got {split!r}")
+    try:
+        result = evaluate_model(
+            model, data, split=split, conf=conf, iou=iou, max_images=max_images, threads=threads
+        )
+    except InputError as exc:
+        raise _fail(str(exc)) from None
+    if json_out:
+        typer.echo(json.dumps(result.to_dict(), indent=2))
+        return
+    console = _console()
+    console.print(f"{model} on {data} ({split}, {result.metrics.images} images)")
+    console.print(_metrics_table(result.metrics, ""))
+    console.print(f"mAP@0.5 {result.metrics.map50:.3f}" if result.metrics.map50 is not None else "mAP@0.5 -")
+    for w in result.warnings:
+        typer.echo(f"bim-init: warning: {w}", err=True)

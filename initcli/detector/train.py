@@ -1,0 +1,481 @@
+"""``bim-init detector train``: plain PyTorch training of :mod:`initcli.detector.model`.
+
+Any YOLO-format dataset (or COCO json, see :mod:`initcli.detector.datasets`); letterbox to a
+square input with random scale and placement, horizontal flips and HSV jitter; AdamW with a
+warm-up and cosine decay; an exponential moving average of the weights (what is validated,
+saved and exported). After every epoch: precision, recall and AP@0.5 per class on the
+validation split, and a checkpoint at ``--out`` that ``--resume`` continues from.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+import random
+import time
+from collections.abc import Callable
+from copy import deepcopy
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import cv2
+import numpy as np
+import torch
+from torch.utils.data import DataLoader
+from torch.utils.data import Dataset as TorchDataset
+
+from bimtools.errors import InputError
+from initcli.detector.datasets import Dataset, DatasetItem, load_dataset
+from initcli.detector.layouts import decode, nms
+from initcli.detector.metrics import MetricAccumulator, Metrics
+from initcli.detector.model import STRIDE, Arch, Detector, ExportHead, detection_loss
+from initcli.detector.preprocess import PAD_VALUE, letterbox
+
+ALPHA = 0.54  # Gaussian size relative to the box (TTFNet)
+
+
+@dataclass
+class TrainOptions:
+    data: Path
+    epochs: int = 30
+    imgsz: int = 320
+    batch: int = 16
+    lr: float = 2e-3
+    weight_decay: float = 0.01
+    out: Path = Path("model.pt")
+    resume: bool = False
+    workers: int = -1  # -1: 0 on CPU (no contention for 2 cores), 4 on a GPU
+    device: str = "auto"
+    seed: int = 0
+    val_max: int = 500  # validate on at most this many images per epoch
+    conf: float = 0.25  # precision / recall are reported at this score
+    scale: tuple[float, float] = (0.6, 1.4)
+    flip: float = 0.5
+    hsv: tuple[float, float, float] = (0.015, 0.6, 0.35)
+    widths: tuple[int, ...] = (16, 32, 64, 96, 128)
+    neck: int = 64
+    max_steps: int = 0  # stop after this many optimiser steps (tests); 0 = no limit
+    weights: Path | None = None  # start from this checkpoint's weights (fine-tuning)
+    time_limit: float = 0.0  # minutes; the schedule then follows elapsed time and ends annealed
+
+
+@dataclass
+class EpochRecord:
+    epoch: int
+    loss: float
+    hm_loss: float
+    box_loss: float
+    seconds: float
+    metrics: dict = field(default_factory=dict)
+
+
+# --- data ----------------------------------------------------------------------------------------
+
+
+def read_image_rgb(path: Path) -> np.ndarray:
+    img = cv2.imread(str(path), cv2.IMREAD_COLOR)
+    if img is None:
+        raise InputError(f"{path}: cannot read image")
+    return cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
+
+
+def augment_hsv(img: np.ndarray, gains: tuple[float, float, float], rng: np.random.Generator) -> np.ndarray:
+    r = rng.uniform(-1, 1, 3) * np.array(gains) + 1
+    hue, sat, val = cv2.split(cv2.cvtColor(img, cv2.COLOR_RGB2HSV))
+    x = np.arange(0, 256, dtype=r.dtype)
+    lut_hue = ((x * r[0]) % 180).astype(np.uint8)
+    lut_sat = np.clip(x * r[1], 0, 255).astype(np.uint8)
+    lut_val = np.clip(x * r[2], 0, 255).astype(np.uint8)
+    hsv = cv2.merge((cv2.LUT(hue, lut_hue), cv2.LUT(sat, lut_sat), cv2.LUT(val, lut_val)))
+    return cv2.cvtColor(hsv, cv2.COLOR_HSV2RGB)
+
+
+def random_letterbox(
+    img: np.ndarray, boxes: np.ndarray, size: int, scale: tuple[float, float], rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Scale by a random factor around the letterbox fit and place at random; boxes in pixels.
+
+    Returns the image, the boxes (x1 y1 x2 y2 pixels, clipped) and a mask of the boxes kept (at
+    least 35 % of their area and 2 px on each side inside the image).
+    """
+    h, w = img.shape[:2]
+    r = size / max(h, w) * rng.uniform(*scale)
+    nw, nh = w * r, h * r
+    ox = rng.uniform(min(0.0, size - nw), max(0.0, size - nw))
+    oy = rng.uniform(min(0.0, size - nh), max(0.0, size - nh))
+    m = np.array([[r, 0, ox], [0, r, oy]], dtype=np.float64)
+    out = cv2.warpAffine(
+        img,
+        m,
+        (size, size),
+        flags=cv2.INTER_LINEAR,
+        borderMode=cv2.BORDER_CONSTANT,
+        borderValue=(PAD_VALUE, PAD_VALUE, PAD_VALUE),
+    )
+    b = boxes * np.array([w, h, w, h]) * r + np.array([ox, oy, ox, oy])
+    area0 = (b[:, 2] - b[:, 0]) * (b[:, 3] - b[:, 1])
+    c = np.clip(b, 0, size)
+    area1 = (c[:, 2] - c[:, 0]) * (c[:, 3] - c[:, 1])
+    keep = (area1 >= 0.35 * np.maximum(area0, 1e-9)) & (c[:, 2] - c[:, 0] >= 2) & (c[:, 3] - c[:, 1] >= 2)
+    return out, c, keep
+
+
+def build_targets(
+    boxes: np.ndarray, classes: np.ndarray, size: int, nc: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Heatmap (nc, g, g), box targets (4, g, g) and box weights (g, g) on the stride-8 grid."""
+    g = size // STRIDE
+    hm = np.zeros((nc, g, g), dtype=np.float32)
+    box_t = np.zeros((4, g, g), dtype=np.float32)
+    box_w = np.zeros((g, g), dtype=np.float32)
+    if len(boxes) == 0:
+        return hm, box_t, box_w
+    areas = (boxes[:, 2] - boxes[:, 0]) * (boxes[:, 3] - boxes[:, 1])
+    for k in np.argsort(-areas):  # small objects last: they win where boxes overlap
+        x1, y1, x2, y2 = boxes[k]
+        bw, bh = x2 - x1, y2 - y1
+        cx, cy = (x1 + x2) / 2 / STRIDE, (y1 + y2) / 2 / STRIDE
+        ci, cj = min(int(cy), g - 1), min(int(cx), g - 1)
+        sx = max(ALPHA * bw / 6 / STRIDE, 0.35)
+        sy = max(ALPHA * bh / 6 / STRIDE, 0.35)
+        r0, r1 = max(0, int(ci - 3 * sy)), min(g, int(ci + 3 * sy) + 1)
+        c0, c1 = max(0, int(cj - 3 * sx)), min(g, int(cj + 3 * sx) + 1)
+        ii = np.arange(r0, r1)[:, None] - ci
+        jj = np.arange(c0, c1)[None, :] - cj
+        gauss = np.exp(-(jj**2) / (2 * sx**2) - (ii**2) / (2 * sy**2)).astype(np.float32)
+        region = hm[int(classes[k]), r0:r1, c0:c1]
+        np.maximum(region, gauss, out=region)
+        mask = gauss > 0.05
+        wgt = gauss * mask
+        wgt = wgt / max(float(wgt.sum()), 1e-6) * math.log(max(bw * bh, 2.0))
+        box_t[:, r0:r1, c0:c1][:, mask] = np.array([x1, y1, x2, y2], dtype=np.float32)[:, None]
+        box_w[r0:r1, c0:c1][mask] = wgt[mask]
+    return hm, box_t, box_w
+
+
+class TrainSet(TorchDataset):
+    def __init__(self, items: list[DatasetItem], nc: int, opts: TrainOptions, augment: bool) -> None:
+        self.items, self.nc, self.opts, self.augment = items, nc, opts, augment
+        self.epoch = 0
+
+    def __len__(self) -> int:
+        return len(self.items)
+
+    def __getitem__(
+        self, i: int
+    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor, np.ndarray]:
+        item = self.items[i]
+        img = read_image_rgb(item.image)
+        size = self.opts.imgsz
+        h, w = img.shape[:2]
+        if self.augment:
+            rng = np.random.default_rng([self.opts.seed, self.epoch, i])
+            img, boxes, keep = random_letterbox(img, item.boxes, size, self.opts.scale, rng)
+            classes = item.classes[keep]
+            boxes = boxes[keep]
+            if rng.random() < self.opts.flip:
+                img = img[:, ::-1]
+                boxes = np.column_stack([size - boxes[:, 2], boxes[:, 1], size - boxes[:, 0], boxes[:, 3]])
+            img = augment_hsv(np.ascontiguousarray(img), self.opts.hsv, rng)
+        else:
+            img, lb = letterbox(img, (size, size))
+            boxes = item.boxes * np.array([w, h, w, h]) * lb.scale + np.array([lb.pad_x, lb.pad_y] * 2)
+            classes = item.classes
+        boxes = boxes.astype(np.float32).reshape(-1, 4)
+        hm, box_t, box_w = build_targets(boxes, classes, size, self.nc)
+        x = torch.from_numpy(np.ascontiguousarray(img.transpose(2, 0, 1)))
+        gt = (
+            np.column_stack([classes.astype(np.float32), boxes])
+            if len(boxes)
+            else np.zeros((0, 5), np.float32)
+        )
+        return x, torch.from_numpy(hm), torch.from_numpy(box_t), torch.from_numpy(box_w), gt
+
+
+def collate(batch: list) -> tuple:
+    xs, hms, bts, bws, gts = zip(*batch, strict=True)
+    return torch.stack(xs), torch.stack(hms), torch.stack(bts), torch.stack(bws), list(gts)
+
+
+# --- model EMA, evaluation ------------------------------------------------------------------------
+
+
+class ModelEMA:
+    """Exponential moving average of the weights, ramped up over the first steps."""
+
+    def __init__(self, model: torch.nn.Module, decay: float, updates: int = 0) -> None:
+        self.ema = deepcopy(model).eval()
+        self.decay, self.updates = decay, updates
+        for p in self.ema.parameters():
+            p.requires_grad_(False)
+
+    def update(self, model: torch.nn.Module) -> None:
+        self.updates += 1
+        d = self.decay * (1 - math.exp(-self.updates / 100.0))
+        with torch.no_grad():
+            msd = model.state_dict()
+            for k, v in self.ema.state_dict().items():
+                if v.dtype.is_floating_point:
+                    v.mul_(d).add_(msd[k].detach(), alpha=1 - d)
+                else:
+                    v.copy_(msd[k])
+
+
+@torch.no_grad()
+def evaluate(
+    net: Detector,
+    items: list[DatasetItem],
+    names: list[str],
+    imgsz: int,
+    device: torch.device,
+    conf: float = 0.25,
+    batch: int = 16,
+) -> Metrics:
+    """Precision / recall (at ``conf``) and AP@0.5 per class, through the exported graph's decoding."""
+    head = ExportHead(net, (imgsz, imgsz)).to(device).eval()
+    acc = MetricAccumulator(len(names))
+    opts = TrainOptions(data=Path("."), imgsz=imgsz)
+    data = TrainSet(items, len(names), opts, augment=False)
+    for start in range(0, len(items), batch):
+        samples = [data[i] for i in range(start, min(start + batch, len(items)))]
+        x = torch.stack([s[0] for s in samples]).to(device).float() / 255.0
+        out = head(x).cpu().numpy()
+        for k, s in enumerate(samples):
+            boxes, scores, classes = decode(out[k], "yolov8", 0.001)
+            keep = nms(boxes, scores, classes, 0.5, 100)
+            gt = s[4]
+            acc.add(boxes[keep], scores[keep], classes[keep], gt[:, 1:5], gt[:, 0].astype(np.int64))
+    return acc.compute(names, conf)
+
+
+# --- training --------------------------------------------------------------------------------------
+
+
+def pick_device(name: str) -> torch.device:
+    if name == "auto":
+        return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+    try:
+        return torch.device(name)
+    except RuntimeError as exc:
+        raise InputError(f"--device: {exc}") from None
+
+
+def save_checkpoint(path: Path, state: dict) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    torch.save(state, tmp)
+    os.replace(tmp, path)
+
+
+def load_checkpoint(path: Path) -> dict:
+    if not Path(path).exists():
+        raise InputError(f"{path}: no such checkpoint")
+    try:
+        ckpt = torch.load(path, map_location="cpu", weights_only=False)
+    except Exception as exc:  # noqa: BLE001 - any unpickling problem is a bad input file
+        raise InputError(f"{path}: not a bim-init checkpoint ({type(exc).__name__})") from None
+    if not isinstance(ckpt, dict) or "model" not in ckpt or "arch" not in ckpt:
+        raise InputError(f"{path}: not a bim-init checkpoint (no model/arch)")
+    return ckpt
+
+
+def model_from_checkpoint(ckpt: dict) -> Detector:
+    net = Detector(Arch.from_dict(ckpt["arch"]))
+    net.load_state_dict(ckpt["model"])
+    return net.eval()
+
+
+Callback = Callable[[str, dict], None]
+
+
+def train(opts: TrainOptions, on_event: Callback | None = None) -> dict:
+    """Train; returns the final checkpoint dict. ``on_event(kind, info)`` gets 'start', 'step', 'epoch'."""
+    emit = on_event or (lambda kind, info: None)
+    ds: Dataset = load_dataset(opts.data)
+    if not ds.train:
+        raise InputError(f"{opts.data}: the train split has no images")
+    if opts.imgsz % 32:
+        raise InputError(f"--imgsz: must be a multiple of 32, got {opts.imgsz}")
+    random.seed(opts.seed)
+    np.random.seed(opts.seed)
+    torch.manual_seed(opts.seed)
+    device = pick_device(opts.device)
+    nc = len(ds.names)
+    arch = Arch(nc=nc, widths=tuple(opts.widths), neck=opts.neck)
+    init = None
+    if opts.weights is not None:  # fine-tune: start from another checkpoint's (EMA) weights
+        init = load_checkpoint(opts.weights)
+        if [str(n) for n in init["names"]] != ds.names:
+            raise InputError(
+                f"{opts.weights}: trained on classes {init['names']}, the dataset has {ds.names}"
+            )
+        arch = Arch.from_dict(init["arch"])
+    net = Detector(arch).to(device)
+    if init is not None:
+        net.load_state_dict(init["model"])
+    steps_per_epoch = math.ceil(len(ds.train) / opts.batch)
+    total_steps = steps_per_epoch * opts.epochs
+    decay = 1.0 - 1.0 / max(50.0, 0.05 * total_steps)
+    decay_params = [p for n, p in net.named_parameters() if p.ndim > 1]
+    other_params = [p for n, p in net.named_parameters() if p.ndim <= 1]
+    optimizer = torch.optim.AdamW(
+        [
+            {"params": decay_params, "weight_decay": opts.weight_decay},
+            {"params": other_params, "weight_decay": 0.0},
+        ],
+        lr=opts.lr,
+    )
+    warmup = min(300, max(steps_per_epoch, total_steps // 10))
+
+    limit_s = opts.time_limit * 60.0
+    started = time.time()
+
+    def progress(step: int) -> float:
+        """Fraction of the run done: by steps, or by time under a time limit (whichever is further)."""
+        p = step / max(1, total_steps)
+        if limit_s > 0:
+            p = max(p, (time.time() - started) / limit_s)
+        return min(p, 1.0)
+
+    def lr_at(step: int) -> float:
+        if step < warmup:
+            return opts.lr * (0.1 + 0.9 * step / warmup)
+        p = progress(step)
+        p0 = warmup / max(1, total_steps)
+        q = (p - p0) / max(1e-9, 1 - p0) if p > p0 else 0.0
+        return opts.lr * (0.05 + 0.95 * 0.5 * (1 + math.cos(math.pi * min(q, 1.0))))
+
+    ema = ModelEMA(net, decay)
+    start_epoch, step, history = 0, 0, []
+    if opts.resume:
+        ckpt = load_checkpoint(opts.out)
+        if ckpt.get("names") != ds.names:
+            raise InputError(
+                f"{opts.out}: trained on classes {ckpt.get('names')}, the dataset has {ds.names}"
+            )
+        net.load_state_dict(ckpt["raw"])
+        ema.ema.load_state_dict(ckpt["model"])
+        ema.updates = int(ckpt.get("ema_updates", 0))
+        if "optimizer" in ckpt:
+            optimizer.load_state_dict(ckpt["optimizer"])
+        start_epoch, step = int(ckpt["epoch"]), int(ckpt.get("step", 0))
+        history = list(ckpt.get("history", []))
+    workers = opts.workers if opts.workers >= 0 else (4 if device.type == "cuda" else 0)
+    train_set = TrainSet(ds.train, nc, opts, augment=True)
+    val_items = ds.val[: opts.val_max] if opts.val_max > 0 else ds.val
+    emit(
+        "start",
+        {
+            "dataset": ds,
+            "device": str(device),
+            "steps_per_epoch": steps_per_epoch,
+            "start_epoch": start_epoch,
+            "params": sum(p.numel() for p in net.parameters()),
+        },
+    )
+    ckpt: dict = {}
+    for epoch in range(start_epoch, opts.epochs):
+        train_set.epoch = epoch
+        gen = torch.Generator().manual_seed(opts.seed * 1000 + epoch)
+        loader = DataLoader(
+            train_set,
+            batch_size=opts.batch,
+            shuffle=True,
+            num_workers=workers,
+            collate_fn=collate,
+            drop_last=len(ds.train) > opts.batch,
+            generator=gen,
+            persistent_workers=False,
+        )
+        net.train()
+        t0 = time.time()
+        sums = np.zeros(3)
+        n = 0
+        for x, hm_t, box_t, box_w, _gt in loader:
+            for g in optimizer.param_groups:
+                g["lr"] = lr_at(step)
+            x = x.to(device, non_blocking=True).float() / 255.0
+            hm_logits, ltrb = net(x)
+            loss, hm_l, box_l = detection_loss(
+                hm_logits, ltrb, hm_t.to(device), box_t.to(device), box_w.to(device)
+            )
+            optimizer.zero_grad(set_to_none=True)
+            loss.backward()
+            torch.nn.utils.clip_grad_norm_(net.parameters(), 10.0)
+            optimizer.step()
+            ema.update(net)
+            step += 1
+            n += 1
+            sums += [float(loss.detach()), float(hm_l), float(box_l)]
+            emit(
+                "step",
+                {
+                    "epoch": epoch,
+                    "loss": sums[0] / n,
+                    "hm": sums[1] / n,
+                    "box": sums[2] / n,
+                    "last": float(loss.detach()),
+                    "step": step,
+                    "lr": lr_at(step),
+                },
+            )
+            if (opts.max_steps and step >= opts.max_steps) or (limit_s > 0 and progress(step) >= 1.0):
+                break
+        metrics = evaluate(ema.ema, val_items, ds.names, opts.imgsz, device, opts.conf) if val_items else None
+        record = EpochRecord(
+            epoch + 1,
+            sums[0] / max(n, 1),
+            sums[1] / max(n, 1),
+            sums[2] / max(n, 1),
+            time.time() - t0,
+            metrics.to_dict() if metrics else {},
+        )
+        history.append(asdict(record))
+        ckpt = {
+            "format": "bim-init.detector/1",
+            "arch": arch.to_dict(),
+            "model": {k: v.detach().cpu() for k, v in ema.ema.state_dict().items()},
+            "raw": {k: v.detach().cpu() for k, v in net.state_dict().items()},
+            "optimizer": optimizer.state_dict(),
+            "ema_updates": ema.updates,
+            "epoch": epoch + 1,
+            "step": step,
+            "names": ds.names,
+            "imgsz": opts.imgsz,
+            "history": history,
+            "options": {k: (str(v) if isinstance(v, Path) else v) for k, v in asdict(opts).items()},
+        }
+        save_checkpoint(opts.out, ckpt)
+        _write_history_csv(opts.out.with_suffix(".csv"), history, ds.names)
+        emit("epoch", {"record": record, "metrics": metrics, "epochs": opts.epochs})
+        if (opts.max_steps and step >= opts.max_steps) or (limit_s > 0 and progress(step) >= 1.0):
+            break
+    return ckpt or load_checkpoint(opts.out)
+
+
+def _write_history_csv(path: Path, history: list[dict], names: list[str]) -> None:
+    cols = ["epoch", "loss", "hm_loss", "box_loss", "seconds", "map50"]
+    for c in names:
+        cols += [f"{c}_precision", f"{c}_recall", f"{c}_ap50"]
+    with path.open("w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow(cols)
+        for h in history:
+            m = h.get("metrics") or {}
+            row = [
+                h["epoch"],
+                f"{h['loss']:.4f}",
+                f"{h['hm_loss']:.4f}",
+                f"{h['box_loss']:.4f}",
+                f"{h['seconds']:.1f}",
+                _fmt(m.get("map50")),
+            ]
+            for c in names:
+                cm = (m.get("classes") or {}).get(c, {})
+                row += [_fmt(cm.get("precision")), _fmt(cm.get("recall")), _fmt(cm.get("ap50"))]
+            w.writerow(row)
+
+
+def _fmt(v: float | None) -> str:
+    return "" if v is None else f"{v:.4f}"
