@@ -99,9 +99,11 @@ def test_wall_normals_point_into_free_space():
         for w in s.plan.walls:
             if w.length < 0.2:
                 continue
+            # 5 mm either side: curtain-wall panels and door leaves can be 1-3 cm thick,
+            # so a larger offset would step right through the element.
             mx, my = (w.x1 + w.x2) / 2, (w.y1 + w.y2) / 2
-            outside = shapely.Point(mx + 0.03 * w.normal[0], my + 0.03 * w.normal[1])
-            inside = shapely.Point(mx - 0.03 * w.normal[0], my - 0.03 * w.normal[1])
+            outside = shapely.Point(mx + 0.005 * w.normal[0], my + 0.005 * w.normal[1])
+            inside = shapely.Point(mx - 0.005 * w.normal[0], my - 0.005 * w.normal[1])
             assert not solid.contains(outside) and solid.buffer(1e-6).contains(inside)
 
 
