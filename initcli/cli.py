@@ -16,6 +16,7 @@ from rich.console import Console
 
 from bimtools.errors import InputError
 from initcli.detector.cli import detector_app
+from initcli.eval_cli import evaluate
 from initcli.match import DEFAULT_POSE_METHOD, EXIT_BAD_INPUT, MatchOptions, run_match
 from initcli.run_cli import run as run_session_command
 
@@ -141,6 +142,7 @@ def match(
 
 
 app.command("run")(run_session_command)
+app.command("eval")(evaluate)
 app.add_typer(detector_app, name="detector")
 
 

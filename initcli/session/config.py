@@ -228,11 +228,9 @@ def _merge(instance: Any, doc: dict) -> Any:
     return instance
 
 
-def parse_config(doc: Any, source: Path | None = None) -> SessionConfig:
-    where = str(source) if source else "config"
-    if doc is None:
-        doc = {}
-    schema = json.loads(SCHEMA_PATH.read_text(encoding="utf-8"))
+def validate_document(doc: Any, schema_path: Path, where: str) -> None:
+    """Raise :class:`InputError` naming the YAML path of the deepest schema violation."""
+    schema = json.loads(schema_path.read_text(encoding="utf-8"))
     validator = jsonschema.Draft202012Validator(schema)
     errors = sorted(
         validator.iter_errors(doc), key=lambda e: (len(list(e.absolute_path)), str(e.absolute_path))
@@ -241,6 +239,28 @@ def parse_config(doc: Any, source: Path | None = None) -> SessionConfig:
         error = max(errors, key=lambda e: len(list(e.absolute_path)))
         path, message = _message(error)
         raise InputError(f"{where}: {path or '(top level)'}: {message}")
+
+
+def read_yaml(path: Path, what: str) -> Any:
+    """The YAML document at ``path``; unreadable files and syntax errors raise :class:`InputError`."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read {what}: {exc.strerror or exc}") from None
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        line = f":{mark.line + 1}" if mark is not None else ""
+        raise InputError(f"{path}{line}: invalid YAML ({getattr(exc, 'problem', exc)})") from None
+
+
+def parse_config(doc: Any, source: Path | None = None) -> SessionConfig:
+    where = str(source) if source else "config"
+    if doc is None:
+        doc = {}
+    validate_document(doc, SCHEMA_PATH, where)
     config = _merge(SessionConfig(), doc)
     config.source = source
     start = config.sim.start
@@ -255,16 +275,7 @@ def parse_config(doc: Any, source: Path | None = None) -> SessionConfig:
 
 def load_config(path: Path) -> SessionConfig:
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read config: {exc.strerror or exc}") from None
-    try:
-        doc = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        line = f":{mark.line + 1}" if mark is not None else ""
-        raise InputError(f"{path}{line}: invalid YAML ({getattr(exc, 'problem', exc)})") from None
+    doc = read_yaml(path, "config")
     if doc is not None and not isinstance(doc, dict):
         raise InputError(f"{path}: expected a mapping of sections (site, robot, camera, ...)")
     return parse_config(doc, path)

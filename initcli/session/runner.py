@@ -103,6 +103,7 @@ class SessionResult:
     fine_converged: bool | None = None
     recoveries: int = 0
     wall_seconds: float = 0.0
+    wall_seconds_coarse: float | None = None  # wall-clock seconds until the unique match
 
     def errors(self) -> tuple[dict[str, float | None], dict[str, float | None]]:
         """Translational (m) and rotational (deg) errors of the coarse, rectified and fine poses."""
@@ -191,6 +192,7 @@ class Session:
         self.target_reached_t: float | None = None
         self.progress: tuple[float, float] = (0.0, math.inf)
         self._loop_checked = -1.0
+        self._started = time.perf_counter()
 
     # -- logging -------------------------------------------------------------------------------------
 
@@ -431,11 +433,11 @@ class Session:
         )
 
     def run(self) -> SessionResult:
-        started = time.perf_counter()
+        self._started = time.perf_counter()
         try:
             self._run()
         finally:
-            self.result.wall_seconds = time.perf_counter() - started
+            self.result.wall_seconds = time.perf_counter() - self._started
             self.close()
         return self.result
 
@@ -590,6 +592,7 @@ class Session:
         r.rectified_pose = best.rectified_pose or best.pose
         r.truth_at_coarse = frame.truth
         r.distance_coarse_m = round(self.driver.distance, 3)
+        r.wall_seconds_coarse = time.perf_counter() - self._started
         r.matched_ids = list(best.matches)
         r.features = list(self.confirmed)
         r.transform = r.rectified_pose * frame.odom.inverse()

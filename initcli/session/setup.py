@@ -68,8 +68,15 @@ class SimSetup:
 
 
 def build_sim(
-    config: SessionConfig, site: Site, storey: str, seed: int, start: Pose2D | None = None
+    config: SessionConfig,
+    site: Site,
+    storey: str,
+    seed: int,
+    start: Pose2D | None = None,
+    detect_features: bool = True,
 ) -> SimSetup:
+    """The simulated robot in the storey's world. ``detect_features=False`` leaves the feature
+    detector out (methods that do not use it: the world, start and noise are the same)."""
     rng = np.random.default_rng(seed)
     model = site.storeys[storey]
     circulation = Circulation.of(model)
@@ -104,7 +111,9 @@ def build_sim(
         range=config.camera.range,
         max_view_angle_deg=config.camera.max_view_angle,
     )
-    if config.detector.kind == "onnx":
+    if not detect_features:
+        detector = _no_detections
+    elif config.detector.kind == "onnx":
         from initcli.sim.onnx_camera import OnnxCamera
 
         detector = OnnxCamera(config, model, world, camera, mount, rng).detect
@@ -128,6 +137,10 @@ def build_sim(
         depth_window=int(config.camera.depth_window),
     )
     return SimSetup(driver, start, world, storey)
+
+
+def _no_detections(pose: Pose2D, t: float) -> list:
+    return []
 
 
 def _phantoms(model, circulation: Circulation, count: int, rng: np.random.Generator):

@@ -1,0 +1,1 @@
+"""Baseline initialisation methods the paper compares against (§4.3): markers and AMCL."""

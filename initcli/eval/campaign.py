@@ -1,0 +1,124 @@
+"""Planning and running the trials of an evaluation, in parallel processes, resumable."""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+from collections.abc import Callable, Iterable
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import dataclass
+from pathlib import Path
+
+from initcli.eval.config import EvalConfig, EvalSite
+from initcli.eval.records import TrialKey, TrialRecord
+from initcli.eval.sweep import Sweep, format_value
+from initcli.eval.trial import TrialJob, run_trial, trial_seed
+from initcli.session.config import load_config
+from initcli.session.setup import prepare_site
+
+
+@dataclass(frozen=True)
+class PreparedSite:
+    site: EvalSite
+    site_dir: Path  # a bim-extract OUTDIR
+
+
+def prepare_sites(config: EvalConfig, workdir: Path, only: Iterable[str] | None = None) -> list[PreparedSite]:
+    """Load every site config and extract its IFC model once (into ``workdir/<site>``)."""
+    wanted = set(only) if only is not None else None
+    out = []
+    for site in config.sites:
+        if wanted is not None and site.name not in wanted:
+            continue
+        session_config = load_config(site.config)
+        target = workdir / site.name
+        prepare_site(session_config, target)
+        path = session_config.site_path()
+        site_dir = target / "site" if path.is_file() else path
+        out.append(PreparedSite(site, site_dir))
+    return out
+
+
+def plan_jobs(
+    config: EvalConfig,
+    sites: list[PreparedSite],
+    methods: tuple[str, ...],
+    starts: int | None = None,
+    sweep: Sweep | None = None,
+    done: set[TrialKey] | None = None,
+) -> list[TrialJob]:
+    """One job per (sweep value, start, site) with the methods not finished yet.
+
+    Starts are interleaved across sites so the progress bar's rate is representative early on.
+    """
+    done = done or set()
+    values: list[float | None] = list(sweep.values) if sweep is not None else [None]
+    jobs = []
+    for value in values:
+        label = (sweep.key, format_value(value)) if sweep is not None and value is not None else ("", "")
+        n_max = max((_starts(p.site, starts) for p in sites), default=0)
+        for k in range(n_max):
+            for p in sites:
+                if k >= _starts(p.site, starts):
+                    continue
+                todo = tuple(m for m in methods if TrialKey(p.site.name, k, m, *label) not in done)
+                if not todo:
+                    continue
+                jobs.append(
+                    TrialJob(
+                        site=p.site.name,
+                        config_path=str(p.site.config),
+                        site_dir=str(p.site_dir),
+                        start=k,
+                        seed=trial_seed(config.seed, k),
+                        methods=todo,
+                        rule=config.rule,
+                        start_pose=p.site.start_poses[k] if p.site.start_poses else None,
+                        sweep=sweep,
+                        sweep_value=value,
+                        amcl=tuple(sorted(config.amcl.items())),
+                        markers=tuple(sorted(config.markers.items())),
+                    )
+                )
+    return jobs
+
+
+def _starts(site: EvalSite, override: int | None) -> int:
+    if site.start_poses:
+        return len(site.start_poses) if override is None else min(override, len(site.start_poses))
+    return override if override is not None else site.starts
+
+
+def _init_worker() -> None:
+    """One thread per worker process: the trials are the parallelism."""
+    try:
+        import cv2
+
+        cv2.setNumThreads(1)
+    except ImportError:  # pragma: no cover - opencv is a core dependency
+        pass
+
+
+def default_workers() -> int:
+    return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
+
+
+def run_jobs(jobs: list[TrialJob], workers: int, on_records: Callable[[list[TrialRecord]], None]) -> None:
+    """Run the jobs on ``workers`` processes (1: in this process); report each job's records as it ends."""
+    if workers <= 1:
+        _init_worker()
+        for job in jobs:
+            on_records(run_trial(job))
+        return
+    # spawn, not fork: the parent runs a progress-bar thread, and forking a process with threads
+    # can deadlock the children on a lock held at fork time.
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=workers, initializer=_init_worker, mp_context=context) as pool:
+        pending = set()
+        queue = list(reversed(jobs))
+        while queue or pending:
+            while queue and len(pending) < 2 * workers:
+                pending.add(pool.submit(run_trial, queue.pop()))
+            finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for future in finished:
+                on_records(future.result())

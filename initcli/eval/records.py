@@ -1,0 +1,90 @@
+"""Typed records of an evaluation: one trial, the rule that scores it, one table row."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+METHODS = ("bim", "bim+pf", "amcl", "markers")
+
+
+@dataclass(frozen=True)
+class FailureRule:
+    """The paper's failure rule (§4.3) plus the threshold of a confident wrong result.
+
+    A trial fails when the method moved more than ``max_distance_m`` without a result, or its
+    result is more than ``max_error_m`` from the truth. A *confident wrong* result is one the
+    method claimed (converged, decoded, unique match) that lies more than ``wrong_error_m`` from
+    the truth: the wrong corridor or the wrong door, counted whether or not it also fails.
+    """
+
+    max_distance_m: float = 150.0
+    max_error_m: float = 5.0
+    wrong_error_m: float = 2.0
+
+
+@dataclass(frozen=True)
+class TrialKey:
+    """What identifies a trial across runs (for ``--resume``)."""
+
+    site: str
+    start: int
+    method: str
+    sweep_key: str = ""
+    sweep_value: str = ""
+
+
+@dataclass
+class TrialRecord:
+    """One row of ``results.jsonl``."""
+
+    site: str
+    start: int
+    method: str
+    success: bool
+    reason: str
+    features: int
+    distance_m: float
+    error_translation_m: float | None
+    error_rotation_deg: float | None
+    confident_wrong: bool
+    seconds: float
+    localised: bool = False
+    seed: int = 0
+    start_pose: list[float] = field(default_factory=list)  # x, y, yaw (deg), BIM frame
+    pose: list[float] | None = None
+    truth: list[float] | None = None
+    sweep_key: str = ""
+    sweep_value: str = ""
+
+    @property
+    def key(self) -> TrialKey:
+        return TrialKey(self.site, self.start, self.method, self.sweep_key, self.sweep_value)
+
+
+@dataclass
+class MethodSummary:
+    """One row of ``table.csv``: a method on a site (at one sweep value), over its trials.
+
+    Means of distance, features and errors are over successful trials only, as in the paper;
+    medians and 95th percentiles likewise.
+    """
+
+    site: str
+    method: str
+    trials: int
+    successes: int
+    success_rate: float  # percent
+    confident_wrong: int
+    features_mean: float | None
+    distance_mean_m: float | None
+    distance_median_m: float | None
+    distance_p95_m: float | None
+    error_translation_mean_m: float | None
+    error_translation_median_m: float | None
+    error_translation_p95_m: float | None
+    error_rotation_mean_deg: float | None
+    error_rotation_median_deg: float | None
+    error_rotation_p95_deg: float | None
+    seconds_mean: float | None
+    sweep_key: str = ""
+    sweep_value: str = ""

@@ -1,0 +1,94 @@
+"""``results.jsonl`` (one trial per line, appended as trials finish) and ``table.csv`` / ``table.md``."""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+import json
+from pathlib import Path
+from typing import IO
+
+from bimtools.errors import InputError
+from bimtools.site.atomic import write_text_atomic
+from initcli.eval.records import TrialRecord
+
+REQUIRED = ("site", "start", "method", "success", "reason")
+_FIELDS = {f.name for f in dataclasses.fields(TrialRecord)}
+
+
+def record_line(record: TrialRecord) -> str:
+    return json.dumps(dataclasses.asdict(record), separators=(",", ":"))
+
+
+def parse_record(doc: object, where: str) -> TrialRecord:
+    if not isinstance(doc, dict):
+        raise InputError(f"{where}: expected a JSON object")
+    missing = [k for k in REQUIRED if k not in doc]
+    if missing:
+        raise InputError(f"{where}: missing {missing[0]!r}")
+    known = {k: v for k, v in doc.items() if k in _FIELDS}
+    try:
+        return TrialRecord(**known)
+    except TypeError as exc:
+        raise InputError(f"{where}: {exc}") from None
+
+
+def read_results(path: Path) -> list[TrialRecord]:
+    """The records of ``results.jsonl``. A last line cut short (an interrupted run) is dropped."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read results: {exc.strerror or exc}") from None
+    lines = text.split("\n")
+    out = []
+    for number, line in enumerate(lines, start=1):
+        if not line.strip():
+            continue
+        try:
+            doc = json.loads(line)
+        except json.JSONDecodeError as exc:
+            if number == len(lines) and not text.endswith("\n"):
+                break  # the interrupted last line: that trial runs again
+            raise InputError(f"{path}:{number}: invalid JSON ({exc.msg})") from None
+        out.append(parse_record(doc, f"{path}:{number}"))
+    return out
+
+
+def truncate_partial_line(path: Path) -> None:
+    """Cut an unfinished last line so appended records start on a line of their own."""
+    data = path.read_bytes()
+    if data and not data.endswith(b"\n"):
+        path.write_bytes(data[: data.rfind(b"\n") + 1])
+
+
+class ResultsWriter:
+    """Appends one line per trial and flushes it, so an interrupted run loses no finished trial."""
+
+    def __init__(self, path: Path, append: bool):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if append and path.exists():
+            truncate_partial_line(path)
+        self.handle: IO[str] = open(path, "a" if append else "w", encoding="utf-8")  # noqa: SIM115
+
+    def write(self, record: TrialRecord) -> None:
+        self.handle.write(record_line(record) + "\n")
+        self.handle.flush()
+
+    def close(self) -> None:
+        self.handle.close()
+
+    def __enter__(self) -> ResultsWriter:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def write_csv(path: Path, columns: list[str], rows: list[dict[str, object]]) -> None:
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=columns, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    write_text_atomic(path, buffer.getvalue())

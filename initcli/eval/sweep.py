@@ -1,0 +1,99 @@
+"""Robustness sweeps (``--sweep KEY=V1,V2,...``): one session parameter varied, the rest fixed."""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+from dataclasses import dataclass
+
+from bimtools.errors import InputError
+from initcli.session.config import SessionConfig
+
+# Short names for the parameters the issue asks to sweep; any dotted config path works too.
+SWEEP_KEYS: dict[str, str] = {
+    "miss_rate": "sim.miss_rate",  # chance a visible feature is not detected in an image (0-1)
+    "false_positives": "sim.false_positives_per_minute",
+    "depth_noise": "camera.depth_noise",  # sigma = depth_noise * d^2
+    "odometry_drift": "sim.odometry_noise",  # a factor on all four odometry alphas (1 = as configured)
+    "clutter": "sim.clutter",  # material stacks per metre of corridor wall
+    "workers": "sim.workers",
+    "phantoms": "sim.phantoms",
+    "alpha": "matching.alpha",  # m, Eq. 7
+    "beta": "matching.beta",  # degrees, Eq. 9
+}
+
+
+@dataclass(frozen=True)
+class Sweep:
+    key: str  # as the user wrote it
+    path: str  # dotted path in the session config
+    values: tuple[float, ...]
+
+    def labels(self) -> list[str]:
+        return [format_value(v) for v in self.values]
+
+
+def format_value(value: float) -> str:
+    return f"{value:g}"
+
+
+def _resolve(config: SessionConfig, path: str) -> tuple[object, str]:
+    """(the dataclass holding the field, the field name) of a dotted path; raises ``KeyError``."""
+    parts = path.split(".")
+    node: object = config
+    for part in parts[:-1]:
+        if not dataclasses.is_dataclass(node) or part not in {f.name for f in dataclasses.fields(node)}:
+            raise KeyError(path)
+        node = getattr(node, part)
+    if not dataclasses.is_dataclass(node) or parts[-1] not in {f.name for f in dataclasses.fields(node)}:
+        raise KeyError(path)
+    return node, parts[-1]
+
+
+def parse_sweep(text: str, config: SessionConfig | None = None) -> Sweep:
+    """``KEY=V1,V2,...`` with KEY one of :data:`SWEEP_KEYS` or a dotted numeric config path."""
+    key, sep, values = text.partition("=")
+    key = key.strip()
+    if not sep or not key:
+        raise InputError(f"--sweep: expected KEY=V1,V2,... (e.g. miss_rate=0,0.25,0.5), got {text!r}")
+    path = SWEEP_KEYS.get(key, key)
+    try:
+        numbers = tuple(float(v) for v in values.split(",") if v.strip())
+    except ValueError:
+        raise InputError(f"--sweep {key}: values must be numbers, got {values!r}") from None
+    if not numbers:
+        raise InputError(f"--sweep {key}: no values given")
+    probe = config or SessionConfig()
+    try:
+        node, name = _resolve(probe, path)
+    except KeyError:
+        known = ", ".join(SWEEP_KEYS)
+        raise InputError(
+            f"--sweep: unknown key {key!r} (one of {known}, or a dotted site-config path)"
+        ) from None
+    current = getattr(node, name)
+    if not (dataclasses.is_dataclass(current) or isinstance(current, int | float)) or isinstance(
+        current, bool
+    ):
+        raise InputError(f"--sweep {key}: {path} is not a number")
+    return Sweep(key, path, numbers)
+
+
+def apply_sweep(config: SessionConfig, sweep: Sweep, value: float) -> SessionConfig:
+    """A copy of ``config`` with the swept parameter set to ``value``.
+
+    A section (``sim.odometry_noise``) is scaled: every number in it is multiplied by ``value``.
+    """
+    out = copy.deepcopy(config)
+    node, name = _resolve(out, sweep.path)
+    current = getattr(node, name)
+    if dataclasses.is_dataclass(current):
+        scaled = {
+            f.name: getattr(current, f.name) * value
+            for f in dataclasses.fields(current)
+            if isinstance(getattr(current, f.name), int | float)
+        }
+        setattr(node, name, dataclasses.replace(current, **scaled))
+    else:
+        setattr(node, name, type(current)(value) if isinstance(current, int) else float(value))
+    return out

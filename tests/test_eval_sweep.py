@@ -1,0 +1,38 @@
+"""Sweep parsing and application to a session config."""
+
+from __future__ import annotations
+
+import pytest
+
+from bimtools.errors import InputError
+from initcli.eval.sweep import apply_sweep, parse_sweep
+from initcli.session.config import SessionConfig
+
+
+def test_short_names_map_to_config_paths():
+    assert parse_sweep("miss_rate=0,0.25,0.5").path == "sim.miss_rate"
+    assert parse_sweep("beta=10,20").values == (10.0, 20.0)
+    assert parse_sweep("camera.range=4,8").path == "camera.range"
+
+
+def test_apply_sets_one_value_and_leaves_the_original_alone():
+    config = SessionConfig()
+    swept = apply_sweep(config, parse_sweep("alpha=0.8"), 0.8)
+    assert swept.matching.alpha == 0.8 and config.matching.alpha == 0.5
+    assert swept.matching.beta == config.matching.beta
+    workers = apply_sweep(config, parse_sweep("workers=0,4"), 4.0)
+    assert workers.sim.workers == 4 and isinstance(workers.sim.workers, int)
+
+
+def test_odometry_drift_scales_every_alpha():
+    config = SessionConfig()
+    swept = apply_sweep(config, parse_sweep("odometry_drift=1,3"), 3.0)
+    before, after = config.sim.odometry_noise, swept.sim.odometry_noise
+    for name in ("alpha1", "alpha2", "alpha3", "alpha4"):
+        assert getattr(after, name) == pytest.approx(3 * getattr(before, name))
+
+
+@pytest.mark.parametrize("text", ["nope=1", "sim.nothing=1", "detector.kind=1", "=1", "alpha="])
+def test_bad_sweeps_are_input_errors(text):
+    with pytest.raises(InputError):
+        parse_sweep(text)
