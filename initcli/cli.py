@@ -93,6 +93,14 @@ def match(
     score_threshold: Annotated[
         float, typer.Option("--score-threshold", metavar="S", help="Detections scoring lower are ignored.")
     ] = 0.5,
+    drift_window: Annotated[
+        float | None,
+        typer.Option(
+            "--drift-window",
+            metavar="M",
+            help="Match only the features confirmed in the last M metres of travel (odometry drift).",
+        ),
+    ] = None,
     skip_bad: Annotated[
         bool, typer.Option("--skip-bad", help="Skip malformed log lines (with a count) instead of failing.")
     ] = False,
@@ -113,6 +121,7 @@ def match(
         min_sightings=min_sightings,
         merge_radius=merge_radius,
         score_threshold=score_threshold,
+        drift_window_m=drift_window,
         skip_bad=skip_bad,
     )
     try:

@@ -31,6 +31,7 @@ from initcli.core.detection_filter import (
     Sighting,
     filter_detections,
     is_truncated,
+    within_drift_window,
 )
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.hypotheses import (
@@ -71,6 +72,7 @@ class MatchOptions:
     min_inliers: int = 3  # matched features needed for a hypothesis (§3.3.4)
     pose_method: str = DEFAULT_POSE_METHOD  # 'paper' (Eq. 10-13) or 'rigid'
     pose_window: int | None = 4  # rigid: align the last N matched features (odometry drifts); None: all
+    drift_window_m: float | None = None  # match only features confirmed in the last M m of travel
     d_thre: float = 0.5  # m, wall clearance of Eq. 17
     pose_radius: float = 1.0  # m, hypotheses closer than this (and within beta in yaw) are one
     merge_radius: float = 1.0  # m, detection filter
@@ -105,6 +107,7 @@ class MatchOptions:
             (self.alpha > 0, "--alpha must be > 0"),
             (0 < self.beta_deg <= 180, "--beta must be in (0, 180] degrees"),
             (self.top >= 1, "--top must be >= 1"),
+            (self.drift_window_m is None or self.drift_window_m > 0, "--drift-window must be > 0"),
             (self.max_outliers >= 0, "--max-outliers must be >= 0"),
             (self.min_inliers >= 2, "--min-inliers must be >= 2"),
             (self.pose_method in POSE_METHODS, f"--pose-method must be one of {', '.join(POSE_METHODS)}"),
@@ -321,6 +324,17 @@ def match_log(log: DetectionLog, site: Site, opts: MatchOptions) -> MatchReport:
     features = filtered.features
     odom_pose, odom_path, more = current_odom(log)
     warnings.extend(more)
+    if opts.drift_window_m is not None and log.odom and len(features) > opts.min_inliers:
+        odom_t = np.array([o.t for o in log.odom])
+        recent = within_drift_window(
+            features, odom_t, odom_path[:, :2], opts.drift_window_m, opts.min_inliers
+        )
+        if len(recent) < len(features):
+            notes.append(
+                f"matched the {len(recent)} features confirmed in the last {opts.drift_window_m:g} m of "
+                f"travel; {len(features) - len(recent)} older one(s) left out (odometry drift)"
+            )
+            features = recent
     if not log.detections and not log.features:
         notes.append("the log has no detections records")
 

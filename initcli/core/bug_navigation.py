@@ -2,7 +2,9 @@
 
 Turn toward the target (Eq. 15-16) and drive straight; when an obstacle blocks the way, follow
 its wall on the side that keeps the target closest; leave the wall when the target is in line of
-sight and closer than where the wall was met.
+sight and closer than where the wall was met. Following the wall the wrong way round (the
+target falling behind by more than ``give_up_margin``) turns back to follow it on the other side;
+if that side leads away too, the robot heads straight for the target again.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ class BugParams:
     yaw_tolerance: float = math.radians(20)  # turn in place above this heading error
     k_yaw: float = 1.5
     follow: WallFollowParams = field(default_factory=WallFollowParams)
+    give_up_margin: float = 1.5  # m farther from the target than where the wall was met
 
 
 @dataclass
@@ -33,6 +36,8 @@ class BugNavigator:
     mode: str = "go"
     side: int = 1
     hit_distance: float = math.inf
+    give_up_at: float = math.inf
+    flipped: bool = False
 
     def step(self, pose: Pose2D, scan: ScanView) -> tuple[float, float, bool]:
         """(v, w, arrived)."""
@@ -48,13 +53,24 @@ class BugNavigator:
             clear = scan.sector_min(d_yaw - 0.15, d_yaw + 0.15, default=math.inf)
             if distance < self.hit_distance - 0.3 and clear > min(distance, 3.0):
                 self.mode = "go"
+            elif distance > self.give_up_at:
+                # Going round the wrong way (e.g. back along a corridor): try the other side once.
+                if self.flipped:
+                    self.mode, self.flipped = "go", False
+                else:
+                    self.side, self.flipped = -self.side, True
+                    self.give_up_at = distance + p.give_up_margin
+                    v, w = wall_follow(scan, self.side, fp)
+                    return v, w, False
             else:
                 v, w = wall_follow(scan, self.side, fp)
                 return v, w, False
         if scan.front() < fp.front_stop + 0.1 and abs(d_yaw) < math.pi / 2 and scan.front() < distance:
             self.mode = "follow"
-            self.side = 1 if d_yaw <= 0 else -1  # target to the right: keep the obstacle on the left
+            self.side = around_side(scan, d_yaw)
             self.hit_distance = distance
+            self.give_up_at = distance + p.give_up_margin
+            self.flipped = False
             v, w = wall_follow(scan, self.side, fp)
             return v, w, False
         if abs(d_yaw) > p.yaw_tolerance:
@@ -90,3 +106,15 @@ class RouteNavigator:
             self.waypoints.pop(0)
             self.current = None
         return 0.0, 0.0, True
+
+
+def around_side(scan: ScanView, d_yaw: float, margin: float = 0.3) -> int:
+    """Which way round a blocking obstacle: +1 keeps it on the left (pass on the right), -1 on the
+    right. The side with clearly more room wins (a material stack against one corridor wall);
+    otherwise the side of the target."""
+    left = scan.sector_min(0.2, 1.4, default=math.inf)
+    right = scan.sector_min(-1.4, -0.2, default=math.inf)
+    if abs(min(left, 5.0) - min(right, 5.0)) > margin:
+        return 1 if right > left else -1
+    return 1 if d_yaw <= 0 else -1  # target to the right: keep the obstacle on the left
+

@@ -267,3 +267,29 @@ def _suppress_duplicates(tracks: list[_Track], moved: _Track, radius: float, t: 
         keep.confirmed_at = min(times) if times else (t if keep.n >= k else None)
         tracks.remove(drop)
         moved = keep
+
+
+def within_drift_window(
+    features: list[ConfirmedFeature],
+    odom_t: np.ndarray,
+    odom_xy: np.ndarray,
+    window_m: float,
+    keep_at_least: int = 3,
+) -> list[ConfirmedFeature]:
+    """The features confirmed within the last ``window_m`` metres of travel.
+
+    Odometry drifts with distance (the motion model's alpha2/alpha3 terms), so after a long
+    exploration the relative positions of S_object's oldest and newest features no longer agree
+    with the BIM within alpha (Eq. 7) and no hypothesis survives; the recent part still does.
+    At least ``keep_at_least`` (the newest) are kept.
+    """
+    if not features or len(odom_t) == 0:
+        return list(features)
+    steps = np.hypot(*np.diff(odom_xy, axis=0).T) if len(odom_xy) > 1 else np.zeros(0)
+    travelled = np.concatenate([[0.0], np.cumsum(steps)])
+    now = travelled[-1]
+    at = travelled[np.clip(np.searchsorted(odom_t, [f.t_confirmed for f in features]), 0, len(odom_t) - 1)]
+    recent = [f for f, d in zip(features, at, strict=True) if now - d <= window_m]
+    if len(recent) < keep_at_least:
+        return list(features[-keep_at_least:])
+    return recent

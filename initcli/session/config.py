@@ -87,6 +87,7 @@ class MatchingSection:
     pose_method: str = "rigid"
     min_sightings: int = 3
     merge_radius: float = 1.0
+    drift_window: float = 50.0  # m: with no consistent match, retry with the features of the last M m
 
 
 @dataclass

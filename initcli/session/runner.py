@@ -15,6 +15,7 @@ log replays to the same coarse verdict and pose.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable
@@ -64,6 +65,10 @@ LANDMARK_SIGMA = 0.3  # m: how far a matched feature may land from its BIM featu
 LOOP_WINDOW_S = 45.0  # s of path checked for a loop (circling an island of clutter, a chicane)
 LOOP_RADIUS = 2.5  # m: a path that long staying this close to its centre is a loop
 LOOP_ESCAPE_S = 25.0  # s driving out of a loop toward open space
+SHUTTLE_WINDOW_S = 150.0  # s of path checked for shuttling
+SHUTTLE_LENGTH = 45.0  # m driven in that window ...
+SHUTTLE_RADIUS = 8.0  # m ... without leaving a circle this size: follow the other wall
+MAX_FRUITLESS = 3  # active-exploration targets in a row without a new feature -> random exploration
 
 
 @dataclass
@@ -192,7 +197,10 @@ class Session:
         self.target_reached_t: float | None = None
         self.progress: tuple[float, float] = (0.0, math.inf)
         self._loop_checked = -1.0
+        self._shuttle_trace: list[tuple[float, float, float]] = []
+        self._shuttle_checked = -1.0
         self._started = time.perf_counter()
+        self.fruitless = 0  # active-exploration targets in a row that brought no new feature
 
     # -- logging -------------------------------------------------------------------------------------
 
@@ -276,6 +284,13 @@ class Session:
 
     def _match(self, t: float) -> MatchReport:
         report = match_log(self.log, self.site, self.options)
+        window = self.config.matching.drift_window
+        if report.n_hypotheses == 0 and window > 0 and len(report.features) > self.options.min_inliers:
+            # Odometry drift: the oldest features no longer fit; match the recent ones
+            # (``bim-init match --drift-window`` replays this).
+            recent = match_log(self.log, self.site, dataclasses.replace(self.options, drift_window_m=window))
+            if recent.n_hypotheses > 0:
+                report = recent
         self.result.match_steps.append(
             MatchStep(t, len(report.features), report.verdict, [h.pose.as_tuple() for h in report.hypotheses])
         )
@@ -285,6 +300,7 @@ class Session:
                 {
                     "verdict": report.verdict,
                     "count": report.n_hypotheses,
+                    "features": len(report.features),
                     "storey": report.storey,
                     "hypotheses": [
                         {
@@ -489,6 +505,7 @@ class Session:
                 )
                 stalled = self.target_reached_t is None and self._stalled(frame)
                 if reached_and_looked or stalled or frame.t - since > self.target_budget:
+                    self.fruitless += 1
                     why = (
                         "target reached, nothing new"
                         if reached_and_looked
@@ -500,13 +517,20 @@ class Session:
                         self._set_state(frame.t, "recovery", why=why)
                         self.result.recoveries += 1
                         turned = 0.0
-                    elif not self._next_target(frame):
+                    elif self.fruitless >= MAX_FRUITLESS or not self._next_target(frame):
                         self._set_state(frame.t, "explore", why=why)
                     v, w = 0.0, 0.0
             elif self.state == "recovery":
                 v, w = 0.0, 0.6 * cfg.robot.max_angular
-                if turned >= RECOVERY_TURN and not self._next_target(frame):
-                    self._set_state(frame.t, "explore", why="nothing detected after recovery")
+                if turned >= RECOVERY_TURN:
+                    if self.fruitless >= MAX_FRUITLESS:
+                        # Targets keep failing (blocked routes, a symmetric layout): wall following
+                        # covers new ground until a new feature changes the hypotheses (§3.3.4).
+                        self._set_state(
+                            frame.t, "explore", why=f"{self.fruitless} targets in a row brought nothing new"
+                        )
+                    elif not self._next_target(frame):
+                        self._set_state(frame.t, "explore", why="nothing detected after recovery")
             else:
                 raise RuntimeError(f"unexpected state {self.state}")
 
@@ -518,6 +542,7 @@ class Session:
 
             if frame.detections is not None and self._new_features():
                 last_feature_t = frame.t
+                self.fruitless = 0
                 self.result.features_detected = len(self.confirmed)
                 if len(self.confirmed) >= self.options.min_inliers:
                     report = self._match(frame.t)
@@ -536,6 +561,16 @@ class Session:
                 elif self.state == "recovery":
                     self._set_state(frame.t, "explore", why="new feature")
             self._emit(frame)
+            if self._shuttling(frame):
+                self.side = -self.side
+                self.navigator = None
+                self._set_state(
+                    frame.t,
+                    "explore",
+                    why="shuttling over the same ground; following the "
+                    + ("left" if self.side > 0 else "right")
+                    + " wall",
+                )
             if self.driver.distance > limits.max_distance:
                 self._fail(
                     frame,
@@ -561,16 +596,19 @@ class Session:
         if frame.t < self.loop_escape_until or frame.t - self._loop_checked < 1.0:
             return False
         self._loop_checked = frame.t
-        self._loop_trace.append((frame.t, frame.odom.x, frame.odom.y))
-        while self._loop_trace and self._loop_trace[0][0] < frame.t - LOOP_WINDOW_S:
-            self._loop_trace.pop(0)
-        if len(self._loop_trace) < LOOP_WINDOW_S * 0.9:
-            return False
-        xy = np.array([(x, y) for _, x, y in self._loop_trace])
-        length = float(np.hypot(*np.diff(xy, axis=0).T).sum())
-        radius = float(np.hypot(*(xy - xy.mean(axis=0)).T).max())
-        if length > 3 * LOOP_RADIUS * 2 and radius < LOOP_RADIUS:
+        if confined(self._loop_trace, frame, LOOP_WINDOW_S, 3 * LOOP_RADIUS * 2, LOOP_RADIUS):
             self._loop_trace.clear()
+            return True
+        return False
+
+    def _shuttling(self, frame: SensorFrame) -> bool:
+        """Back and forth over the same few metres for minutes (a dead end behind a material stack
+        the followed wall leads around, targets that keep failing): a longer, wider loop."""
+        if frame.t - self._shuttle_checked < 1.0:
+            return False
+        self._shuttle_checked = frame.t
+        if confined(self._shuttle_trace, frame, SHUTTLE_WINDOW_S, SHUTTLE_LENGTH, SHUTTLE_RADIUS):
+            self._shuttle_trace.clear()
             return True
         return False
 
@@ -594,7 +632,7 @@ class Session:
         r.distance_coarse_m = round(self.driver.distance, 3)
         r.wall_seconds_coarse = time.perf_counter() - self._started
         r.matched_ids = list(best.matches)
-        r.features = list(self.confirmed)
+        r.features = list(report.features)  # the ones matched (a drift window may leave old ones out)
         r.transform = r.rectified_pose * frame.odom.inverse()
         self.detecting = False  # the log ends its detections here: it replays to this verdict
         self._set_state(
@@ -691,3 +729,19 @@ class Session:
                 if converged_at is not None or travelled >= cfg.distance:
                     self.result.fine_converged = converged_at is not None
                     return frame, estimate.pose, cov
+
+
+def confined(
+    trace: list[tuple[float, float, float]], frame: SensorFrame, window_s: float, length: float, radius: float
+) -> bool:
+    """Append the frame's odom position to ``trace`` (kept ``window_s`` long) and tell whether the
+    path over a full window is longer than ``length`` yet stays within ``radius`` of its centre."""
+    trace.append((frame.t, frame.odom.x, frame.odom.y))
+    while trace and trace[0][0] < frame.t - window_s:
+        trace.pop(0)
+    if len(trace) < 2 or trace[-1][0] - trace[0][0] < 0.9 * window_s:
+        return False
+    xy = np.array([(x, y) for _, x, y in trace])
+    travelled = float(np.hypot(*np.diff(xy, axis=0).T).sum())
+    spread = float(np.hypot(*(xy - xy.mean(axis=0)).T).max())
+    return travelled > length and spread < radius

@@ -1,0 +1,95 @@
+"""The exploration fixes that keep sessions out of dead loops: odometry-drift windows, going round
+a stack on the open side, workers giving way, shuttle detection."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from initcli.core.bug_navigation import BugNavigator, BugParams, around_side
+from initcli.core.detection_filter import ConfirmedFeature, within_drift_window
+from initcli.core.geometry import Pose2D
+from initcli.core.wall_following import ScanView
+from initcli.drivers.base import SensorFrame
+from initcli.session.runner import confined
+from initcli.sim.world import SimWorld, Worker, box_edges
+
+
+def feature(i: int, t: float) -> ConfirmedFeature:
+    return ConfirmedFeature(i, "door", float(i), 0.0, 5, t - 1.0, t)
+
+
+def test_drift_window_keeps_the_features_of_the_last_metres():
+    odom_t = np.arange(0.0, 101.0)  # 1 m/s along x for 100 s
+    odom_xy = np.column_stack([odom_t, np.zeros_like(odom_t)])
+    features = [feature(i, t) for i, t in enumerate([5.0, 20.0, 55.0, 70.0, 90.0, 99.0])]
+    recent = within_drift_window(features, odom_t, odom_xy, 50.0)
+    assert [f.index for f in recent] == [2, 3, 4, 5]
+    # never fewer than keep_at_least (the newest)
+    assert [f.index for f in within_drift_window(features, odom_t, odom_xy, 5.0, 3)] == [3, 4, 5]
+    # standing still: nothing is old
+    still = np.zeros((101, 2))
+    assert len(within_drift_window(features, odom_t, still, 1.0)) == 6
+
+
+def scan_of(points: np.ndarray) -> ScanView:
+    """A 360-beam scan from the origin (robot facing +x) against the given wall segments."""
+    from initcli.sim.world import ray_segment_distances
+
+    angles = np.linspace(-math.pi, math.pi, 360, endpoint=False)
+    ranges = ray_segment_distances(np.zeros(2), angles, points, 20.0)
+    return ScanView.of(angles, ranges, 20.0)
+
+
+def corridor_with_stack(stack_on_left: bool) -> np.ndarray:
+    walls = np.array([[-5.0, 0.9, 20.0, 0.9], [-5.0, -0.9, 20.0, -0.9]])
+    y = 0.65 if stack_on_left else -0.65
+    stack = box_edges(0.8, y, 0.6, 0.25)
+    return np.vstack([walls, stack])
+
+
+def test_bug_goes_round_a_stack_on_the_open_side():
+    # target straight ahead, slightly to the side of the stack: the open side still wins
+    assert around_side(scan_of(corridor_with_stack(stack_on_left=True)), d_yaw=0.05) == 1
+    assert around_side(scan_of(corridor_with_stack(stack_on_left=False)), d_yaw=-0.05) == -1
+    # nothing to choose between: the target's side
+    open_room = np.array([[2.0, -5.0, 2.0, 5.0]])
+    assert around_side(scan_of(open_room), d_yaw=0.3) == -1
+    assert around_side(scan_of(open_room), d_yaw=-0.3) == 1
+
+
+def test_bug_turns_back_when_the_wall_leads_away_from_the_target():
+    nav = BugNavigator(np.array([10.0, 0.0]), BugParams())
+    nav.mode, nav.side, nav.hit_distance, nav.give_up_at = "follow", 1, 10.0, 11.5
+    scan = scan_of(np.array([[-5.0, 0.9, 20.0, 0.9], [-5.0, -0.9, 20.0, -0.9]]))
+    nav.step(Pose2D(-2.0, 0.0, math.pi), scan)  # 12 m away: the wrong way round
+    assert nav.side == -1 and nav.flipped and nav.mode == "follow"
+    nav.step(Pose2D(-4.0, 0.0, math.pi), scan)  # the other side leads away too: head for it
+    assert nav.mode == "go"
+
+
+def test_worker_gives_way_after_standing_face_to_face():
+    w = Worker(a=np.array([0.0, 0.0]), b=np.array([8.0, 0.0]), speed=1.0, phase=2.0)
+    robot = np.array([3.0, 0.0])  # 1 m ahead of the worker walking toward it
+    for _ in range(20):  # 2 s: waits
+        w.advance(0.1, robot)
+    assert np.allclose(w.position(), [2.0, 0.0])
+    for _ in range(15):  # past its patience: turns round and walks away
+        w.advance(0.1, robot)
+    assert w.position()[0] < 2.0 - 0.3
+    world = SimWorld.from_obstacles([], workers=[w])
+    assert len(world.worker_segments(0.0)) == 4
+
+
+def frame_at(t: float, x: float, y: float) -> SensorFrame:
+    return SensorFrame(t, Pose2D(x, y, 0.0))
+
+
+def test_shuttling_is_told_from_travelling():
+    trace: list[tuple[float, float, float]] = []
+    hits = [confined(trace, frame_at(t, 5.0 * math.sin(t / 8.0), 0.0), 150.0, 45.0, 8.0) for t in range(200)]
+    assert any(hits[140:])  # back and forth over 10 m for minutes
+    trace.clear()
+    hits = [confined(trace, frame_at(t, 0.5 * t, 0.0), 150.0, 45.0, 8.0) for t in range(200)]
+    assert not any(hits)  # a long straight drive
