@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install run test lint samples bench clean
+.PHONY: install run test lint samples bench eval clean
 
 install: $(STAMP)
 
@@ -32,5 +32,9 @@ bench: install
 	$(BIN)/python benchmarks/bench_match.py --quick
 	$(BIN)/python benchmarks/bench_session.py --starts 20
 
+# The paper's Tables 2 and 3 on the three samples: 100 starts x 4 methods each (about 10 min on 2 cores).
+eval: install
+	$(BIN)/bim-init eval --config sample_models/eval.yaml --out eval_results --resume
+
 clean:
-	rm -rf $(VENV) runs *_site .pytest_cache
+	rm -rf $(VENV) runs *_site .pytest_cache eval_results

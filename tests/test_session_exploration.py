@@ -72,7 +72,7 @@ def test_bug_turns_back_when_the_wall_leads_away_from_the_target():
 def test_worker_gives_way_after_standing_face_to_face():
     w = Worker(a=np.array([0.0, 0.0]), b=np.array([8.0, 0.0]), speed=1.0, phase=2.0)
     robot = np.array([3.0, 0.0])  # 1 m ahead of the worker walking toward it
-    for _ in range(20):  # 2 s: waits
+    for _ in range(round(0.8 * w.patience / 0.1)):  # waits
         w.advance(0.1, robot)
     assert np.allclose(w.position(), [2.0, 0.0])
     for _ in range(15):  # past its patience: turns round and walks away

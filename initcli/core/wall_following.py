@@ -81,7 +81,7 @@ class MovingObstacleWait:
     The robot waits while the distance ahead keeps changing (up to ``max_wait`` seconds).
     """
 
-    watch: float = 0.6  # s standing still to tell a wall from a person
+    watch: float = 2.0  # s standing still to tell a wall from a person (who may step aside)
     max_wait: float = 6.0  # s
     moving: float = 0.04  # m change of the distance ahead that counts as motion
     since: float | None = None

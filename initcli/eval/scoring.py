@@ -49,7 +49,7 @@ def score(
     """One ``results.jsonl`` row from what a method reported."""
     trans, rot = pose_errors(outcome)
     success, verdict, wrong = judge(outcome.localised, outcome.distance_m, trans, rule)
-    reason = verdict if outcome.localised else f"no result: {outcome.reason}"
+    reason = f"{verdict}: {outcome.reason}" if outcome.localised else f"no result: {outcome.reason}"
     return TrialRecord(
         site=site,
         start=start,

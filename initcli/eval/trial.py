@@ -72,6 +72,8 @@ def session_outcomes(result: SessionResult) -> dict[str, LocalisationOutcome]:
         features=result.features_detected,
         wall_seconds=result.wall_seconds_coarse if coarse else result.wall_seconds,
     )
+    # The session's final pose is its claim, whether the filter's covariance fell below the
+    # thresholds or its distance ran out first (the reason says which).
     fine = result.success and result.pose is not None
     bim_pf = LocalisationOutcome(
         method="bim+pf",

@@ -193,7 +193,7 @@ class Worker:
     radius: float = 0.25
     phase: float = 0.0  # metres walked along the back-and-forth loop
     yield_distance: float = 1.2  # m: closer than this to the robot the worker waits
-    patience: float = 3.0  # s standing before giving way
+    patience: float = 1.0  # s standing before giving way
     give_way: float = 5.0  # s walking off, whatever the robot does
     waited: float = 0.0
     giving_way: float = 0.0
