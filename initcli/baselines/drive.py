@@ -6,22 +6,17 @@ based motion planning algorithm"), so distances compare like for like.
 
 from __future__ import annotations
 
-from initcli.core.wall_following import MovingObstacleWait, ScanView, WallFollowParams, wall_follow
+from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
 from initcli.drivers.base import SensorFrame
-from initcli.session.config import SessionConfig
+from initcli.session.config import SessionConfig, followed_side, wall_follow_params
 
 
 class WallFollowingExplorer:
     """Velocity commands for random exploration, one control period at a time."""
 
     def __init__(self, config: SessionConfig):
-        self.side = 1 if config.exploration.wall_side == "left" else -1
-        self.params = WallFollowParams(
-            distance=config.exploration.wall_distance,
-            speed=config.robot.max_linear,
-            max_turn=config.robot.max_angular,
-            front_stop=config.robot.radius + 0.2,
-        )
+        self.side = followed_side(config)
+        self.params = wall_follow_params(config)
         self.waiting = MovingObstacleWait()
 
     def command(self, frame: SensorFrame) -> tuple[float, float]:

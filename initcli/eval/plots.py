@@ -6,7 +6,6 @@ import io
 from pathlib import Path
 
 from bimtools.site.atomic import write_bytes_atomic
-from initcli.eval.paper import METHOD_TITLES
 from initcli.eval.records import METHODS, MethodSummary, TrialRecord
 
 
@@ -112,29 +111,40 @@ def fig12(records: list[TrialRecord], site: str, path: Path) -> None:
     plt.close(fig)
 
 
+METHOD_COLOURS = {"bim": "tab:blue", "bim+pf": "tab:green", "amcl": "tab:red", "markers": "tab:purple"}
+SITE_STYLES = ("-", "--", ":", "-.")
+
+
 def sweep_plot(summaries: list[MethodSummary], key: str, path: Path) -> None:
-    """Success rate and mean translational error against the swept value, one line per method
-    and site."""
+    """Success rate and mean translational error against the swept value: one colour per method,
+    one line style per site."""
     plt = _pyplot()
     rows = [s for s in summaries if s.sweep_key == key]
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4))
+    sites = list(dict.fromkeys(s.site for s in rows))
+    fig, axes = plt.subplots(1, 2, figsize=(13, 4.5))
     for site, method in dict.fromkeys((s.site, s.method) for s in rows):
         line = sorted((float(s.sweep_value), s) for s in rows if s.site == site and s.method == method)
         xs = [v for v, _ in line]
-        label = f"{METHOD_TITLES.get(method, method)} · {site}"
-        axes[0].plot(xs, [s.success_rate for _, s in line], marker="o", label=label)
+        style = {
+            "color": METHOD_COLOURS.get(method, "0.3"),
+            "linestyle": SITE_STYLES[sites.index(site) % len(SITE_STYLES)],
+            "marker": "o",
+            "label": f"{method} · {site}",
+        }
+        axes[0].plot(xs, [s.success_rate for _, s in line], **style)
         errors = [
             s.error_translation_mean_m if s.error_translation_mean_m is not None else float("nan")
             for _, s in line
         ]
-        axes[1].plot(xs, errors, marker="o", label=label)
+        axes[1].plot(xs, errors, **style)
     axes[0].set_ylabel("success rate (%)")
     axes[0].set_ylim(-5, 105)
     axes[1].set_ylabel("mean translational error of successes (m)")
+    axes[1].set_yscale("log")
     for ax in axes:
         ax.set_xlabel(key)
-        ax.grid(alpha=0.3)
-    axes[1].legend(fontsize=7, loc="best")
-    fig.suptitle(f"Robustness sweep: {key}")
+        ax.grid(alpha=0.3, which="both")
+    axes[1].legend(fontsize=7, loc="center left", bbox_to_anchor=(1.02, 0.5))
+    fig.suptitle(f"Robustness sweep: {key} (colour: method, line style: site)")
     _save_png(fig, path)
     plt.close(fig)

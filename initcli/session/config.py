@@ -17,6 +17,7 @@ import jsonschema
 import yaml
 
 from bimtools.errors import InputError
+from initcli.core.wall_following import WallFollowParams
 
 SCHEMA_PATH = Path(__file__).resolve().parents[2] / "schemas" / "site_config.schema.json"
 
@@ -293,3 +294,19 @@ def config_to_dict(config: SessionConfig) -> dict:
     doc = dataclasses.asdict(config)
     doc.pop("source", None)
     return doc
+
+
+def followed_side(config: SessionConfig) -> int:
+    """+1: follow the left wall, -1: the right one (random exploration, §3.3.4)."""
+    return 1 if config.exploration.wall_side == "left" else -1
+
+
+def wall_follow_params(config: SessionConfig) -> WallFollowParams:
+    """The wall follower's settings from the robot and exploration sections."""
+    return WallFollowParams(
+        distance=config.exploration.wall_distance,
+        speed=config.robot.max_linear,
+        max_turn=config.robot.max_angular,
+        front_stop=config.robot.radius + 0.2,
+    )
+

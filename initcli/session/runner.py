@@ -32,7 +32,7 @@ from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.grid_planner import PlanningGrid
 from initcli.core.particle_filter import FilterNoise, LaserModel, LikelihoodField, ParticleFilter
 from initcli.core.projection import detections_to_odom
-from initcli.core.wall_following import MovingObstacleWait, ScanView, WallFollowParams, wall_follow
+from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
 from initcli.io.detection_log import (
     DetectionLog,
@@ -46,7 +46,7 @@ from initcli.io.detection_log import (
     Truth,
 )
 from initcli.match import Hypothesis, MatchOptions, MatchReport, match_log
-from initcli.session.config import SessionConfig
+from initcli.session.config import SessionConfig, followed_side, wall_follow_params
 from initcli.sim.robot import motion_delta
 
 SCAN_LOG_EVERY = 5  # control steps between logged scans (2 Hz at 10 Hz control)
@@ -171,13 +171,8 @@ class Session:
         self.log = DetectionLog(path=log_path or Path("session.jsonl"), meta=self.meta, records=[], lines=[])
         self._log_file = open(log_path, "w", encoding="utf-8") if log_path else None  # noqa: SIM115
         self._write(self.meta, keep=False)
-        self.side = 1 if config.exploration.wall_side == "left" else -1
-        self.follow = WallFollowParams(
-            distance=config.exploration.wall_distance,
-            speed=config.robot.max_linear,
-            max_turn=config.robot.max_angular,
-            front_stop=config.robot.radius + 0.2,
-        )
+        self.side = followed_side(config)
+        self.follow = wall_follow_params(config)
         self.loop_escape_until = -1.0
         self.waiting = MovingObstacleWait()
         self.sightings: list[Sighting] = []
