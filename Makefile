@@ -31,6 +31,8 @@ bench: install
 	$(BIN)/python benchmarks/bench_extract.py ../shared/ifc/*.ifc sample_models/*.ifc
 	$(BIN)/python benchmarks/bench_match.py --quick
 	$(BIN)/python benchmarks/bench_session.py --starts 20
+	$(BIN)/python benchmarks/bench_raycast.py
+	$(BIN)/python benchmarks/bench_eval.py --starts 10
 
 # The paper's Tables 2 and 3 on the three samples: 100 starts x 4 methods each (about 10 min on 2 cores).
 eval: install

@@ -1,0 +1,61 @@
+"""Benchmark ``bim-init eval``: trials per minute on the three samples, and the projected time of
+the full 3 sites x 100 starts x 4 methods evaluation (goal: under 20 minutes on 2 cores).
+
+    python benchmarks/bench_eval.py [--starts 10] [--workers 2]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--starts", type=int, default=10)
+    parser.add_argument("--workers", type=int, default=2)
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "eval"
+        command = [
+            str(Path(sys.executable).parent / "bim-init"),
+            "eval",
+            "--config",
+            str(ROOT / "sample_models" / "eval.yaml"),
+            "--starts",
+            str(args.starts),
+            "--workers",
+            str(args.workers),
+            "--out",
+            str(out),
+        ]
+        started = time.perf_counter()
+        subprocess.run(command, check=True, capture_output=True)
+        elapsed = time.perf_counter() - started
+        rows = [json.loads(line) for line in (out / "results.jsonl").read_text().splitlines()]
+    per_method: dict[str, list[float]] = {}
+    for r in rows:
+        per_method.setdefault(r["method"], []).append(r["seconds"])
+    rate = 60.0 * len(rows) / elapsed
+    print(
+        f"{len(rows)} trials in {elapsed:.1f} s (including start-up and IFC extraction) "
+        f"on {args.workers} workers"
+    )
+    print(f"trial rate: {rate:.1f} trials/min")
+    for method, seconds in per_method.items():
+        print(f"  {method:8s} mean {sum(seconds) / len(seconds):.2f} s per trial (one core)")
+    full = 3 * 100 * 4
+    print(f"projected 3 x 100 x 4 = {full} trials: {full / rate:.1f} min (goal < 20 min on 2 cores)")
+
+
+if __name__ == "__main__":
+    main()
