@@ -220,3 +220,24 @@ class ParticleFilter:
         )
         cov = (dev * w[:, None]).T @ dev
         return PoseEstimate(Pose2D(x, y, yaw), cov)
+
+
+def scan_fit(
+    pose: Pose2D,
+    angles: np.ndarray,
+    ranges: np.ndarray,
+    range_max: float,
+    field: LikelihoodField,
+    tolerance: float = 0.25,
+) -> float:
+    """Fraction of a scan's valid beams whose end points lie within ``tolerance`` of an occupied
+    map cell, seen from ``pose``, with no beam skipped: a check of a final estimate. Beam skipping
+    (above) lets a whole cloud in the wrong place keep only the beams that happen to agree with it;
+    at the right pose most beams end on mapped walls even with clutter about."""
+    ok = np.isfinite(ranges) & (ranges < range_max) & (ranges > 0.05)
+    if not ok.any():
+        return 0.0
+    heading = pose.yaw + angles[ok]
+    ex = pose.x + ranges[ok] * np.cos(heading)
+    ey = pose.y + ranges[ok] * np.sin(heading)
+    return float((field.lookup(ex, ey) < tolerance).mean())

@@ -30,7 +30,13 @@ from initcli.core.bug_navigation import BugNavigator, BugParams, RouteNavigator
 from initcli.core.detection_filter import ConfirmedFeature, Sighting, filter_detections, is_truncated
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.grid_planner import PlanningGrid
-from initcli.core.particle_filter import FilterNoise, LaserModel, LikelihoodField, ParticleFilter
+from initcli.core.particle_filter import (
+    FilterNoise,
+    LaserModel,
+    LikelihoodField,
+    ParticleFilter,
+    scan_fit,
+)
 from initcli.core.projection import detections_to_odom
 from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
@@ -68,6 +74,8 @@ LOOP_ESCAPE_S = 25.0  # s driving out of a loop toward open space
 SHUTTLE_WINDOW_S = 150.0  # s of path checked for shuttling
 SHUTTLE_LENGTH = 45.0  # m driven in that window ...
 SHUTTLE_RADIUS = 8.0  # m ... without leaving a circle this size: follow the other wall
+MIN_SCAN_FIT = 0.6  # fraction of beams on mapped walls at the final pose (0.76-0.99 when right)
+RESEED_SIGMA_XY = 2.0  # m: the spread of a second try when the first settled on the wrong side
 MAX_FRUITLESS = 3  # active-exploration targets in a row without a new feature -> random exploration
 
 
@@ -687,6 +695,7 @@ class Session:
         odom_xy, bim_xy = self._matched_pairs(storey)
         pf.weight_by_landmarks(frame.odom, odom_xy[-LANDMARKS:], bim_xy[-LANDMARKS:], LANDMARK_SIGMA)
         start_distance = self.driver.distance
+        reseeded = False
         last_update = frame.odom
         lost = 0
         step = 0
@@ -722,6 +731,26 @@ class Session:
                 ):
                     converged_at = frame.t
                 if converged_at is not None or travelled >= cfg.distance:
+                    fit = scan_fit(
+                        estimate.pose, frame.scan.angles, frame.scan.ranges, frame.scan.range_max, pf.field
+                    )
+                    if fit < MIN_SCAN_FIT:
+                        if reseeded:
+                            self._fail(
+                                frame, f"lost during fine tuning (only {fit:.0%} of the scan fits the map)"
+                            )
+                            return None
+                        # The cloud settled where only the beams it kept agree (the far side of a
+                        # wall, say): spread it wider around the estimate and track again.
+                        reseeded = True
+                        self._write(
+                            State(
+                                round(frame.t, 3), {"state": "fine", "why": f"scan fit {fit:.0%}, reseeded"}
+                            )
+                        )
+                        pf.seed(estimate.pose, RESEED_SIGMA_XY, math.radians(cfg.seed_sigma_yaw))
+                        start_distance, converged_at = self.driver.distance, None
+                        continue
                     self.result.fine_converged = converged_at is not None
                     return frame, estimate.pose, cov
 
