@@ -98,6 +98,7 @@ class ExplorationSection:
     d_thre: float = 0.5  # m, Eq. 17
     t_thre: float = 25.0  # s without a new feature during active exploration -> recovery
     recovery: bool = True
+    initial_look: bool = True  # turn once on the spot before exploring
 
 
 @dataclass

@@ -466,7 +466,12 @@ class Session:
         frame = self.driver.start()
         step = 0
         self._record_frame(frame, step)
-        self._set_state(frame.t, "explore")
+        if cfg.exploration.initial_look:
+            # Turn once on the spot first: features behind the robot cost no distance (§3.3.4's
+            # recovery rotation, done before the first metre).
+            self._set_state(frame.t, "look")
+        else:
+            self._set_state(frame.t, "explore")
         self._last_count = 0
         escape: BugNavigator | None = None
         last_feature_t = frame.t
@@ -523,6 +528,10 @@ class Session:
                     elif self.fruitless >= MAX_FRUITLESS or not self._next_target(frame):
                         self._set_state(frame.t, "explore", why=why)
                     v, w = 0.0, 0.0
+            elif self.state == "look":
+                v, w = 0.0, 0.6 * cfg.robot.max_angular
+                if turned >= RECOVERY_TURN:
+                    self._set_state(frame.t, "explore", why="initial look done")
             elif self.state == "recovery":
                 v, w = 0.0, 0.6 * cfg.robot.max_angular
                 if turned >= RECOVERY_TURN:
