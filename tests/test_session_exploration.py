@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from initcli.core.bug_navigation import BugNavigator, BugParams, around_side
 from initcli.core.detection_filter import ConfirmedFeature, within_drift_window
@@ -118,3 +119,25 @@ def test_scan_fit_tells_the_right_side_of_a_wall_from_the_wrong_one():
     assert scan_fit(truth, angles, ranges, 20.0, field) > 0.9
     wrong = Pose2D(10.0, 3.0, 0.0)  # the room side of the same wall
     assert scan_fit(wrong, angles, ranges, 20.0, field) < 0.6
+
+
+def test_explorer_turns_once_on_the_spot_before_following_walls():
+    from initcli.baselines.drive import WallFollowingExplorer
+    from initcli.drivers.base import LaserScan
+    from initcli.session.config import SessionConfig
+
+    config = SessionConfig()
+    explorer = WallFollowingExplorer(config)
+    scan = LaserScan(-math.pi, 2 * math.pi / 360, 20.0, np.full(360, 3.0))
+    yaw, t, commands = 0.0, 0.0, []
+    while t < 30.0:
+        v, w = explorer.command(SensorFrame(t, Pose2D(0.0, 0.0, yaw), scan))
+        commands.append((v, w))
+        yaw = float(yaw + w * 0.1)
+        t += 0.1
+        if v > 0:
+            break
+    turned = sum(abs(w) * 0.1 for v, w in commands if v == 0)
+    assert turned == pytest.approx(2 * math.pi, abs=0.1) and commands[-1][0] > 0
+    config.exploration.initial_look = False
+    assert WallFollowingExplorer(config).command(SensorFrame(0.0, Pose2D(0, 0, 0), scan))[0] > 0

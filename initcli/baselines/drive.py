@@ -1,11 +1,15 @@
 """The random exploration of §3.3.4 shared by every method: follow the wall, wait for passers-by.
 
 The baselines drive exactly as ``bim-init run`` explores (§4.3: "using the same wall following
-based motion planning algorithm"), so distances compare like for like.
+based motion planning algorithm"), including its initial turn on the spot
+(``exploration.initial_look``), so distances compare like for like.
 """
 
 from __future__ import annotations
 
+import math
+
+from initcli.core.geometry import wrap_angle
 from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
 from initcli.drivers.base import SensorFrame
 from initcli.session.config import SessionConfig, followed_side, wall_follow_params
@@ -18,8 +22,17 @@ class WallFollowingExplorer:
         self.side = followed_side(config)
         self.params = wall_follow_params(config)
         self.waiting = MovingObstacleWait()
+        self.look_speed = 0.6 * config.robot.max_angular  # as the session's look and recovery
+        self.to_turn = 2 * math.pi if config.exploration.initial_look else 0.0
+        self.last_yaw: float | None = None
 
     def command(self, frame: SensorFrame) -> tuple[float, float]:
+        if self.to_turn > 0:
+            if self.last_yaw is not None:
+                self.to_turn -= abs(float(wrap_angle(frame.odom.yaw - self.last_yaw)))
+            self.last_yaw = frame.odom.yaw
+            if self.to_turn > 0:
+                return 0.0, self.look_speed
         if frame.scan is None:
             return 0.0, 0.0
         scan = ScanView.of(frame.scan.angles, frame.scan.ranges, frame.scan.range_max)
