@@ -100,3 +100,9 @@ def test_no_success_gives_no_means_and_sweeps_group_apart():
     assert [x.sweep_value for x in s] == ["0.4", "0.6"]
     assert s[0].distance_mean_m is None and s[0].error_translation_mean_m is None
     assert s[1].error_translation_mean_m == pytest.approx(0.1)
+
+
+def test_facing_the_wrong_way_is_confident_wrong_too():
+    ok, _, wrong = judge(True, 10.0, 0.3, RULE, error_deg=179.0)
+    assert ok and wrong  # within the paper's 5 m rule, but turned round
+    assert judge(True, 10.0, 0.3, RULE, error_deg=10.0)[2] is False

@@ -81,6 +81,7 @@ def parse_eval_config(doc: Any, source: Path) -> EvalConfig:
         max_distance_m=float(failure.get("max_distance", 150.0)),
         max_error_m=float(failure.get("max_error", 5.0)),
         wrong_error_m=float(failure.get("wrong_error", 2.0)),
+        wrong_error_deg=float(failure.get("wrong_error_deg", 30.0)),
     )
     methods = tuple(dict.fromkeys(doc.get("methods", METHODS)))
     for section, params in (("amcl", GlobalLocalisationParams), ("markers", MarkerParams)):

@@ -14,12 +14,14 @@ class FailureRule:
     A trial fails when the method moved more than ``max_distance_m`` without a result, or its
     result is more than ``max_error_m`` from the truth. A *confident wrong* result is one the
     method claimed (converged, decoded, unique match) that lies more than ``wrong_error_m`` from
-    the truth: the wrong corridor or the wrong door, counted whether or not it also fails.
+    the truth, or facing more than ``wrong_error_deg`` away from the true heading: the wrong
+    corridor, the wrong door or the wrong way round, counted whether or not it also fails.
     """
 
     max_distance_m: float = 150.0
     max_error_m: float = 5.0
     wrong_error_m: float = 2.0
+    wrong_error_deg: float = 30.0
 
 
 @dataclass(frozen=True)

@@ -38,7 +38,8 @@ def table_markdown(
         f"Failure rule (paper §4.3): more than {rule.max_distance_m:g} m moved without a result, or a "
         f"final error above {rule.max_error_m:g} m. Distance, features and errors are averaged over "
         f"successful trials only, as in the paper; a confident wrong result is a claimed pose more "
-        f"than {rule.wrong_error_m:g} m from the truth. `(paper)` columns: the paper's published means "
+        f"than {rule.wrong_error_m:g} m or {rule.wrong_error_deg:g} degrees from the truth. "
+        "`(paper)` columns: the paper's published means "
         "(Table 2 for every environment, Table 3 for the baselines on the NTU floor).",
         "",
     ]

@@ -21,10 +21,17 @@ def pose_errors(outcome: LocalisationOutcome) -> tuple[float | None, float | Non
 
 
 def judge(
-    localised: bool, distance_m: float, error_m: float | None, rule: FailureRule
+    localised: bool,
+    distance_m: float,
+    error_m: float | None,
+    rule: FailureRule,
+    error_deg: float | None = None,
 ) -> tuple[bool, str, bool]:
     """(success, reason, confident_wrong) under the paper's failure rule."""
-    wrong = localised and error_m is not None and error_m > rule.wrong_error_m
+    wrong = localised and (
+        (error_m is not None and error_m > rule.wrong_error_m)
+        or (error_deg is not None and error_deg > rule.wrong_error_deg)
+    )
     if not localised:
         return False, "no result", False
     if distance_m > rule.max_distance_m:
@@ -48,7 +55,7 @@ def score(
 ) -> TrialRecord:
     """One ``results.jsonl`` row from what a method reported."""
     trans, rot = pose_errors(outcome)
-    success, verdict, wrong = judge(outcome.localised, outcome.distance_m, trans, rule)
+    success, verdict, wrong = judge(outcome.localised, outcome.distance_m, trans, rule, rot)
     reason = f"{verdict}: {outcome.reason}" if outcome.localised else f"no result: {outcome.reason}"
     return TrialRecord(
         site=site,

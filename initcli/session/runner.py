@@ -75,6 +75,8 @@ SHUTTLE_WINDOW_S = 150.0  # s of path checked for shuttling
 SHUTTLE_LENGTH = 45.0  # m driven in that window ...
 SHUTTLE_RADIUS = 8.0  # m ... without leaving a circle this size: follow the other wall
 MIN_SCAN_FIT = 0.6  # fraction of beams on mapped walls at the final pose (0.76-0.99 when right)
+DRIFTED_M, DRIFTED_DEG = 1.0, 20.0  # the filter moved this far from the carried rectified pose ...
+KEEP_RECTIFIED_MARGIN = 0.1  # scan fit by which the carried rectified pose must beat the filter
 RESEED_SIGMA_XY = 2.0  # m: the spread of a second try when the first settled on the wrong side
 MAX_FRUITLESS = 3  # active-exploration targets in a row without a new feature -> random exploration
 
@@ -740,9 +742,29 @@ class Session:
                 ):
                     converged_at = frame.t
                 if converged_at is not None or travelled >= cfg.distance:
-                    fit = scan_fit(
-                        estimate.pose, frame.scan.angles, frame.scan.ranges, frame.scan.range_max, pf.field
-                    )
+                    scan_args = (frame.scan.angles, frame.scan.ranges, frame.scan.range_max, pf.field)
+                    fit = scan_fit(estimate.pose, *scan_args)
+                    # The rectified pose carried along by odometry is the other candidate: a filter
+                    # that drifted off a good coarse result fits the scan worse than it does.
+                    assert self.result.transform is not None
+                    carried = self.result.transform * frame.odom
+                    carried_fit = scan_fit(carried, *scan_args)
+                    apart = estimate.pose.distance_to(carried) > DRIFTED_M or abs(
+                        float(wrap_angle(estimate.pose.yaw - carried.yaw))
+                    ) > math.radians(DRIFTED_DEG)
+                    if apart and carried_fit >= max(fit + KEEP_RECTIFIED_MARGIN, MIN_SCAN_FIT):
+                        self._write(
+                            State(
+                                round(frame.t, 3),
+                                {
+                                    "state": "fine",
+                                    "why": f"filter drifted (scan fit {fit:.0%}); rectified pose kept "
+                                    f"({carried_fit:.0%})",
+                                },
+                            )
+                        )
+                        self.result.fine_converged = False
+                        return frame, carried, cov
                     if fit < MIN_SCAN_FIT:
                         if reseeded:
                             self._fail(
