@@ -1,4 +1,4 @@
-"""``bim-init``: the thin typer app. Commands: ``match``, ``run``.
+"""``bim-init``: the thin typer app. Commands: ``match``, ``run``, ``eval``, ``detector``.
 
 Exit codes: 0 unique match, 3 ambiguous (several hypotheses), 4 no consistent match, 2 bad input
 (one line on stderr, never a traceback).
