@@ -93,7 +93,7 @@ def evaluate(
         eval_config = load_eval_config(config)
         chosen = parse_methods(methods) if methods else eval_config.methods
         the_sweep = parse_sweep(sweep) if sweep else None
-        only = [s for s in sites.replace(",", " ").split()] if sites else None
+        only = sites.replace(",", " ").split() if sites else None
         if only:
             unknown = [s for s in only if s not in {x.name for x in eval_config.sites}]
             if unknown:

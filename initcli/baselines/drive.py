@@ -12,7 +12,7 @@ import math
 from initcli.core.geometry import wrap_angle
 from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
 from initcli.drivers.base import SensorFrame
-from initcli.session.config import SessionConfig, followed_side, wall_follow_params
+from initcli.session.config import SessionConfig, followed_side, turn_in_place_speed, wall_follow_params
 
 
 class WallFollowingExplorer:
@@ -22,7 +22,7 @@ class WallFollowingExplorer:
         self.side = followed_side(config)
         self.params = wall_follow_params(config)
         self.waiting = MovingObstacleWait()
-        self.look_speed = 0.6 * config.robot.max_angular  # as the session's look and recovery
+        self.look_speed = turn_in_place_speed(config)
         self.to_turn = 2 * math.pi if config.exploration.initial_look else 0.0
         self.last_yaw: float | None = None
 

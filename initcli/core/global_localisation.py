@@ -45,6 +45,8 @@ from initcli.core.particle_filter import (
     LikelihoodField,
     ParticleFilter,
     beam_log_likelihood,
+    low_variance_indices,
+    weighted_pose_stats,
 )
 
 YAW_BINS_FULL_TURN = 36  # 360 degrees / 10 degrees
@@ -99,17 +101,6 @@ def kld_sample_limit(bins: np.ndarray | int, params: GlobalLocalisationParams) -
     n = np.ceil(km1 / (2.0 * params.kld_err) * x**3)
     n = np.where(k <= 1, params.min_particles, n)
     return np.clip(n, params.min_particles, params.particles).astype(np.int64)
-
-
-def low_variance_indices(weights: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
-    """Low-variance (systematic) resampling of ``count`` indices into ``weights`` (normalised).
-
-    :meth:`ParticleFilter.resample` draws as many particles as it has; KLD-sampling needs a count
-    that differs from the current one.
-    """
-    positions = (rng.random() + np.arange(count)) / count
-    idx = np.searchsorted(np.cumsum(weights), positions)
-    return np.minimum(idx, len(weights) - 1)
 
 
 class PoseHistogram:
@@ -191,16 +182,6 @@ def free_cell_centres(grid: OccupancyGrid) -> np.ndarray:
     rows, cols = np.nonzero(grid.cells == FREE)
     x, y = grid.cell_centre(rows, cols)
     return np.column_stack([x, y])
-
-
-def weighted_pose_stats(particles: np.ndarray, weights: np.ndarray) -> tuple[Pose2D, np.ndarray]:
-    """Weighted mean (circular in yaw) and 3x3 covariance of a particle set."""
-    w = weights / weights.sum()
-    x = float(w @ particles[:, 0])
-    y = float(w @ particles[:, 1])
-    yaw = math.atan2(float(w @ np.sin(particles[:, 2])), float(w @ np.cos(particles[:, 2])))
-    dev = np.column_stack([particles[:, 0] - x, particles[:, 1] - y, wrap_angle(particles[:, 2] - yaw)])
-    return Pose2D(x, y, yaw), (dev * w[:, None]).T @ dev
 
 
 class GlobalLocalisation:
@@ -305,7 +286,7 @@ class GlobalLocalisation:
         totals = np.bincount(labels, weights=weights)
         best = int(np.argmax(totals))
         mine = labels == best
-        pose, cluster_cov = weighted_pose_stats(particles[mine], weights[mine])
+        pose, cluster_cov = weighted_pose_stats(particles[mine], weights[mine] / totals[best])
         return GlobalEstimate(
             pose, cov, cluster_cov, len(totals), float(totals[best] / totals.sum()), len(particles)
         )

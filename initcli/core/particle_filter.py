@@ -201,25 +201,32 @@ class ParticleFilter:
 
     def resample(self) -> None:
         """Low-variance (systematic) resampling."""
-        positions = (self.rng.random() + np.arange(self.n)) / self.n
-        idx = np.searchsorted(np.cumsum(self.weights), positions)
-        self.particles = self.particles[np.minimum(idx, self.n - 1)]
+        self.particles = self.particles[low_variance_indices(self.weights, self.n, self.rng)]
         self.weights = np.full(self.n, 1.0 / self.n)
 
     def estimate(self) -> PoseEstimate:
-        w = self.weights
-        x = float(np.sum(w * self.particles[:, 0]))
-        y = float(np.sum(w * self.particles[:, 1]))
-        c, s = (
-            float(np.sum(w * np.cos(self.particles[:, 2]))),
-            float(np.sum(w * np.sin(self.particles[:, 2]))),
-        )
-        yaw = math.atan2(s, c)
-        dev = np.column_stack(
-            [self.particles[:, 0] - x, self.particles[:, 1] - y, wrap_angle(self.particles[:, 2] - yaw)]
-        )
-        cov = (dev * w[:, None]).T @ dev
-        return PoseEstimate(Pose2D(x, y, yaw), cov)
+        return PoseEstimate(*weighted_pose_stats(self.particles, self.weights))
+
+
+def low_variance_indices(weights: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
+    """Low-variance (systematic) resampling: ``count`` indices into ``weights`` (normalised).
+
+    The tracking filter draws as many particles as it has; KLD-sampling draws another count.
+    """
+    positions = (rng.random() + np.arange(count)) / count
+    idx = np.searchsorted(np.cumsum(weights), positions)
+    return np.minimum(idx, len(weights) - 1)
+
+
+def weighted_pose_stats(particles: np.ndarray, weights: np.ndarray) -> tuple[Pose2D, np.ndarray]:
+    """Weighted mean (circular in yaw) and 3x3 covariance of a particle set; ``weights`` sum to 1."""
+    w = weights
+    x = float(np.sum(w * particles[:, 0]))
+    y = float(np.sum(w * particles[:, 1]))
+    c, s = float(np.sum(w * np.cos(particles[:, 2]))), float(np.sum(w * np.sin(particles[:, 2])))
+    yaw = math.atan2(s, c)
+    dev = np.column_stack([particles[:, 0] - x, particles[:, 1] - y, wrap_angle(particles[:, 2] - yaw)])
+    return Pose2D(x, y, yaw), (dev * w[:, None]).T @ dev
 
 
 def scan_fit(

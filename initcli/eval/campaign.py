@@ -11,7 +11,7 @@ from pathlib import Path
 
 from initcli.eval.config import EvalConfig, EvalSite
 from initcli.eval.records import TrialKey, TrialRecord
-from initcli.eval.sweep import Sweep, format_value
+from initcli.eval.sweep import Sweep, sweep_label
 from initcli.eval.trial import TrialJob, run_trial, trial_seed
 from initcli.session.config import load_config
 from initcli.session.setup import prepare_site
@@ -30,12 +30,8 @@ def prepare_sites(config: EvalConfig, workdir: Path, only: Iterable[str] | None 
     for site in config.sites:
         if wanted is not None and site.name not in wanted:
             continue
-        session_config = load_config(site.config)
-        target = workdir / site.name
-        prepare_site(session_config, target)
-        path = session_config.site_path()
-        site_dir = target / "site" if path.is_file() else path
-        out.append(PreparedSite(site, site_dir))
+        prepared = prepare_site(load_config(site.config), workdir / site.name)
+        out.append(PreparedSite(site, Path(prepared.root)))
     return out
 
 
@@ -55,7 +51,7 @@ def plan_jobs(
     values: list[float | None] = list(sweep.values) if sweep is not None else [None]
     jobs = []
     for value in values:
-        label = (sweep.key, format_value(value)) if sweep is not None and value is not None else ("", "")
+        label = sweep_label(sweep, value)
         n_max = max((_starts(p.site, starts) for p in sites), default=0)
         for k in range(n_max):
             for p in sites:

@@ -77,20 +77,27 @@ def parse_eval_config(doc: Any, source: Path) -> EvalConfig:
             )
         )
     failure = doc.get("failure", {})
+    paper_rule = FailureRule()
     rule = FailureRule(
-        max_distance_m=float(failure.get("max_distance", 150.0)),
-        max_error_m=float(failure.get("max_error", 5.0)),
-        wrong_error_m=float(failure.get("wrong_error", 2.0)),
-        wrong_error_deg=float(failure.get("wrong_error_deg", 30.0)),
+        max_distance_m=float(failure.get("max_distance", paper_rule.max_distance_m)),
+        max_error_m=float(failure.get("max_error", paper_rule.max_error_m)),
+        wrong_error_m=float(failure.get("wrong_error", paper_rule.wrong_error_m)),
+        wrong_error_deg=float(failure.get("wrong_error_deg", paper_rule.wrong_error_deg)),
     )
     methods = tuple(dict.fromkeys(doc.get("methods", METHODS)))
     for section, params in (("amcl", GlobalLocalisationParams), ("markers", MarkerParams)):
-        known = {f.name: f for f in dataclasses.fields(params)}
+        defaults = params()
+        settable = {
+            f.name: getattr(defaults, f.name)
+            for f in dataclasses.fields(defaults)
+            if not dataclasses.is_dataclass(getattr(defaults, f.name))
+        }
         for key, value in doc.get(section, {}).items():
-            if key not in known or dataclasses.is_dataclass(getattr(params(), key)):
-                names = ", ".join(k for k in known if not dataclasses.is_dataclass(getattr(params(), k)))
-                raise InputError(f"{where}: {section}.{key}: unknown parameter (one of {names})")
-            default = getattr(params(), key)
+            if key not in settable:
+                raise InputError(
+                    f"{where}: {section}.{key}: unknown parameter (one of {', '.join(settable)})"
+                )
+            default = settable[key]
             if isinstance(default, bool) != isinstance(value, bool):
                 want = "true or false" if isinstance(default, bool) else "a number"
                 raise InputError(f"{where}: {section}.{key}: expected {want}")

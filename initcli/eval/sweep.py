@@ -37,6 +37,13 @@ def format_value(value: float) -> str:
     return f"{value:g}"
 
 
+def sweep_label(sweep: Sweep | None, value: float | None) -> tuple[str, str]:
+    """(key, value) a trial record carries; ("", "") outside a sweep."""
+    if sweep is None or value is None:
+        return "", ""
+    return sweep.key, format_value(value)
+
+
 def _resolve(config: SessionConfig, path: str) -> tuple[object, str]:
     """(the dataclass holding the field, the field name) of a dotted path; raises ``KeyError``."""
     parts = path.split(".")

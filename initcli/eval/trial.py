@@ -9,7 +9,6 @@ continues with fine tuning), exactly as two separate runs with the same seed wou
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
@@ -22,7 +21,7 @@ from initcli.baselines.outcome import LocalisationOutcome
 from initcli.core.geometry import Pose2D
 from initcli.eval.records import FailureRule, TrialRecord
 from initcli.eval.scoring import score
-from initcli.eval.sweep import Sweep, apply_sweep, format_value
+from initcli.eval.sweep import Sweep, apply_sweep, sweep_label
 from initcli.session.config import SessionConfig, load_config
 from initcli.session.runner import Session, SessionResult
 from initcli.session.setup import build_sim, choose_storey
@@ -93,7 +92,7 @@ def _trial_config(job: TrialJob) -> SessionConfig:
     config = _config(job.config_path)
     if job.sweep is not None and job.sweep_value is not None:
         return apply_sweep(config, job.sweep, job.sweep_value)
-    return dataclasses.replace(config)
+    return config
 
 
 def run_trial(job: TrialJob) -> list[TrialRecord]:
@@ -135,11 +134,7 @@ def run_trial(job: TrialJob) -> list[TrialRecord]:
         params_m = dataclasses.replace(MarkerParams(), **dict(job.markers))
         outcomes.append(run_markers(config, site, sim(False), np.random.default_rng(job.seed + 2), params_m))
     assert start_pose is not None
-    sweep = (
-        (job.sweep.key, format_value(job.sweep_value))
-        if job.sweep is not None and job.sweep_value is not None
-        else ("", "")
-    )
+    sweep = sweep_label(job.sweep, job.sweep_value)
     order = {m: i for i, m in enumerate(job.methods)}
     outcomes.sort(key=lambda o: order[o.method])
     return [
@@ -151,6 +146,3 @@ def run_trial(job: TrialJob) -> list[TrialRecord]:
 def trial_seed(base: int, start: int) -> int:
     return base + start
 
-
-def degrees_pose(pose: tuple[float, float, float]) -> tuple[float, float, float]:
-    return pose[0], pose[1], math.degrees(pose[2])

@@ -311,3 +311,8 @@ def wall_follow_params(config: SessionConfig) -> WallFollowParams:
         front_stop=config.robot.radius + 0.2,
     )
 
+
+def turn_in_place_speed(config: SessionConfig) -> float:
+    """rad/s of the look round at the start and of the recovery rotation (§3.3.4)."""
+    return 0.6 * config.robot.max_angular
+

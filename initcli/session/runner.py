@@ -52,7 +52,7 @@ from initcli.io.detection_log import (
     Truth,
 )
 from initcli.match import Hypothesis, MatchOptions, MatchReport, match_log
-from initcli.session.config import SessionConfig, followed_side, wall_follow_params
+from initcli.session.config import SessionConfig, followed_side, turn_in_place_speed, wall_follow_params
 from initcli.sim.robot import motion_delta
 
 SCAN_LOG_EVERY = 5  # control steps between logged scans (2 Hz at 10 Hz control)
@@ -191,7 +191,10 @@ class Session:
         self.state = "explore"
         self.result = SessionResult(False, "", storey)
         self.detecting = True
-        self._loop_trace: list[tuple[float, float, float]] = []
+        self.loops = ConfinementWatch(LOOP_WINDOW_S, 3 * LOOP_RADIUS * 2, LOOP_RADIUS)
+        # Back and forth over the same few metres for minutes (a dead end behind a material stack
+        # the followed wall leads around, targets that keep failing): a longer, wider loop.
+        self.shuttles = ConfinementWatch(SHUTTLE_WINDOW_S, SHUTTLE_LENGTH, SHUTTLE_RADIUS)
         self.plan: list[Hypothesis] = []
         self.plan_all: list[Hypothesis] = []
         self.visited: list[np.ndarray] = []
@@ -201,9 +204,6 @@ class Session:
         self.target_started = 0.0
         self.target_reached_t: float | None = None
         self.progress: tuple[float, float] = (0.0, math.inf)
-        self._loop_checked = -1.0
-        self._shuttle_trace: list[tuple[float, float, float]] = []
-        self._shuttle_checked = -1.0
         self._started = time.perf_counter()
         self.fruitless = 0  # active-exploration targets in a row that brought no new feature
 
@@ -531,11 +531,11 @@ class Session:
                         self._set_state(frame.t, "explore", why=why)
                     v, w = 0.0, 0.0
             elif self.state == "look":
-                v, w = 0.0, 0.6 * cfg.robot.max_angular
+                v, w = 0.0, turn_in_place_speed(cfg)
                 if turned >= RECOVERY_TURN:
                     self._set_state(frame.t, "explore", why="initial look done")
             elif self.state == "recovery":
-                v, w = 0.0, 0.6 * cfg.robot.max_angular
+                v, w = 0.0, turn_in_place_speed(cfg)
                 if turned >= RECOVERY_TURN:
                     if self.fruitless >= MAX_FRUITLESS:
                         # Targets keep failing (blocked routes, a symmetric layout): wall following
@@ -575,7 +575,7 @@ class Session:
                 elif self.state == "recovery":
                     self._set_state(frame.t, "explore", why="new feature")
             self._emit(frame)
-            if self._shuttling(frame):
+            if self.shuttles.confined(frame):
                 self.side = -self.side
                 self.navigator = None
                 self._set_state(
@@ -607,24 +607,7 @@ class Session:
 
     def _looping(self, frame: SensorFrame) -> bool:
         """Has the robot driven a long way in the last LOOP_WINDOW_S while staying in a small area?"""
-        if frame.t < self.loop_escape_until or frame.t - self._loop_checked < 1.0:
-            return False
-        self._loop_checked = frame.t
-        if confined(self._loop_trace, frame, LOOP_WINDOW_S, 3 * LOOP_RADIUS * 2, LOOP_RADIUS):
-            self._loop_trace.clear()
-            return True
-        return False
-
-    def _shuttling(self, frame: SensorFrame) -> bool:
-        """Back and forth over the same few metres for minutes (a dead end behind a material stack
-        the followed wall leads around, targets that keep failing): a longer, wider loop."""
-        if frame.t - self._shuttle_checked < 1.0:
-            return False
-        self._shuttle_checked = frame.t
-        if confined(self._shuttle_trace, frame, SHUTTLE_WINDOW_S, SHUTTLE_LENGTH, SHUTTLE_RADIUS):
-            self._shuttle_trace.clear()
-            return True
-        return False
+        return frame.t >= self.loop_escape_until and self.loops.confined(frame)
 
     def _fail(self, frame: SensorFrame, reason: str) -> None:
         self._set_state(frame.t, "failed", reason=reason)
@@ -784,6 +767,27 @@ class Session:
                         continue
                     self.result.fine_converged = converged_at is not None
                     return frame, estimate.pose, cov
+
+
+@dataclass
+class ConfinementWatch:
+    """:func:`confined` once a second over the robot's recent path (a loop round clutter,
+    shuttling in a dead end); the trace starts afresh after each detection."""
+
+    window_s: float
+    length: float
+    radius: float
+    trace: list[tuple[float, float, float]] = field(default_factory=list)
+    checked: float = -1.0
+
+    def confined(self, frame: SensorFrame) -> bool:
+        if frame.t - self.checked < 1.0:
+            return False
+        self.checked = frame.t
+        if confined(self.trace, frame, self.window_s, self.length, self.radius):
+            self.trace.clear()
+            return True
+        return False
 
 
 def confined(
