@@ -26,9 +26,9 @@ def _child(mode: str, path: str) -> None:
     import ifcopenshell
     import ifcopenshell.geom
 
+    from bimtools.extract.output import write_site
     from bimtools.extract.pipeline import collect_candidates, extract_site
     from bimtools.ifc.categories import load_categories
-    from bimtools.site.writer import write_site
 
     # Imports are paid once per process by both modes and are not what is compared.
     start = time.perf_counter()

@@ -41,16 +41,16 @@ from bimtools.site.load import Site, load_site  # noqa: E402
 from initcli.core.geometry import Pose2D  # noqa: E402
 from initcli.core.matching import BimIndex, Matcher, MatchParams  # noqa: E402
 from initcli.io.detection_log import read_log, write_log  # noqa: E402
-from initcli.match import MatchOptions, match_log  # noqa: E402
-from initcli.synthetic_floor import SyntheticFloor, doors_along, make_floor, write_site_folder  # noqa: E402
-from initcli.synthetic_log import (  # noqa: E402
+from initcli.match.pipeline import MatchOptions, match_log  # noqa: E402
+from initcli.sim.synthetic_floor import SyntheticFloor, doors_along, make_floor, write_site_folder  # noqa: E402
+from initcli.sim.synthetic_log import (  # noqa: E402
     SimFeature,
     SyntheticParams,
     make_log,
     path_from_waypoints,
     sim_features_from_bim,
 )
-from initcli.synthetic_paths import random_path  # noqa: E402
+from initcli.sim.synthetic_paths import random_path  # noqa: E402
 
 # Realistic noise for the accuracy and outlier sections: RGB-D depth error growing with the
 # square of the range, box jitter, boxes clipped at the image border, odometry drift, missed

@@ -20,9 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
-from bimtools.site.occupancy_map import FREE
+from bimtools.site.records import FREE
+from initcli.config import load_config
 from initcli.drivers.sim import LidarSpec
-from initcli.session.config import load_config
 from initcli.session.setup import build_sim, choose_storey, prepare_site
 from initcli.sim.world import SimWorld, ray_segment_distances
 

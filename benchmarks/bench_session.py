@@ -28,7 +28,7 @@ PAPER_DISTANCE = {"ntu_hallway": 44.88, "block_a": 14.81, "block_b": 16.61}
 
 def one_session(args: tuple[str, int, str]) -> dict:
     name, seed, workdir = args
-    from initcli.session.config import load_config
+    from initcli.config import load_config
     from initcli.session.runner import Session
     from initcli.session.setup import build_sim, choose_storey, prepare_site
 

@@ -93,9 +93,9 @@ def extract(
     version: Annotated[bool, typer.Option("--version", help="print the version and exit")] = False,
 ) -> None:
     """Extract doors, lifts and stairs (paper Table 1), wall outlines, ROS maps and previews per storey."""
+    from bimtools.extract.output import write_site
     from bimtools.extract.pipeline import extract_site
     from bimtools.ifc.categories import load_categories
-    from bimtools.site.writer import write_site
 
     if version:
         out.print(f"bim-extract {__version__}")

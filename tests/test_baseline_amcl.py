@@ -10,8 +10,8 @@ import pytest
 
 from initcli.baselines.amcl import AmclTracePoint, run_amcl
 from initcli.baselines.outcome import LocalisationOutcome
+from initcli.config import SessionConfig, load_config
 from initcli.core.global_localisation import GlobalLocalisationParams
-from initcli.session.config import SessionConfig, load_config
 from initcli.session.setup import build_sim, choose_storey, prepare_site
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_models"

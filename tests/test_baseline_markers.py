@@ -10,8 +10,8 @@ import pytest
 
 from bimtools.site.load import Site
 from initcli.baselines.markers import MarkerParams, deploy_markers, run_markers
+from initcli.config import SessionConfig, load_config
 from initcli.core.geometry import Pose2D
-from initcli.session.config import SessionConfig, load_config
 from initcli.session.setup import build_sim, choose_storey, prepare_site
 from initcli.sim.markers import Marker
 

@@ -10,15 +10,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from bimtools.extract.output import write_site
 from bimtools.extract.pipeline import extract_site
 from bimtools.site.load import load_site
-from bimtools.site.writer import write_site
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.detector import DEFAULT_MODEL
 from initcli.detector.layouts import iou_matrix
 from initcli.detector.runtime import Detector
 from initcli.detector.scene import Camera, Clutter, Scene, camera_pose_in_world
-from initcli.detector.sensor import RenderedCamera, to_detected_objects
+from initcli.sim.rendered_camera import RenderedCamera, to_detected_objects
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_models"
 

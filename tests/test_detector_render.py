@@ -12,16 +12,16 @@ import pytest
 import yaml
 
 from bimtools.errors import InputError
+from bimtools.extract.output import write_site
 from bimtools.extract.pipeline import extract_site
 from bimtools.site.load import StoreyModel, load_site
-from bimtools.site.writer import write_site
 from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraMount, detections_to_odom
 from initcli.detector.render import render_view
 from initcli.detector.runtime import Detection
 from initcli.detector.scene import Camera, Scene, camera_pose_in_world
-from initcli.detector.sensor import detections_to_objects, window_depth
 from initcli.detector.synth import SynthOptions, load_placements, render_sample, write_dataset
+from initcli.sim.rendered_camera import detections_to_objects, window_depth
 
 ROOT = Path(__file__).resolve().parent.parent
 SAMPLES = ROOT / "sample_models"
@@ -137,7 +137,7 @@ def test_synth_dataset(site_a, tmp_path):
 def test_synth_cli_with_preview(site_a, tmp_path):
     from typer.testing import CliRunner
 
-    from initcli.detector.cli import detector_app
+    from initcli.cli.detector import detector_app
 
     out, sheet = tmp_path / "ds", tmp_path / "sheet.png"
     args = ["synth", "--site", str(site_a), "--out", str(out), "--images", "6", "--size", "160x120"]

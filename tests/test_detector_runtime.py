@@ -144,7 +144,7 @@ def test_cli_corrupt_model_one_line(tmp_path):
     import cv2
 
     cv2.imwrite(str(image), np.zeros((32, 32, 3), np.uint8))
-    script = "from initcli.cli import main; main()"
+    script = "from initcli.cli.main import main; main()"
     result = subprocess.run(
         [sys.executable, "-c", script, "detector", "predict", str(corrupt), str(image)],
         capture_output=True,

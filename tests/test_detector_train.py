@@ -14,9 +14,9 @@ from typer.testing import CliRunner
 torch = pytest.importorskip("torch")
 onnx = pytest.importorskip("onnx")
 
+from bimtools.extract.output import write_site  # noqa: E402
 from bimtools.extract.pipeline import extract_site  # noqa: E402
-from bimtools.site.writer import write_site  # noqa: E402
-from initcli.detector.cli import detector_app  # noqa: E402
+from initcli.cli.detector import detector_app  # noqa: E402
 from initcli.detector.export import export_onnx  # noqa: E402
 from initcli.detector.runtime import Detector  # noqa: E402
 from initcli.detector.synth import SynthOptions, write_dataset  # noqa: E402

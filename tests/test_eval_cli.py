@@ -10,7 +10,7 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
-from initcli.cli import app
+from initcli.cli.main import app
 from initcli.eval.tables import CSV_COLUMNS
 
 SAMPLES = Path(__file__).resolve().parent.parent / "sample_models"

@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from bimtools.errors import InputError
+from initcli.config import SessionConfig
 from initcli.eval.sweep import apply_sweep, parse_sweep
-from initcli.session.config import SessionConfig
 
 
 def test_short_names_map_to_config_paths():

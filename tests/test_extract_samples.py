@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 import shapely
 
+from bimtools.extract.output import write_site
 from bimtools.extract.pipeline import extract_site
 from bimtools.site.load import load_site
-from bimtools.site.occupancy_map import FREE, OCCUPIED
-from bimtools.site.writer import write_site
+from bimtools.site.records import FREE, OCCUPIED
 from tests.conftest import SAMPLES
 
 MODELS = ["ntu_hallway", "block_a", "block_b"]

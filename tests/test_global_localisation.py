@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from bimtools.site.occupancy_map import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
+from bimtools.site.records import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.global_localisation import (
     GlobalLocalisation,

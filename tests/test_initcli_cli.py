@@ -11,10 +11,10 @@ import jsonschema
 import pytest
 from typer.testing import CliRunner
 
-from initcli.cli import app
+from initcli.cli.main import app
 from initcli.io.detection_log import write_log
-from initcli.synthetic_floor import write_site_folder
-from initcli.synthetic_log import SimFeature, make_log, path_from_waypoints
+from initcli.sim.synthetic_floor import write_site_folder
+from initcli.sim.synthetic_log import SimFeature, make_log, path_from_waypoints
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULT_SCHEMA = json.loads((ROOT / "schemas" / "match_result.schema.json").read_text())

@@ -27,7 +27,7 @@ from initcli.io.detection_log import (
     read_log,
     write_log,
 )
-from initcli.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT, SimFeature, make_log, path_from_waypoints
+from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT, SimFeature, make_log, path_from_waypoints
 
 SCHEMA = json.loads(
     (Path(__file__).resolve().parent.parent / "schemas" / "detection_log.schema.json").read_text()

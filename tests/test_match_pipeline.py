@@ -11,9 +11,9 @@ import pytest
 from bimtools.site.load import load_site
 from initcli.core.geometry import Pose2D
 from initcli.io.detection_log import read_log, write_log
-from initcli.match import MatchOptions, MatchReport, match_log
-from initcli.synthetic_floor import write_site_folder
-from initcli.synthetic_log import SimFeature, SyntheticParams, make_log, path_from_waypoints
+from initcli.match.pipeline import MatchOptions, MatchReport, match_log
+from initcli.sim.synthetic_floor import write_site_folder
+from initcli.sim.synthetic_log import SimFeature, SyntheticParams, make_log, path_from_waypoints
 
 # A corridor 40 m long, y in [0, 2]; doors at irregular spacing on both walls, stairs and a lift at the ends.
 # Written as a hand-made Table 1 with the paper's category names.
@@ -256,7 +256,7 @@ def test_rectification_with_walls(tmp_path) -> None:
 
 def test_feature_records_of_an_aggregating_robot(tmp_path, distinct_csv) -> None:
     from initcli.io.detection_log import FeatureRecord, Meta, Odom
-    from initcli.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
+    from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
 
     start = Pose2D(30.0, 1.0, math.pi)  # walking west from x = 30
     bim = {f.id: f for f in corridor()}
@@ -283,7 +283,7 @@ def test_three_detections_with_a_false_one_are_never_a_wrong_unique_match(tmp_pa
     match (L1, L2, D), a wrong unique match; with --max-outliers 1 the alternative "the door was
     false" (L2, L3, -) is enumerated and the verdict is ambiguous."""
     from initcli.io.detection_log import FeatureRecord, Meta, Odom
-    from initcli.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
+    from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
 
     feats = [
         SimFeature("L1", "lift", 0.0, 0.0, 0.0, 1.0),

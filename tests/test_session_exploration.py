@@ -97,7 +97,7 @@ def test_shuttling_is_told_from_travelling():
 
 
 def test_scan_fit_tells_the_right_side_of_a_wall_from_the_wrong_one():
-    from bimtools.site.occupancy_map import FREE, OCCUPIED, OccupancyGrid
+    from bimtools.site.records import FREE, OCCUPIED, OccupancyGrid
     from initcli.core.particle_filter import LikelihoodField, scan_fit
     from initcli.sim.world import ray_segment_distances
 
@@ -123,8 +123,8 @@ def test_scan_fit_tells_the_right_side_of_a_wall_from_the_wrong_one():
 
 def test_explorer_turns_once_on_the_spot_before_following_walls():
     from initcli.baselines.drive import WallFollowingExplorer
+    from initcli.config import SessionConfig
     from initcli.drivers.base import LaserScan
-    from initcli.session.config import SessionConfig
 
     config = SessionConfig()
     explorer = WallFollowingExplorer(config)

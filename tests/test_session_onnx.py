@@ -8,7 +8,7 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
-from initcli.cli import app
+from initcli.cli.main import app
 from initcli.detector import DEFAULT_MODEL
 from tests.conftest import SAMPLES
 

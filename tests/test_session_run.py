@@ -10,9 +10,9 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
-from initcli.cli import app
+from initcli.cli.main import app
 from initcli.io.detection_log import read_log
-from initcli.match import MatchOptions, run_match
+from initcli.match.pipeline import MatchOptions, run_match
 from tests.conftest import SAMPLES
 
 runner = CliRunner()
@@ -140,7 +140,7 @@ def test_invalid_yaml_names_the_line(tmp_path):
 
 
 def test_sample_configs_are_valid():
-    from initcli.session.config import load_config
+    from initcli.config import load_config
 
     for name in STARTS:
         config = load_config(SAMPLES / f"{name}.site.yaml")
@@ -148,7 +148,7 @@ def test_sample_configs_are_valid():
 
 
 def test_schema_defaults_match_the_code():
-    from initcli.session.config import SCHEMA_PATH, SessionConfig, config_to_dict
+    from initcli.config import SCHEMA_PATH, SessionConfig, config_to_dict
 
     schema = json.loads(SCHEMA_PATH.read_text())
     defaults = config_to_dict(SessionConfig())

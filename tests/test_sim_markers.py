@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from bimtools.site.load import StoreyModel
+from initcli.config import load_config
 from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount
-from initcli.session.config import load_config
 from initcli.session.setup import choose_storey, prepare_site
 from initcli.sim.markers import (
     MAX_SHIFT,

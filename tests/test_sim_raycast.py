@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bimtools.site.occupancy_map import FREE
+from bimtools.site.records import FREE
+from initcli.config import load_config
 from initcli.drivers.sim import LidarSpec
-from initcli.session.config import load_config
 from initcli.session.setup import build_sim, choose_storey, prepare_site
 from initcli.sim import world as world_module
 from initcli.sim.world import SimWorld, cast_rays, ray_segment_distances

@@ -20,7 +20,7 @@ import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
-from bimtools.site.occupancy_map import FREE, OccupancyGrid
+from bimtools.site.records import FREE, OccupancyGrid
 
 PROBE_DISTANCES = (0.35, 0.6, 0.9, 1.3)  # metres beyond the element's face
 

@@ -15,7 +15,7 @@ from shapely.geometry.base import BaseGeometry
 
 from bimtools.extract.floorplan import FloorPlan
 from bimtools.extract.section import polygons_of
-from bimtools.site.occupancy_map import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
+from bimtools.site.records import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
 
 _SHIFT = 4  # sub-pixel bits for cv2 drawing
 _MARGIN = 1.0  # metres of unknown around the outline

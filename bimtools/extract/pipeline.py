@@ -24,8 +24,7 @@ from bimtools.ifc.geometry import Mesh, ProgressCallback, iterate_meshes
 from bimtools.ifc.model import ModelInfo, describe_model, open_model
 from bimtools.ifc.storeys import Storey, container_storey, list_storeys, storey_at_elevation
 from bimtools.ifc.text import element_name
-from bimtools.site.occupancy_map import OccupancyGrid
-from bimtools.site.records import Feature
+from bimtools.site.records import Feature, OccupancyGrid
 
 OBSTACLE_CLASSES = ("IfcWall", "IfcColumn", "IfcCurtainWall", "IfcDoor", "IfcWindow")
 CURTAIN_PART_CLASSES = ("IfcPlate", "IfcMember")

@@ -5,6 +5,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
 # The first eight columns of features.csv are exactly the paper's Table 1.
 TABLE1_COLUMNS = ("ID", "Category", "X", "Y", "Norm_X", "Norm_Y", "Width", "Height")
 EXTRA_COLUMNS = ("Storey", "Elevation", "IfcClass", "Name")
@@ -81,3 +83,52 @@ class StoreyInfo:
     counts: dict[str, int] = field(default_factory=dict)
     map_yaml: str | None = None
     preview: str | None = None
+
+
+# Occupancy grid pixel values (ROS map_server / Nav2 trinary): written by bimtools.site.occupancy_map.
+FREE = 254
+OCCUPIED = 0
+UNKNOWN = 205
+
+
+@dataclass
+class OccupancyGrid:
+    """A trinary occupancy grid; ``cells[0]`` is the top row (largest y)."""
+
+    cells: np.ndarray  # uint8, shape (rows, cols)
+    resolution: float
+    origin: tuple[float, float, float]
+    negate: int = 0
+    occupied_thresh: float = 0.65
+    # 0.196, not 0.25: with 0.25 the unknown value 205 ((255-205)/255 = 0.196) would load as free.
+    free_thresh: float = 0.196
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.cells.shape  # type: ignore[return-value]
+
+    def world_to_cell(self, x: np.ndarray | float, y: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+        """World coordinates -> (row, col) integer indices (may be out of bounds)."""
+        col = np.floor((np.asarray(x) - self.origin[0]) / self.resolution).astype(int)
+        row_from_bottom = np.floor((np.asarray(y) - self.origin[1]) / self.resolution).astype(int)
+        return self.cells.shape[0] - 1 - row_from_bottom, col
+
+    def cell_centre(self, row: np.ndarray | int, col: np.ndarray | int) -> tuple[np.ndarray, np.ndarray]:
+        x = self.origin[0] + (np.asarray(col) + 0.5) * self.resolution
+        y = self.origin[1] + (self.cells.shape[0] - 1 - np.asarray(row) + 0.5) * self.resolution
+        return x, y
+
+    def value_at(self, x: float, y: float) -> int:
+        """Pixel value at a world point; UNKNOWN outside the grid."""
+        row, col = self.world_to_cell(x, y)
+        if 0 <= row < self.cells.shape[0] and 0 <= col < self.cells.shape[1]:
+            return int(self.cells[row, col])
+        return UNKNOWN
+
+    def occupancy(self) -> np.ndarray:
+        """Per-cell state as map_server reads it: 1 occupied, 0 free, -1 unknown."""
+        p = self.cells.astype(float) / 255.0 if self.negate else (255.0 - self.cells.astype(float)) / 255.0
+        state = np.full(self.cells.shape, -1, dtype=np.int8)
+        state[p > self.occupied_thresh] = 1
+        state[p < self.free_thresh] = 0
+        return state

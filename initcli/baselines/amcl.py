@@ -20,9 +20,9 @@ import numpy as np
 from bimtools.site.load import Site
 from initcli.baselines.drive import WallFollowingExplorer
 from initcli.baselines.outcome import LocalisationOutcome
+from initcli.config import SessionConfig
 from initcli.core.geometry import Pose2D
 from initcli.core.global_localisation import GlobalLocalisation, GlobalLocalisationParams
-from initcli.session.config import SessionConfig
 from initcli.session.setup import SimSetup
 from initcli.sim.robot import motion_delta
 

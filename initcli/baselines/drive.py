@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import math
 
+from initcli.config import SessionConfig, followed_side, turn_in_place_speed, wall_follow_params
 from initcli.core.geometry import wrap_angle
 from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
 from initcli.drivers.base import SensorFrame
-from initcli.session.config import SessionConfig, followed_side, turn_in_place_speed, wall_follow_params
 
 
 class WallFollowingExplorer:

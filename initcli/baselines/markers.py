@@ -17,8 +17,8 @@ import numpy as np
 from bimtools.site.load import Site
 from initcli.baselines.drive import WallFollowingExplorer
 from initcli.baselines.outcome import LocalisationOutcome
+from initcli.config import SessionConfig
 from initcli.core.geometry import Pose2D
-from initcli.session.config import SessionConfig
 from initcli.session.setup import SimSetup, camera_of
 from initcli.sim.markers import (
     Marker,

@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bimtools.site.occupancy_map import FREE, OccupancyGrid
+from bimtools.site.records import FREE, OccupancyGrid
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.particle_filter import (
     FilterNoise,

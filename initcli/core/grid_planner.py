@@ -16,7 +16,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from bimtools.site.occupancy_map import FREE, OccupancyGrid
+from bimtools.site.records import FREE, OccupancyGrid
 
 
 @dataclass

@@ -73,7 +73,7 @@ class MatchParams:
 class BimIndex:
     """B_object (Eq. 4) of one storey, indexed per class for Algorithm 1.
 
-    ``classes`` are canonical class names (see :mod:`initcli.classes`); comparisons are exact.
+    ``classes`` are canonical class names (see :mod:`initcli.core.classes`); comparisons are exact.
     """
 
     def __init__(self, xy: np.ndarray, classes: Sequence[str]) -> None:

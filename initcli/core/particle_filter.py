@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from bimtools.site.occupancy_map import OCCUPIED, OccupancyGrid
+from bimtools.site.records import OCCUPIED, OccupancyGrid
 from initcli.core.geometry import Pose2D, wrap_angle
 
 

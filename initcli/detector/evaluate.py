@@ -14,7 +14,7 @@ import cv2
 import numpy as np
 
 from bimtools.errors import InputError
-from initcli.classes import ClassMap
+from initcli.core.classes import ClassMap
 from initcli.detector.datasets import load_dataset
 from initcli.detector.metrics import MetricAccumulator, Metrics
 from initcli.detector.runtime import Detector

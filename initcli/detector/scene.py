@@ -21,7 +21,7 @@ from shapely.geometry.polygon import orient
 
 from bimtools.errors import InputError
 from bimtools.site.load import StoreyModel
-from initcli.classes import ClassMap
+from initcli.core.classes import ClassMap
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.detector import CLASS_NAMES
 

@@ -9,11 +9,11 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass
 from pathlib import Path
 
+from initcli.config import load_config
 from initcli.eval.config import EvalConfig, EvalSite
 from initcli.eval.records import TrialKey, TrialRecord
 from initcli.eval.sweep import Sweep, sweep_label
 from initcli.eval.trial import TrialJob, run_trial, trial_seed
-from initcli.session.config import load_config
 from initcli.session.setup import prepare_site
 
 

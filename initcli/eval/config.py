@@ -12,12 +12,13 @@ from pathlib import Path
 from typing import Any
 
 from bimtools.errors import InputError
+from bimtools.schemas import schema_path
+from initcli.config import read_yaml, validate_document
 from initcli.core.global_localisation import GlobalLocalisationParams
 from initcli.eval.records import METHODS, FailureRule
-from initcli.session.config import read_yaml, validate_document
 from initcli.sim.markers import MarkerParams
 
-SCHEMA_PATH = Path(__file__).resolve().parents[2] / "schemas" / "eval_config.schema.json"
+SCHEMA_PATH = schema_path("eval_config.schema.json")
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_models"
 DEFAULT_CONFIG = SAMPLES / "eval.yaml"
 

@@ -7,7 +7,7 @@ import dataclasses
 from dataclasses import dataclass
 
 from bimtools.errors import InputError
-from initcli.session.config import SessionConfig
+from initcli.config import SessionConfig
 
 # Short names for the parameters the issue asks to sweep; any dotted config path works too.
 SWEEP_KEYS: dict[str, str] = {

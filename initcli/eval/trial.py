@@ -18,11 +18,11 @@ import numpy as np
 
 from bimtools.site.load import Site, load_site
 from initcli.baselines.outcome import LocalisationOutcome
+from initcli.config import SessionConfig, load_config
 from initcli.core.geometry import Pose2D
 from initcli.eval.records import FailureRule, TrialRecord
 from initcli.eval.scoring import score
 from initcli.eval.sweep import Sweep, apply_sweep, sweep_label
-from initcli.session.config import SessionConfig, load_config
 from initcli.session.runner import Session, SessionResult
 from initcli.session.setup import build_sim, choose_storey
 

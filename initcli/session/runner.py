@@ -9,7 +9,7 @@ modified bug algorithm (Eq. 15-16); no new feature within t_thre -> ``recovery``
 to widen the view) -> still nothing -> ``explore``.
 
 The session writes every record it acts on to its detection log, and decides by running the
-same pipeline as ``bim-init match`` (:func:`initcli.match.match_log`) on the log so far, so the
+same pipeline as ``bim-init match`` (:func:`initcli.match.pipeline.match_log`) on the log so far, so the
 log replays to the same coarse verdict and pose.
 """
 
@@ -25,8 +25,9 @@ from pathlib import Path
 import numpy as np
 
 from bimtools.site.load import Site
-from initcli.classes import ClassMap
+from initcli.config import SessionConfig, followed_side, turn_in_place_speed, wall_follow_params
 from initcli.core.bug_navigation import BugNavigator, BugParams, RouteNavigator
+from initcli.core.classes import ClassMap
 from initcli.core.detection_filter import ConfirmedFeature, Sighting, filter_detections, is_truncated
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.grid_planner import PlanningGrid
@@ -51,8 +52,7 @@ from initcli.io.detection_log import (
     State,
     Truth,
 )
-from initcli.match import Hypothesis, MatchOptions, MatchReport, match_log
-from initcli.session.config import SessionConfig, followed_side, turn_in_place_speed, wall_follow_params
+from initcli.match.pipeline import Hypothesis, MatchOptions, MatchReport, match_log
 from initcli.sim.robot import motion_delta
 
 SCAN_LOG_EVERY = 5  # control steps between logged scans (2 Hz at 10 Hz control)
@@ -252,7 +252,7 @@ class Session:
             self._add_sightings(t, frame.odom, frame.detections)
 
     def _add_sightings(self, t: float, odom: Pose2D, objects: list) -> None:
-        """Eq. 1-2 for one image, exactly as :func:`initcli.match.sightings_from_log` does."""
+        """Eq. 1-2 for one image, exactly as :func:`initcli.match.pipeline.sightings_from_log` does."""
         frame = self.frames
         self.frames += 1
         objs = [o for o in objects if o.depth is not None and math.isfinite(o.depth)]

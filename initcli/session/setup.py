@@ -10,16 +10,16 @@ import numpy as np
 
 from bimtools.errors import InputError
 from bimtools.site.load import Site, load_site
-from initcli.classes import ClassMap
+from initcli.config import SessionConfig, start_pose_degrees
+from initcli.core.classes import ClassMap
 from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.drivers.sim import LidarSpec, SimDriver
-from initcli.session.config import SessionConfig, start_pose_degrees
 from initcli.sim.camera import CameraNoise, SimulatedDetector
 from initcli.sim.robot import DiffDriveRobot, OdometryNoise
 from initcli.sim.scenario import Circulation, place_clutter, place_workers, random_start
+from initcli.sim.synthetic_log import sim_features_from_bim
 from initcli.sim.world import SimWorld
-from initcli.synthetic_log import sim_features_from_bim
 
 
 def prepare_site(config: SessionConfig, workdir: Path) -> Site:
@@ -29,8 +29,8 @@ def prepare_site(config: SessionConfig, workdir: Path) -> Site:
     if not path.exists():
         raise InputError(f"{where}: {path} does not exist")
     if path.is_file() and path.suffix.lower() == ".ifc":
+        from bimtools.extract.output import write_site
         from bimtools.extract.pipeline import extract_site
-        from bimtools.site.writer import write_site
 
         target = workdir / "site"
         write_site(target, extract_site(path), preview=False)
@@ -145,7 +145,7 @@ def _no_detections(pose: Pose2D, t: float) -> list:
 
 def _phantoms(model, circulation: Circulation, count: int, rng: np.random.Generator):
     """Door-like things on corridor walls that are not in the BIM (posters, temporary openings)."""
-    from initcli.synthetic_log import SimFeature
+    from initcli.sim.synthetic_log import SimFeature
 
     walls = [
         w

@@ -16,8 +16,8 @@ import numpy as np
 from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.io.detection_log import DetectedObject
+from initcli.sim.synthetic_log import SimFeature, SyntheticParams, render_image
 from initcli.sim.world import SimWorld
-from initcli.synthetic_log import SimFeature, SyntheticParams, render_image
 
 
 @dataclass(frozen=True)

@@ -9,10 +9,10 @@ import numpy as np
 
 from bimtools.errors import InputError
 from bimtools.site.load import StoreyModel
+from initcli.config import SessionConfig
 from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.io.detection_log import DetectedObject
-from initcli.session.config import SessionConfig
 from initcli.sim.world import SimWorld
 
 
@@ -26,7 +26,7 @@ class OnnxCamera:
         mount: CameraMount,
         rng: np.random.Generator,
     ):
-        from initcli.detector.sensor import RenderedCamera, to_detected_objects, world_clutter
+        from initcli.sim.rendered_camera import RenderedCamera, to_detected_objects, world_clutter
 
         self._to_objects = to_detected_objects
         self._clutter = world_clutter

@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 
 from bimtools.site.load import StoreyModel
-from bimtools.site.occupancy_map import FREE, OccupancyGrid
+from bimtools.site.records import FREE, OccupancyGrid
 from initcli.core.geometry import Pose2D
 from initcli.sim.world import Worker, ray_segment_distances
 

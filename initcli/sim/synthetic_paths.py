@@ -4,7 +4,7 @@ The occupancy grid of a ``bim-extract`` OUTDIR (``map_<storey>.pgm``) is reduced
 of cells with at least ``clearance`` metres to the nearest obstacle; a shortest path (Dijkstra,
 cost favouring the middle of corridors) joins a random start to a random goal ``min_length`` to
 ``max_length`` metres away along the way. The result is a list of waypoints for
-:func:`initcli.synthetic_log.path_from_waypoints`.
+:func:`initcli.sim.synthetic_log.path_from_waypoints`.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from bimtools.site.occupancy_map import OccupancyGrid
+from bimtools.site.records import OccupancyGrid
 
 
 def _coarse_clearance(grid: OccupancyGrid, cell: float) -> tuple[np.ndarray, float, np.ndarray]:

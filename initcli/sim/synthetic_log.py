@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from initcli.classes import ClassMap
+from initcli.core.classes import ClassMap
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.projection import CameraIntrinsics, CameraMount, box_for_point, odom_to_pixel
 from initcli.io.detection_log import DetectedObject, Detections, Meta, Odom, Record, Truth
@@ -217,7 +217,7 @@ def make_log(
     phantoms: Sequence[SimFeature] = (),
     seed: int = 0,
     truth: bool = True,
-    source: str = "initcli.synthetic_log",
+    source: str = "initcli.sim.synthetic_log",
     transform_odom: Callable[[Pose2D], Pose2D] | None = None,
 ) -> SyntheticLog:
     """Render a whole log along ``path_bim`` (T, 3) at ``times`` (T,).

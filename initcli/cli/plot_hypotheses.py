@@ -15,7 +15,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from initcli.match import MatchReport  # noqa: E402
+from initcli.match.pipeline import MatchReport  # noqa: E402
 
 MARKERS = {"door": "s", "lift": "^", "stairs": "D"}
 

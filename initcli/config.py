@@ -17,9 +17,10 @@ import jsonschema
 import yaml
 
 from bimtools.errors import InputError
+from bimtools.schemas import schema_path
 from initcli.core.wall_following import WallFollowParams
 
-SCHEMA_PATH = Path(__file__).resolve().parents[2] / "schemas" / "site_config.schema.json"
+SCHEMA_PATH = schema_path("site_config.schema.json")
 
 
 @dataclass

@@ -1,4 +1,4 @@
-"""``bim-init``: the thin typer app. Commands: ``match``, ``run``, ``eval``, ``detector``.
+"""``bim-init match``: a detection log against the feature table, and the console tables of the result.
 
 Exit codes: 0 unique match, 3 ambiguous (several hypotheses), 4 no consistent match, 2 bad input
 (one line on stderr, never a traceback).
@@ -7,32 +7,19 @@ Exit codes: 0 unique match, 3 ambiguous (several hypotheses), 4 no consistent ma
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 from typing import Annotated
 
 import typer
 from rich.console import Console
+from rich.table import Table
 
 from bimtools.errors import InputError
-from initcli.detector.cli import detector_app
-from initcli.eval_cli import evaluate
-from initcli.match import DEFAULT_POSE_METHOD, EXIT_BAD_INPUT, MatchOptions, run_match
-from initcli.run_cli import run as run_session_command
-
-app = typer.Typer(
-    name="bim-init",
-    help="Marker-free robot initialisation from BIM: match detected doors, lifts and stairs to the model.",
-    add_completion=False,
-    no_args_is_help=True,
-    pretty_exceptions_enable=False,
-)
-
-
-@app.callback()
-def _root() -> None:
-    """Marker-free robot initialisation from BIM (paper §3.3): match detected doors, lifts and
-    staircases to the same elements of the building model."""
+from initcli.core.geometry import Pose2D
+from initcli.io.match_result import report_to_dict
+from initcli.match.pipeline import DEFAULT_POSE_METHOD, EXIT_BAD_INPUT, MatchOptions, MatchReport, run_match
 
 
 def _fail(message: str) -> typer.Exit:
@@ -40,7 +27,77 @@ def _fail(message: str) -> typer.Exit:
     return typer.Exit(EXIT_BAD_INPUT)
 
 
-@app.command()
+
+def _fmt_pose(p: Pose2D | None) -> str:
+    if p is None:
+        return "-"
+    return f"{p.x:8.3f} {p.y:8.3f} {math.degrees(p.yaw):7.1f}°"
+
+
+def print_report(report: MatchReport, console: Console) -> None:
+    """Confirmed features, the top-K hypotheses table, then the verdict line (last line)."""
+    feats = Table(
+        title=f"Confirmed features S_object ({len(report.features)}, odom frame)", title_justify="left"
+    )
+    for col in ("#", "class", "x [m]", "y [m]", "sightings", "confirmed t [s]"):
+        feats.add_column(col, justify="right" if col not in ("class",) else "left")
+    for f in report.features:
+        feats.add_row(
+            str(f.index + 1),
+            f.cls,
+            f"{f.x:.3f}",
+            f"{f.y:.3f}",
+            "given" if f.given else str(f.sightings),
+            f"{f.t_confirmed:.2f}",
+        )
+    console.print(feats)
+
+    if report.hypotheses:
+        shown = len(report.hypotheses)
+        title = (
+            f"Hypotheses: top {shown} of {report.n_hypotheses} (pose method {report.options.pose_method}, "
+            f"pose at the last odom record, BIM frame)"
+        )
+        table = Table(title=title, title_justify="left")
+        for col in (
+            "rank",
+            "cost J",
+            "storey",
+            "matches (detection order)",
+            "pose x y yaw",
+            "rectified pose",
+            "confidence",
+        ):
+            table.add_column(
+                col, justify="left" if col in ("storey", "matches (detection order)") else "right"
+            )
+        for h in report.hypotheses:
+            matches = " ".join(m if m is not None else "-" for m in h.matches)
+            rect = _fmt_pose(h.rectified_pose) if h.rectified_pose is not None else "(no walls)"
+            table.add_row(
+                str(h.rank),
+                f"{h.cost:.3f}",
+                h.storey or "-",
+                matches,
+                _fmt_pose(h.pose),
+                rect,
+                f"{h.confidence:.3f}",
+            )
+        console.print(table)
+        if any(h.n_outliers for h in report.hypotheses):
+            console.print("'-' in matches: a detection treated as an outlier (--max-outliers)", style="dim")
+    if report.truth is not None and report.hypotheses:
+        best = report.hypotheses[0].pose
+        console.print(
+            f"truth (from the log): {_fmt_pose(report.truth)}; best hypothesis error "
+            f"{best.distance_to(report.truth):.3f} m, {math.degrees(best.yaw_error(report.truth)):.2f}°",
+            style="dim",
+        )
+    for note in report.notes:
+        console.print(f"note: {note}", style="dim")
+    console.print(report.verdict, style="bold", highlight=False)
+
+
 def match(
     log: Annotated[Path, typer.Argument(metavar="LOG.jsonl", help="Detection log (JSON Lines, version 1).")],
     site: Annotated[
@@ -132,33 +189,15 @@ def match(
     for warning in report.warnings:
         typer.echo(f"bim-init: warning: {warning}", err=True)
     if json_out:
-        from initcli.report import report_to_dict
-
         typer.echo(json.dumps(report_to_dict(report), indent=2))
     else:
-        from initcli.report import print_report
-
         console = Console(width=None if sys.stdout.isatty() else 200, soft_wrap=False)
         print_report(report, console)
     if plot is not None:
-        from initcli.tools.plot_hypotheses import plot_hypotheses
+        from initcli.cli.plot_hypotheses import plot_hypotheses
 
         try:
             plot_hypotheses(report, plot)
         except OSError as exc:
             raise _fail(f"{plot}: cannot write the plot: {exc.strerror or exc}") from None
     raise typer.Exit(report.exit_code)
-
-
-app.command("run")(run_session_command)
-app.command("eval")(evaluate)
-app.add_typer(detector_app, name="detector")
-
-
-def main() -> None:
-    """Console-script entry point (``bim-init``)."""
-    app()
-
-
-if __name__ == "__main__":
-    main()

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from initcli.synthetic_log import SimFeature
+from initcli.sim.synthetic_log import SimFeature
 
 
 @dataclass

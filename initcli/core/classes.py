@@ -3,7 +3,7 @@
 Both sides are reduced to a *canonical class*: lower case, surrounding blanks removed, then the
 built-in synonyms below, then the site's own mapping ``{"detector name": "Category", ...}``
 (``detector.classes`` of the site folder's ``site.yaml``, or ``"classes"`` in its ``site.json``;
-see :func:`initcli.match.site_class_map`). So ``Door``, ``doors`` and ``DOOR`` all
+see :func:`initcli.match.pipeline.site_class_map`). So ``Door``, ``doors`` and ``DOOR`` all
 match features.csv category ``Doors`` (the paper's Table 1) or ``Door`` (bim-extract), and a
 detector's ``elevator`` matches category ``Lift``.
 """

@@ -23,7 +23,7 @@ import yaml
 
 from bimtools.errors import InputError
 from bimtools.site.load import Site, StoreyModel, load_site
-from initcli.classes import ClassMap
+from initcli.core.classes import ClassMap
 from initcli.core.detection_filter import (
     ConfirmedFeature,
     FilterParams,

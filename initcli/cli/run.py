@@ -18,8 +18,8 @@ from rich.table import Table
 
 from bimtools.errors import EXIT_BAD_INPUT, InputError
 from bimtools.site.atomic import staged_directory
+from initcli.config import SessionConfig, config_to_dict, load_config
 from initcli.core.geometry import Pose2D
-from initcli.session.config import SessionConfig, config_to_dict, load_config
 from initcli.session.outputs import render_report, summary_document, write_summary
 from initcli.session.runner import Session, SessionResult
 from initcli.session.setup import build_sim, choose_storey, prepare_site

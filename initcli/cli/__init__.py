@@ -1,0 +1,5 @@
+"""Command faces of ``bim-init``: option parsing, progress, console tables and the plots only they draw.
+
+Each module is one command (``match``, ``run``, ``eval``, ``detector``); :mod:`initcli.cli.main` holds
+the typer app. Algorithms live in :mod:`initcli.core`, file formats in :mod:`initcli.io`.
+"""

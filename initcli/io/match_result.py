@@ -1,0 +1,87 @@
+"""Rendering of a :class:`~initcli.match.pipeline.MatchReport`: the console tables and the JSON document.
+
+The JSON document follows ``schemas/match_result.schema.json``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from initcli.core.geometry import Pose2D
+from initcli.match.pipeline import MatchReport
+
+RESULT_FORMAT = "bim-init.match/1"
+
+
+def _pose(p: Pose2D | None) -> dict[str, float] | None:
+    if p is None:
+        return None
+    return {
+        "x": round(p.x, 6),
+        "y": round(p.y, 6),
+        "yaw": round(p.yaw, 6),
+        "yaw_deg": round(math.degrees(p.yaw), 4),
+    }
+
+
+def report_to_dict(report: MatchReport) -> dict[str, Any]:
+    """The ``--json`` document."""
+    o = report.options
+    return {
+        "format": RESULT_FORMAT,
+        "verdict": report.verdict,
+        "exit_code": report.exit_code,
+        "n_hypotheses": report.n_hypotheses,
+        "storey": report.storey,
+        "storeys_searched": list(report.storeys),
+        "log": str(report.log),
+        "site": str(report.site),
+        "pose_method": o.pose_method,
+        "odom_pose": _pose(report.odom_pose),
+        "features": [
+            {
+                "index": f.index,
+                "class": f.cls,
+                "x": round(f.x, 6),
+                "y": round(f.y, 6),
+                "sightings": f.sightings,
+                "t_first": f.t_first,
+                "t_confirmed": f.t_confirmed,
+                "given": f.given,
+            }
+            for f in report.features
+        ],
+        "hypotheses": [
+            {
+                "rank": h.rank,
+                "cost": round(h.cost, 6),
+                "storey": h.storey,
+                "matches": list(h.matches),
+                "outliers": h.n_outliers,
+                "pose": _pose(h.pose),
+                "rectified_pose": _pose(h.rectified_pose),
+                "rectified": h.rectified,
+                "confidence": round(h.confidence, 6),
+                "support": h.support,
+            }
+            for h in report.hypotheses
+        ],
+        "parameters": {
+            "alpha": o.alpha,
+            "beta_deg": o.beta_deg,
+            "top": o.top,
+            "max_outliers": o.max_outliers,
+            "min_inliers": o.min_inliers,
+            "d_thre": o.d_thre,
+            "pose_radius": o.pose_radius,
+            "merge_radius": o.merge_radius,
+            "min_sightings": o.min_sightings,
+            "score_threshold": o.score_threshold,
+            "min_depth": o.min_depth,
+            "max_depth": o.max_depth,
+        },
+        "truth": _pose(report.truth),
+        "warnings": list(report.warnings),
+        "notes": list(report.notes),
+    }

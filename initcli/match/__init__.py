@@ -1,0 +1,6 @@
+"""The matching pipeline over a detection log: sightings -> confirmed features -> hypotheses -> pose.
+
+:func:`initcli.match.pipeline.match_log` composes the pure steps of :mod:`initcli.core` (Eq. 1-17,
+Algorithm 1) on a :class:`~initcli.io.detection_log.DetectionLog` and a site model; ``bim-init
+match`` and the online session both call it.
+"""

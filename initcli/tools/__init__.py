@@ -1,1 +1,0 @@
-"""Plotting and other tools around the core algorithms."""
