@@ -1,0 +1,273 @@
+"""Verification of a pose hypothesis against evidence Algorithm 1 does not use (beyond the paper).
+
+A hypothesis is the transform ``T = pose_BIM * odom^-1`` that puts the robot's odometry frame into the
+BIM frame (Eq. 10-13 give it at the last odom pose). Algorithm 1 only checks that the features that
+*were* detected fit the BIM; it never asks about the features the hypothesis says the camera must
+have seen but did not, nor whether the lidar agrees with the walls. Two checks:
+
+* **Negative evidence** -- every BIM feature that, under ``T``, stood in the camera's view (inside the
+  image, within ``predict_range``, seen from its front side within ``predict_view_angle_deg`` of its
+  normal, line of sight through the BIM's walls) in at least ``min_frames`` images of the path, yet no
+  sighting of its category landed within ``match_radius`` of it. A few misses are normal on a site
+  (doors not installed yet, a detector that misses); at a wrong place most predictions fail.
+  The share test follows a binomial likelihood ratio: with a per-feature miss probability
+  ``p_right`` at the right place and ``p_wrong`` at a wrong one, ``k`` misses of ``n`` favour the
+  wrong place when ``k log(p_wrong/p_right) + (n-k) log((1-p_wrong)/(1-p_right)) > log_odds``.
+* **Scan fit** -- the share of lidar beam end points of the recent scans, put into the BIM frame with
+  ``T``, that land within ``scan_tolerance`` of an occupied map cell (the beam end-point model of the
+  fine-tuning filter, Eq. 18, with no beam skipped). As-built deviations move walls by centimetres;
+  a wrong corridor fits badly where the layouts differ.
+
+Everything here is pure numpy on arrays; the session and ``bim-init match`` gather the inputs.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from initcli.core.geometry import Pose2D
+from initcli.core.particle_filter import LikelihoodField, scan_fit
+from initcli.core.projection import CameraIntrinsics, CameraMount, odom_to_pixel
+
+
+@dataclass(frozen=True)
+class VerificationParams:
+    """Thresholds of the two checks (units in the comments)."""
+
+    predict_range: float = 4.5  # m: a BIM feature farther than this is not predicted to be seen
+    predict_view_angle_deg: float = 60.0  # degrees from the feature's normal
+    image_margin: float = 0.1  # share of the image width/height kept clear at the borders
+    min_frames: int = 4  # images a feature must be predicted in view before a miss counts
+    match_radius: float = 1.5  # m: a same-category sighting this close (BIM frame) explains a feature
+    p_right: float = 0.4  # chance that a predicted feature is missed at the right place
+    p_wrong: float = 0.9  # ... and at a wrong place
+    log_odds: float = 2.3  # natural log of the likelihood ratio that rejects (about 10:1)
+    min_scan_fit: float = 0.5  # share of beams on mapped walls below which the place is wrong
+    scan_tolerance: float = 0.25  # m: a beam end point this close to an occupied cell fits
+    scan_search_xy: float = 0.3  # m: the fit is the best over shifts of the pose up to this ...
+    scan_search_yaw_deg: float = 3.0  # ... and turns up to this (a coarse pose is decimetres off)
+    enabled: bool = True
+
+
+@dataclass(frozen=True)
+class CameraView:
+    """What the camera can see: intrinsics, mount, the detector's minimum depth."""
+
+    camera: CameraIntrinsics
+    mount: CameraMount
+    min_depth: float = 0.5  # m
+
+
+@dataclass(frozen=True)
+class Verification:
+    """The outcome of the checks for one hypothesis (reported in summary.json and match --json)."""
+
+    predicted: int  # BIM features predicted in view
+    missed_predictions: int  # ... of which never detected
+    missed_ids: tuple[str, ...] = ()
+    scan_fit: float | None = None  # None: no scans to judge by
+    passed: bool = True
+    reasons: tuple[str, ...] = field(default_factory=tuple)
+
+    def as_dict(self) -> dict[str, object]:
+        return {
+            "predicted": self.predicted,
+            "missed_predictions": self.missed_predictions,
+            "missed_ids": list(self.missed_ids),
+            "scan_fit": None if self.scan_fit is None else round(self.scan_fit, 4),
+            "passed": self.passed,
+            "reasons": list(self.reasons),
+        }
+
+
+def segments_cross(a: np.ndarray, b: np.ndarray, walls: np.ndarray) -> np.ndarray:
+    """For each segment ``a[i] -> b[i]`` (N, 2), does it properly cross any wall (W, 4: x1 y1 x2 y2)?"""
+    a = np.asarray(a, dtype=float).reshape(-1, 2)
+    b = np.asarray(b, dtype=float).reshape(-1, 2)
+    w = np.asarray(walls, dtype=float).reshape(-1, 4)
+    if len(w) == 0 or len(a) == 0:
+        return np.zeros(len(a), dtype=bool)
+    r = (b - a)[:, None, :]
+    q = w[None, :, 0:2]
+    s = (w[:, 2:4] - w[:, 0:2])[None, :, :]
+    rxs = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
+    qp = q - a[:, None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0]) / rxs
+        u = (qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0]) / rxs
+    hit = (np.abs(rxs) > 1e-12) & (t > 1e-6) & (t < 1.0 - 1e-6) & (u >= 0.0) & (u <= 1.0)
+    return hit.any(axis=1)
+
+
+def frames_in_view(
+    feature_xy: np.ndarray,
+    feature_normals: np.ndarray,
+    feature_heights: np.ndarray,
+    robot_poses: list[Pose2D],
+    view: CameraView,
+    walls: np.ndarray,
+    params: VerificationParams,
+) -> np.ndarray:
+    """Per BIM feature (F,), the number of ``robot_poses`` (BIM frame) whose image shows it (the
+    inverse of Eq. 1-2 for the box centre, plus range, view angle and line of sight)."""
+    xy = np.asarray(feature_xy, dtype=float).reshape(-1, 2)
+    normals = np.asarray(feature_normals, dtype=float).reshape(-1, 2)
+    counts = np.zeros(len(xy), dtype=int)
+    if len(xy) == 0:
+        return counts
+    points = np.column_stack([xy, 0.5 * np.asarray(feature_heights, dtype=float)])
+    cam = view.camera
+    mu, mv = params.image_margin * cam.width, params.image_margin * cam.height
+    cos_max = math.cos(math.radians(params.predict_view_angle_deg))
+    for pose in robot_poses:
+        u, v, depth = odom_to_pixel(points, cam, view.mount, pose)
+        eye = pose.apply(np.array([view.mount.x, view.mount.y]))
+        to_eye = eye - xy
+        dist = np.hypot(to_eye[:, 0], to_eye[:, 1])
+        cos_view = np.einsum("ij,ij->i", normals, to_eye) / np.maximum(dist, 1e-12)
+        seen = (
+            (depth >= view.min_depth)
+            & (dist <= params.predict_range)
+            & (u >= mu)
+            & (u <= cam.width - mu)
+            & (v >= mv)
+            & (v <= cam.height - mv)
+            & (cos_view >= cos_max)
+        )
+        if seen.any():
+            idx = np.flatnonzero(seen)
+            targets = xy[idx] + 0.1 * normals[idx]  # just in front of the host wall's surface
+            blocked = segments_cross(np.repeat(eye[None, :], len(idx), axis=0), targets, walls)
+            seen[idx[blocked]] = False
+        counts += seen
+    return counts
+
+
+def explained(
+    feature_xy: np.ndarray,
+    feature_categories: list[str],
+    sighting_xy: np.ndarray,
+    sighting_categories: list[str],
+    radius: float,
+) -> np.ndarray:
+    """Per BIM feature, is there a sighting of the same category within ``radius`` (both BIM frame)?"""
+    xy = np.asarray(feature_xy, dtype=float).reshape(-1, 2)
+    s = np.asarray(sighting_xy, dtype=float).reshape(-1, 2)
+    out = np.zeros(len(xy), dtype=bool)
+    if len(s) == 0 or len(xy) == 0:
+        return out
+    d = np.hypot(xy[:, None, 0] - s[None, :, 0], xy[:, None, 1] - s[None, :, 1])
+    same = (
+        np.array(feature_categories, dtype=object)[:, None]
+        == np.array(sighting_categories, dtype=object)[None, :]
+    )
+    return np.asarray(((d <= radius) & same).any(axis=1))
+
+
+def misses_reject(missed: int, predicted: int, params: VerificationParams) -> bool:
+    """The binomial likelihood-ratio test of the module docstring: do ``missed`` of ``predicted``
+    favour a wrong place by more than ``exp(log_odds)`` to one?"""
+    if predicted <= 0:
+        return False
+    pr, pw = params.p_right, params.p_wrong
+    llr = missed * math.log(pw / pr) + (predicted - missed) * math.log((1.0 - pw) / (1.0 - pr))
+    return llr > params.log_odds
+
+
+@dataclass(frozen=True)
+class ScanSample:
+    """One lidar scan in the odometry frame: the robot's odom pose and its beams."""
+
+    odom: Pose2D
+    angles: np.ndarray
+    ranges: np.ndarray
+    range_max: float
+
+
+def path_scan_fit(
+    transform: Pose2D,
+    scans: list[ScanSample],
+    field_: LikelihoodField,
+    tolerance: float,
+    search_xy: float = 0.0,
+    search_yaw: float = 0.0,
+) -> float | None:
+    """Mean share of beams on mapped walls over ``scans``, each placed in the BIM frame by ``transform``
+    (odom -> BIM); the best over a 5 x 5 x 3 grid of shifts (up to ``search_xy`` m) and turns (up to
+    ``search_yaw`` rad) of the pose at the last scan. None when there is no scan."""
+    if not scans:
+        return None
+    last = scans[-1].odom
+    here = transform * last
+    best = 0.0
+    shifts = np.linspace(-search_xy, search_xy, 5) if search_xy > 0 else np.zeros(1)
+    turns = np.linspace(-search_yaw, search_yaw, 3) if search_yaw > 0 else np.zeros(1)
+    for dyaw in turns:
+        for dx in shifts:
+            for dy in shifts:
+                moved = (
+                    Pose2D(here.x + float(dx), here.y + float(dy), here.yaw + float(dyaw)) * last.inverse()
+                )
+                fits = [
+                    scan_fit(moved * s.odom, s.angles, s.ranges, s.range_max, field_, tolerance)
+                    for s in scans
+                ]
+                best = max(best, float(np.mean(fits)))
+    return best
+
+
+def verify_hypothesis(
+    transform: Pose2D,
+    feature_ids: list[str],
+    feature_xy: np.ndarray,
+    feature_normals: np.ndarray,
+    feature_heights: np.ndarray,
+    feature_categories: list[str],
+    camera_odom_poses: list[Pose2D],
+    sighting_odom_xy: np.ndarray,
+    sighting_categories: list[str],
+    view: CameraView,
+    walls: np.ndarray,
+    scans: list[ScanSample],
+    field_: LikelihoodField | None,
+    params: VerificationParams,
+) -> Verification:
+    """Both checks for the hypothesis ``transform`` (odom -> BIM) on one storey's BIM features.
+
+    ``camera_odom_poses`` are the robot's odom poses at the images the detector ran on;
+    ``sighting_odom_xy`` every detection's odom point (Eq. 1-2), confirmed or not."""
+    poses = [transform * p for p in camera_odom_poses]
+    in_view = frames_in_view(feature_xy, feature_normals, feature_heights, poses, view, walls, params)
+    predicted = in_view >= params.min_frames
+    s_bim = transform.apply(np.asarray(sighting_odom_xy, dtype=float).reshape(-1, 2))
+    seen = explained(feature_xy, feature_categories, s_bim, sighting_categories, params.match_radius)
+    missed_mask = predicted & ~seen
+    n_pred, n_miss = int(predicted.sum()), int(missed_mask.sum())
+    fit = (
+        path_scan_fit(
+            transform,
+            scans,
+            field_,
+            params.scan_tolerance,
+            params.scan_search_xy,
+            math.radians(params.scan_search_yaw_deg),
+        )
+        if field_ is not None
+        else None
+    )
+    reasons = []
+    if misses_reject(n_miss, n_pred, params):
+        reasons.append(f"{n_miss} of {n_pred} BIM features in view were never detected")
+    if fit is not None and fit < params.min_scan_fit:
+        reasons.append(f"lidar fits the BIM walls poorly ({fit:.2f} < {params.min_scan_fit:.2f})")
+    return Verification(
+        predicted=n_pred,
+        missed_predictions=n_miss,
+        missed_ids=tuple(feature_ids[i] for i in np.flatnonzero(missed_mask)),
+        scan_fit=fit,
+        passed=not reasons or not params.enabled,
+        reasons=tuple(reasons),
+    )

@@ -1,0 +1,140 @@
+"""Negative evidence and scan fit of a pose hypothesis (initcli.core.verification)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from bimtools.site.records import FREE, OCCUPIED, OccupancyGrid
+from initcli.core.geometry import Pose2D
+from initcli.core.particle_filter import LikelihoodField
+from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.core.verification import (
+    CameraView,
+    ScanSample,
+    VerificationParams,
+    explained,
+    frames_in_view,
+    misses_reject,
+    path_scan_fit,
+    segments_cross,
+    verify_hypothesis,
+)
+
+VIEW = CameraView(CameraIntrinsics(600.0, 600.0, 320.0, 240.0, 640, 480), CameraMount(0.2, 0.0, 1.0, 0, 0, 0))
+# A corridor 2 m wide along +x (y in [0, 2]); doors on the north wall (y = 2) every 4 m, facing -y.
+DOORS_X = np.arange(2.0, 40.0, 4.0)
+DOOR_XY = np.column_stack([DOORS_X, np.full(len(DOORS_X), 2.0)])
+DOOR_N = np.tile([0.0, -1.0], (len(DOORS_X), 1))
+DOOR_H = np.full(len(DOORS_X), 2.1)
+WALLS = np.array([[-1.0, 0.0, 41.0, 0.0], [-1.0, 2.0, 41.0, 2.0]])
+
+
+def path_along(x0: float, x1: float, yaw: float = math.radians(60.0)) -> list[Pose2D]:
+    """Robot poses along the corridor centre line, the camera turned toward the north wall."""
+    return [Pose2D(float(x), 1.0, yaw) for x in np.arange(x0, x1, 0.25)]
+
+
+def test_segments_cross_finds_proper_crossings_only() -> None:
+    walls = np.array([[0.0, -1.0, 0.0, 1.0]])
+    a = np.array([[-1.0, 0.0], [-1.0, 0.0], [1.0, 5.0]])
+    b = np.array([[1.0, 0.0], [-0.5, 0.0], [1.0, 6.0]])
+    assert segments_cross(a, b, walls).tolist() == [True, False, False]
+    assert segments_cross(a, b, np.zeros((0, 4))).tolist() == [False, False, False]
+
+
+def test_frames_in_view_counts_only_features_in_front_and_in_range() -> None:
+    poses = path_along(0.0, 10.0)
+    counts = frames_in_view(DOOR_XY, DOOR_N, DOOR_H, poses, VIEW, WALLS, VerificationParams())
+    assert counts[0] > 0 and counts[1] > 0  # doors at x = 2 and 6 pass the camera
+    assert counts[-1] == 0  # the door at x = 38 is far ahead
+    behind = frames_in_view(DOOR_XY, -DOOR_N, DOOR_H, poses, VIEW, WALLS, VerificationParams())
+    assert behind.sum() == 0  # a door seen from its back side is never predicted
+
+
+def test_a_wall_between_camera_and_feature_hides_it() -> None:
+    poses = path_along(0.0, 4.0)
+    clear = frames_in_view(DOOR_XY[:1], DOOR_N[:1], DOOR_H[:1], poses, VIEW, WALLS, VerificationParams())
+    screen = np.vstack([WALLS, [[0.0, 1.5, 5.0, 1.5]]])  # a hoarding along the corridor
+    hidden = frames_in_view(DOOR_XY[:1], DOOR_N[:1], DOOR_H[:1], poses, VIEW, screen, VerificationParams())
+    assert clear[0] > 0 and hidden[0] == 0
+
+
+def test_explained_needs_the_same_category_nearby() -> None:
+    feats = np.array([[0.0, 0.0], [5.0, 0.0]])
+    sightings = np.array([[0.4, 0.3], [5.0, 0.2]])
+    assert explained(feats, ["door", "lift"], sightings, ["door", "door"], 1.0).tolist() == [True, False]
+    assert explained(feats, ["door", "lift"], np.zeros((0, 2)), [], 1.0).tolist() == [False, False]
+
+
+def test_binomial_rule_tolerates_some_misses_but_not_most() -> None:
+    p = VerificationParams()
+    assert not misses_reject(0, 0, p)
+    assert not misses_reject(3, 10, p)  # 30 %: doors not installed, detector misses
+    assert misses_reject(9, 10, p)
+    assert misses_reject(3, 3, p)
+    assert not misses_reject(2, 3, p)
+
+
+def test_negative_evidence_rejects_the_place_where_doors_should_have_been_seen() -> None:
+    odom_path = path_along(0.0, 20.0)  # odometry frame = BIM frame for the right hypothesis
+    seen = DOOR_XY[DOORS_X < 20.0] + np.array([0.0, -0.3])  # every door passed was detected
+    args = dict(
+        feature_ids=[f"d{i}" for i in range(len(DOORS_X))],
+        feature_xy=DOOR_XY,
+        feature_normals=DOOR_N,
+        feature_heights=DOOR_H,
+        feature_categories=["door"] * len(DOORS_X),
+        camera_odom_poses=odom_path,
+        sighting_odom_xy=seen,
+        sighting_categories=["door"] * len(seen),
+        view=VIEW,
+        walls=WALLS,
+        scans=[],
+        field_=None,
+        params=VerificationParams(),
+    )
+    right = verify_hypothesis(Pose2D.identity(), **args)  # type: ignore[arg-type]
+    assert right.passed and right.predicted >= 4 and right.missed_predictions == 0
+    # A wrong hypothesis 2 m along the corridor: every door it predicts lies between the detected ones.
+    wrong = verify_hypothesis(Pose2D(2.0, 0.0, 0.0), **args)  # type: ignore[arg-type]
+    assert not wrong.passed
+    assert wrong.missed_predictions == wrong.predicted >= 4
+    assert "never detected" in wrong.reasons[0]
+
+
+def corridor_grid() -> OccupancyGrid:
+    res = 0.05
+    cells = np.full((80, 900), FREE, dtype=np.uint8)  # x in [-1, 44), y in [-1, 3)
+    for y in (0.0, 2.0):
+        row = 80 - 1 - int(round((y + 1.0) / res))
+        cells[row, :] = OCCUPIED
+    return OccupancyGrid(cells, res, (-1.0, -1.0, 0.0))
+
+
+def corridor_scan(pose: Pose2D) -> ScanSample:
+    """A 90-beam scan from ``pose`` in the corridor (walls at y = 0 and 2), ranges to the walls."""
+    angles = np.linspace(-math.pi, math.pi, 90, endpoint=False)
+    heading = pose.yaw + angles
+    sin = np.sin(heading)
+    with np.errstate(divide="ignore"):
+        r = np.where(sin > 1e-6, (2.0 - pose.y) / sin, np.where(sin < -1e-6, -pose.y / sin, np.inf))
+    ranges = np.where(r < 10.0, r, 20.0)
+    return ScanSample(pose, angles, ranges, 20.0)
+
+
+def test_scan_fit_is_high_at_the_right_transform_and_low_when_turned() -> None:
+    field = LikelihoodField(corridor_grid())
+    scans = [corridor_scan(Pose2D(float(x), 0.9, 0.3)) for x in (5.0, 6.0, 7.0)]
+    right = path_scan_fit(Pose2D.identity(), scans, field, 0.25)
+    turned = path_scan_fit(
+        Pose2D(7.0, 0.9, math.pi / 2) * Pose2D(7.0, 0.9, 0.0).inverse(), scans, field, 0.25
+    )
+    assert right is not None and right > 0.95
+    assert turned is not None and turned < 0.5
+    # A pose 0.3 m off is found by the local search.
+    off = Pose2D(0.0, 0.3, 0.0)
+    assert path_scan_fit(off, scans, field, 0.1) < 0.5  # type: ignore[operator]
+    assert path_scan_fit(off, scans, field, 0.1, search_xy=0.3) > 0.95  # type: ignore[operator]
+    assert path_scan_fit(Pose2D.identity(), [], field, 0.25) is None
