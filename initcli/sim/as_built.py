@@ -1,0 +1,244 @@
+"""The site as built, not as designed: a seeded world derived from the design model (issue 11).
+
+The BIM is what the robot matches against; the world it drives in, scans and photographs is this one.
+Every deviation is drawn from the seed, so a trial is reproducible, and every key defaults to 0 (the
+ideal world, today's simulator):
+
+=====================  =====================================================================  ========
+key                    what it does                                                           unit
+=====================  =====================================================================  ========
+missing_doors          share of doors not installed: no leaf (a free doorway), nothing to     share
+                       detect
+door_shift             doors built off their design place along the host wall (leaf and       m, sigma
+                       feature move together)
+wall_offset            every other element (walls, columns, glazing) built off its place      m, sigma
+open_doors             share of the installed doors standing open: no obstacle, still a door  share
+hoarding               temporary walls not in the BIM, across a corridor or in front of a     per 100 m
+                       room front (hiding its doors)                                          corridor
+extra_doors            doors on site the model lacks (the detector sees them; no BIM match)   per 100 m
+clutter_in_corridor    share of the material stacks (``sim.clutter``) standing out in the     share
+                       corridor instead of against a wall
+persistent_phantoms    posters or panels detected as a door every time they are in view       per 100 m
+never_seen             share of the real features the detector never fires on                 share
+=====================  =====================================================================  ========
+
+Corridor length is estimated as the circulation area over a 2 m corridor width.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from bimtools.site.records import Obstacle
+from initcli.sim.scenario import Circulation
+from initcli.sim.synthetic_log import SimFeature
+from initcli.sim.world import polygon_edges, ray_segment_distances
+
+CORRIDOR_WIDTH = 2.0  # m: circulation area / this = corridor length for the per-100 m rates
+HOARDING_THICKNESS = 0.1  # m
+DOOR_CLASSES = ("door",)  # canonical feature classes that can be missing, shifted or open
+
+
+@dataclass(frozen=True)
+class AsBuiltParams:
+    """How the site deviates from its design model (see the module docstring for units)."""
+
+    missing_doors: float = 0.0
+    door_shift: float = 0.0
+    wall_offset: float = 0.0
+    open_doors: float = 0.0
+    hoarding: float = 0.0
+    extra_doors: float = 0.0
+    clutter_in_corridor: float = 0.0
+    persistent_phantoms: float = 0.0
+    never_seen: float = 0.0
+
+
+@dataclass
+class AsBuiltWorld:
+    """The obstacles the lidar and the robot meet, and the things the detector can fire on."""
+
+    obstacles: list[Obstacle]
+    features: list[SimFeature]  # installed and detectable BIM features (as built), extra doors, phantoms
+    hoardings: list[np.ndarray] = field(default_factory=list)  # closed (5, 2) rings, for plots and tests
+    changes: dict[str, int] = field(default_factory=dict)  # what was changed, counted
+
+
+def corridor_length(circulation: Circulation) -> float:
+    """Metres of corridor: the circulation area over a 2 m width."""
+    area = float(circulation.label.sum()) * circulation.grid.resolution**2
+    return area / CORRIDOR_WIDTH
+
+
+def _count(rate_per_100m: float, length: float, rng: np.random.Generator) -> int:
+    return int(rng.poisson(rate_per_100m * length / 100.0)) if rate_per_100m > 0 else 0
+
+
+def _shift(obstacle: Obstacle, dx: float, dy: float) -> Obstacle:
+    ring = tuple((x + dx, y + dy) for x, y in obstacle.exterior)
+    holes = tuple(tuple((x + dx, y + dy) for x, y in h) for h in obstacle.holes)
+    return replace(obstacle, exterior=ring, holes=holes)
+
+
+def _box(centre: np.ndarray, along: np.ndarray, half_length: float, half_depth: float) -> np.ndarray:
+    across = np.array([-along[1], along[0]])
+    c = [
+        centre - along * half_length - across * half_depth,
+        centre + along * half_length - across * half_depth,
+        centre + along * half_length + across * half_depth,
+        centre - along * half_length + across * half_depth,
+    ]
+    return np.vstack([c, c[:1]])
+
+
+def _corridor_walls(model_walls: list, circulation: Circulation, min_length: float) -> list:
+    return [
+        w
+        for w in model_walls
+        if w.length >= min_length
+        and circulation.contains((w.x1 + w.x2) / 2 + 0.4 * w.normal[0], (w.y1 + w.y2) / 2 + 0.4 * w.normal[1])
+    ]
+
+
+def _wall_features(
+    walls: list, count: int, prefix: str, rng: np.random.Generator, keep_off: np.ndarray
+) -> list[SimFeature]:
+    """Door-like things on corridor walls at random places at least 1.5 m from ``keep_off`` points."""
+    out: list[SimFeature] = []
+    for _ in range(count * 10):
+        if len(out) >= count or not walls:
+            break
+        w = walls[int(rng.integers(len(walls)))]
+        s = rng.uniform(0.15, 0.85)
+        x, y = w.x1 + s * (w.x2 - w.x1), w.y1 + s * (w.y2 - w.y1)
+        if len(keep_off) and float(np.hypot(keep_off[:, 0] - x, keep_off[:, 1] - y).min()) < 1.5:
+            continue
+        out.append(SimFeature(f"{prefix}-{len(out)}", "door", x, y, w.normal[0], w.normal[1], 1.0, 2.1))
+        keep_off = np.vstack([keep_off.reshape(-1, 2), [[x, y]]])
+    return out
+
+
+def _hoarding(
+    circulation: Circulation, segments: np.ndarray, walls: list, rng: np.random.Generator
+) -> np.ndarray | None:
+    """A temporary wall: across the corridor at a random corridor point (half the time), or 0.4 m in
+    front of a corridor wall, 3-6 m long (the front of a room closed off)."""
+    cells = circulation.cells(0.6)
+    if len(cells) == 0:
+        return None
+    if rng.random() < 0.5 or not walls:
+        x, y = cells[int(rng.integers(len(cells)))]
+        angles = np.linspace(0.0, math.pi, 12, endpoint=False)
+        origin = np.array([x, y])
+        fwd = ray_segment_distances(origin, angles, segments, 10.0)
+        back = ray_segment_distances(origin, angles + math.pi, segments, 10.0)
+        k = int(np.argmin(fwd + back))  # the narrowest direction is across the corridor
+        if fwd[k] + back[k] > 8.0:
+            return None  # an open hall: no corridor to close here
+        direction = np.array([math.cos(angles[k]), math.sin(angles[k])])
+        centre = origin + direction * (fwd[k] - back[k]) / 2
+        half = (fwd[k] + back[k]) / 2 - 0.01
+        return _box(centre, direction, half, HOARDING_THICKNESS / 2)
+    w = walls[int(rng.integers(len(walls)))]
+    length = min(float(rng.uniform(3.0, 6.0)), w.length)
+    s = rng.uniform(length / 2, w.length - length / 2) / w.length
+    along = np.array([w.x2 - w.x1, w.y2 - w.y1]) / w.length
+    centre = np.array([w.x1 + s * (w.x2 - w.x1), w.y1 + s * (w.y2 - w.y1)]) + 0.4 * np.array(w.normal)
+    return _box(centre, along, length / 2, HOARDING_THICKNESS / 2)
+
+
+def derive_as_built(
+    obstacles: list[Obstacle],
+    walls: list,
+    features: list[SimFeature],
+    circulation: Circulation,
+    params: AsBuiltParams,
+    rng: np.random.Generator,
+) -> AsBuiltWorld:
+    """The as-built world of one storey from its design ``obstacles``, wall surfaces and ``features``
+    (canonical classes). With every parameter 0 the world is the design, unchanged, and ``rng`` is
+    not drawn from."""
+    p = params
+    if p == AsBuiltParams():
+        return AsBuiltWorld(list(obstacles), list(features))
+    changes = {"missing_doors": 0, "shifted_doors": 0, "open_doors": 0, "never_seen": 0}
+    by_element: dict[str, list[int]] = {}
+    for i, o in enumerate(obstacles):
+        by_element.setdefault(o.element, []).append(i)
+    out_obstacles: list[Obstacle | None] = list(obstacles)
+    moved_obstacles: set[int] = set()
+    out_features: list[SimFeature] = []
+    for f in features:
+        leaves = by_element.get(f.id, [])
+        if f.cls in DOOR_CLASSES:
+            if p.missing_doors > 0 and rng.random() < p.missing_doors:
+                for i in leaves:
+                    out_obstacles[i] = None
+                changes["missing_doors"] += 1
+                continue
+            if p.door_shift > 0:
+                s = float(rng.normal(0.0, p.door_shift))
+                dx, dy = -f.norm_y * s, f.norm_x * s  # along the host wall
+                f = replace(f, x=f.x + dx, y=f.y + dy)
+                for i in leaves:
+                    o = out_obstacles[i]
+                    if o is not None:
+                        out_obstacles[i] = _shift(o, dx, dy)
+                        moved_obstacles.add(i)
+                changes["shifted_doors"] += 1
+            if p.open_doors > 0 and rng.random() < p.open_doors:
+                for i in leaves:
+                    out_obstacles[i] = None
+                changes["open_doors"] += 1
+        if p.never_seen > 0 and rng.random() < p.never_seen:
+            changes["never_seen"] += 1
+            continue
+        out_features.append(f)
+    if p.wall_offset > 0:
+        for i, o in enumerate(out_obstacles):
+            if o is None or i in moved_obstacles:
+                continue
+            dx, dy = rng.normal(0.0, p.wall_offset, 2)
+            out_obstacles[i] = _shift(o, float(dx), float(dy))
+    kept = [o for o in out_obstacles if o is not None]
+    length = corridor_length(circulation)
+    corridor_walls = _corridor_walls(walls, circulation, 2.0)
+    segments = (
+        np.concatenate([polygon_edges(np.asarray(o.exterior)) for o in kept]) if kept else np.zeros((0, 4))
+    )
+    hoardings: list[np.ndarray] = []
+    for _ in range(_count(p.hoarding, length, rng)):
+        ring = _hoarding(circulation, segments, corridor_walls, rng)
+        if ring is not None:
+            hoardings.append(ring)
+    for k, ring in enumerate(hoardings):
+        kept.append(Obstacle("", f"hoarding-{k}", "Hoarding", tuple(map(tuple, ring[:-1].tolist()))))
+    occupied = np.array([[f.x, f.y] for f in features]).reshape(-1, 2)
+    extra = _wall_features(corridor_walls, _count(p.extra_doors, length, rng), "extra", rng, occupied)
+    occupied = np.vstack([occupied, [[f.x, f.y] for f in extra]]) if extra else occupied
+    phantoms = _wall_features(
+        corridor_walls, _count(p.persistent_phantoms, length, rng), "phantom-persistent", rng, occupied
+    )
+    changes.update(hoardings=len(hoardings), extra_doors=len(extra), persistent_phantoms=len(phantoms))
+    return AsBuiltWorld(kept, out_features + extra + phantoms, hoardings, changes)
+
+
+def stand_out(boxes: list[np.ndarray], share: float, rng: np.random.Generator) -> list[np.ndarray]:
+    """``clutter_in_corridor``: move a ``share`` of the stacks placed against corridor walls 0.6 m out
+    into the corridor (along the stack's own depth axis, away from its wall)."""
+    if share <= 0:
+        return boxes
+    out = []
+    for b in boxes:
+        if rng.random() < share:
+            c = b[:4]
+            wall_side = (c[0] + c[1]) / 2
+            free_side = (c[2] + c[3]) / 2
+            n = free_side - wall_side
+            n = n / max(float(np.hypot(*n)), 1e-9)
+            b = b + 0.6 * n
+        out.append(b)
+    return out

@@ -1,0 +1,113 @@
+"""The as-built world derived from a design model (initcli.sim.as_built)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bimtools.extract.output import write_site
+from bimtools.extract.pipeline import extract_site
+from bimtools.site.load import StoreyModel, load_site
+from initcli.sim.as_built import AsBuiltParams, corridor_length, derive_as_built
+from initcli.sim.scenario import Circulation
+from initcli.sim.synthetic_log import sim_features_from_bim
+
+SAMPLES = Path(__file__).resolve().parents[3] / "sample_models"
+
+
+@pytest.fixture(scope="module")
+def block_a(tmp_path_factory: pytest.TempPathFactory) -> StoreyModel:
+    out = tmp_path_factory.mktemp("block_a") / "site"
+    write_site(out, extract_site(SAMPLES / "block_a.ifc"), preview=False)
+    site = load_site(out)
+    return max(site.storeys.values(), key=lambda s: len(s.features))
+
+
+def derive(model: StoreyModel, seed: int = 1, **params: float):
+    return derive_as_built(
+        model.obstacles,
+        model.walls,
+        sim_features_from_bim(model.features),
+        Circulation.of(model),
+        AsBuiltParams(**params),
+        np.random.default_rng(seed),
+    )
+
+
+def door_ids(model: StoreyModel) -> set[str]:
+    return {f.id for f in model.features if f.category == "Door"}
+
+
+def test_ideal_world_is_the_design(block_a: StoreyModel) -> None:
+    world = derive(block_a)
+    assert world.obstacles == block_a.obstacles
+    assert [f.id for f in world.features] == [f.id for f in block_a.features]
+
+
+def test_missing_doors_leave_free_doorways_and_nothing_to_detect(block_a: StoreyModel) -> None:
+    doors = door_ids(block_a)
+    world = derive(block_a, missing_doors=1.0)
+    assert not doors & {f.id for f in world.features}
+    assert not doors & {o.element for o in world.obstacles}
+    assert world.changes["missing_doors"] == len(doors)
+    assert {f.id for f in world.features} == {f.id for f in block_a.features} - doors
+
+
+def test_open_doors_are_no_obstacle_but_still_detected(block_a: StoreyModel) -> None:
+    doors = door_ids(block_a)
+    world = derive(block_a, open_doors=1.0)
+    assert doors <= {f.id for f in world.features}
+    assert not doors & {o.element for o in world.obstacles}
+
+
+def test_shifted_doors_move_along_their_wall_with_their_leaf(block_a: StoreyModel) -> None:
+    world = derive(block_a, door_shift=0.3)
+    design = {f.id: f for f in block_a.features}
+    moves = []
+    for f in world.features:
+        if f.id not in door_ids(block_a):
+            continue
+        d = np.array([f.x - design[f.id].x, f.y - design[f.id].y])
+        normal = np.array([design[f.id].norm_x, design[f.id].norm_y])
+        assert abs(float(d @ normal)) < 1e-9  # along the wall, never into the room
+        moves.append(float(np.hypot(*d)))
+        leaf = [o for o in world.obstacles if o.element == f.id]
+        old = [o for o in block_a.obstacles if o.element == f.id]
+        for a, b in zip(leaf, old, strict=True):
+            shift = np.asarray(a.exterior) - np.asarray(b.exterior)
+            assert np.allclose(shift, d)
+    assert 0.1 < float(np.mean(moves)) < 0.5  # sigma 0.3 m: mean |shift| about 0.24 m
+
+
+def test_hoardings_phantoms_and_extra_doors_are_added(block_a: StoreyModel) -> None:
+    length = corridor_length(Circulation.of(block_a))
+    assert length > 30.0
+    world = derive(block_a, hoarding=10.0, extra_doors=10.0, persistent_phantoms=10.0)
+    assert world.changes["hoardings"] >= 1
+    assert len(world.hoardings) == world.changes["hoardings"]
+    assert sum(o.ifc_class == "Hoarding" for o in world.obstacles) == len(world.hoardings)
+    extra = [f for f in world.features if f.id.startswith("extra-")]
+    phantoms = [f for f in world.features if f.id.startswith("phantom-persistent")]
+    assert extra and phantoms
+    assert all(f.cls == "door" for f in extra + phantoms)
+    pts = np.array([[f.x, f.y] for f in world.features])
+    d = np.hypot(pts[:, None, 0] - pts[None, :, 0], pts[:, None, 1] - pts[None, :, 1])
+    np.fill_diagonal(d, np.inf)
+    added = [i for i, f in enumerate(world.features) if f.id.startswith(("extra-", "phantom"))]
+    assert all(d[i].min() >= 1.5 - 1e-9 for i in added)  # never on top of another door
+
+
+def test_never_seen_hides_features_from_the_detector_only(block_a: StoreyModel) -> None:
+    world = derive(block_a, never_seen=1.0)
+    assert world.features == []
+    assert world.obstacles == block_a.obstacles
+
+
+def test_same_seed_same_world(block_a: StoreyModel) -> None:
+    a = derive(block_a, 7, missing_doors=0.3, door_shift=0.2, wall_offset=0.05, hoarding=2.0)
+    b = derive(block_a, 7, missing_doors=0.3, door_shift=0.2, wall_offset=0.05, hoarding=2.0)
+    c = derive(block_a, 8, missing_doors=0.3, door_shift=0.2, wall_offset=0.05, hoarding=2.0)
+    assert a.obstacles == b.obstacles and a.features == b.features
+    assert a.obstacles != c.obstacles
