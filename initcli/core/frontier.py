@@ -1,0 +1,187 @@
+"""Frontier exploration on a local grid built from the lidar (beyond the paper's §3.3.4).
+
+The paper explores by following a wall, which works in corridors. In an open-plan office, a hall or a
+restaurant no wall is within reach and a wall follower circles; in a room it circles the room. A
+frontier explorer (Yamauchi 1997) leaves such places: every scan is integrated into a log-odds grid in
+the odometry frame (free along each beam, occupied at its end point), the *frontiers* are free cells
+next to unknown ones, and the robot drives to the nearest large frontier cluster along the grid's free
+cells (Dijkstra on :class:`~initcli.core.grid_planner.PlanningGrid`). Frontiers that were targeted and
+not reached are not chosen again.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from bimtools.site.records import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
+from initcli.core.geometry import Pose2D
+from initcli.core.grid_planner import PlanningGrid
+
+L_FREE = -0.4  # log-odds added to a cell a beam passed through
+L_OCC = 0.85  # log-odds added at a beam's end point
+L_CLAMP = 4.0  # log-odds saturate at +-this
+FREE_BELOW = -0.3  # a cell is known free below this log-odds (one pass of a beam) ...
+OCC_ABOVE = 0.5  # ... and occupied above this (one end point)
+
+
+@dataclass(frozen=True)
+class FrontierParams:
+    resolution: float = 0.2  # m per local-grid cell
+    half_size: float = 80.0  # m: the grid spans +-this around the odometry origin
+    integrate_range: float = 8.0  # m of each beam written into the grid
+    min_cluster: int = 6  # cells: smaller frontier clusters are noise
+    clearance: float = 0.45  # m: planning keeps this far from occupied and unknown cells
+    size_weight: float = 0.05  # m of path traded for one frontier cell (prefers big openings)
+    visited_radius: float = 1.5  # m: a frontier this close to a failed target is not chosen again
+
+
+@dataclass
+class Frontier:
+    """A cluster of frontier cells: its centre (odom frame) and size in cells."""
+
+    centre: np.ndarray
+    size: int
+
+
+@dataclass
+class LocalMap:
+    """A log-odds occupancy grid in the odometry frame, row 0 = lowest y."""
+
+    params: FrontierParams = field(default_factory=FrontierParams)
+
+    def __post_init__(self) -> None:
+        n = int(round(2 * self.params.half_size / self.params.resolution))
+        self.logodds = np.zeros((n, n), dtype=np.float32)
+        self.origin = (-self.params.half_size, -self.params.half_size)
+        self.failed: list[np.ndarray] = []
+
+    def cells_of(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        res = self.params.resolution
+        c = np.floor((xy[:, 0] - self.origin[0]) / res).astype(np.int64)
+        r = np.floor((xy[:, 1] - self.origin[1]) / res).astype(np.int64)
+        return r, c
+
+    def integrate(self, pose: Pose2D, angles: np.ndarray, ranges: np.ndarray, range_max: float) -> None:
+        """Write one scan taken at ``pose`` (odom frame) into the grid."""
+        p = self.params
+        ranges = np.asarray(ranges, dtype=float)
+        ok = np.isfinite(ranges) & (ranges > 0.05)
+        if not ok.any():
+            return
+        a = pose.yaw + np.asarray(angles, dtype=float)[ok]
+        r = ranges[ok]
+        hit = r < min(range_max, p.integrate_range)
+        reach = np.minimum(r, p.integrate_range)
+        steps = np.arange(0.0, p.integrate_range, p.resolution * 0.7)
+        # Free samples along each beam up to its end point (the end point's cell is occupied).
+        t = steps[None, :]
+        along = t < reach[:, None]
+        xs = pose.x + t * np.cos(a)[:, None]
+        ys = pose.y + t * np.sin(a)[:, None]
+        free_xy = np.column_stack([xs[along], ys[along]])
+        n = self.logodds.shape[0]
+        flat = self.logodds.reshape(-1)
+        rr, cc = self.cells_of(free_xy)
+        inside = (rr >= 0) & (rr < n) & (cc >= 0) & (cc < n)
+        free_cells = np.unique(rr[inside] * n + cc[inside])
+        end_cells = np.zeros(0, dtype=np.int64)
+        if hit.any():
+            end = np.column_stack([pose.x + r[hit] * np.cos(a[hit]), pose.y + r[hit] * np.sin(a[hit])])
+            er, ec = self.cells_of(end)
+            inside = (er >= 0) & (er < n) & (ec >= 0) & (ec < n)
+            end_cells = np.unique(er[inside] * n + ec[inside])
+            flat[end_cells] = np.minimum(flat[end_cells] + L_OCC, L_CLAMP)
+        free_cells = np.setdiff1d(free_cells, end_cells, assume_unique=True)
+        flat[free_cells] = np.maximum(flat[free_cells] + L_FREE, -L_CLAMP)
+
+    def occupancy(self) -> tuple[OccupancyGrid, tuple[int, int]]:
+        """The known part of the grid as a trinary map (cropped to what was seen, 2 m margin), and the
+        (row, col) offset of the crop in the full grid."""
+        known = (self.logodds < FREE_BELOW) | (self.logodds > OCC_ABOVE)
+        rows, cols = np.nonzero(known)
+        n = self.logodds.shape[0]
+        if len(rows) == 0:
+            r0 = c0 = n // 2 - 1
+            r1 = c1 = n // 2 + 1
+        else:
+            m = int(round(2.0 / self.params.resolution))
+            r0, r1 = max(int(rows.min()) - m, 0), min(int(rows.max()) + m + 1, n)
+            c0, c1 = max(int(cols.min()) - m, 0), min(int(cols.max()) + m + 1, n)
+        lo = self.logodds[r0:r1, c0:c1]
+        cells = np.full(lo.shape, UNKNOWN, dtype=np.uint8)
+        cells[lo < FREE_BELOW] = FREE
+        cells[lo > OCC_ABOVE] = OCCUPIED
+        res = self.params.resolution
+        origin = (self.origin[0] + c0 * res, self.origin[1] + r0 * res, 0.0)
+        return OccupancyGrid(np.flipud(cells).copy(), res, origin), (r0, c0)
+
+    def frontiers(self) -> list[Frontier]:
+        """Clusters of free cells that border unknown cells (4-neighbourhood)."""
+        grid, _ = self.occupancy()
+        cells = np.flipud(grid.cells)  # row 0 = lowest y again
+        free = cells == FREE
+        # Unknown cells right beside a wall are gaps between sparse beam end points, not openings.
+        walls = cv2.dilate((cells == OCCUPIED).astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
+        unknown = (cells == UNKNOWN) & ~walls
+        cross = np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], np.uint8)
+        near_unknown = cv2.dilate(unknown.astype(np.uint8), cross)
+        edge = (free & (near_unknown > 0)).astype(np.uint8)
+        count, labels, stats, centroids = cv2.connectedComponentsWithStats(edge, connectivity=8)
+        res = grid.resolution
+        out = []
+        for k in range(1, count):
+            size = int(stats[k, cv2.CC_STAT_AREA])
+            if size < self.params.min_cluster:
+                continue
+            rows, cols = np.nonzero(labels == k)
+            # The member cell nearest the centroid: a free cell the planner can reach.
+            cy, cx = float(centroids[k][1]), float(centroids[k][0])
+            i = int(np.argmin((rows - cy) ** 2 + (cols - cx) ** 2))
+            centre = np.array(
+                [grid.origin[0] + (cols[i] + 0.5) * res, grid.origin[1] + (rows[i] + 0.5) * res]
+            )
+            out.append(Frontier(centre, size))
+        return out
+
+    def plan(self, pose: Pose2D) -> list[np.ndarray]:
+        """Waypoints (odom frame) to the best frontier: shortest path minus ``size_weight`` per cell,
+        not near a failed target. Empty when no frontier is reachable (the place is explored)."""
+        p = self.params
+        frontiers = [
+            f
+            for f in self.frontiers()
+            if not any(float(np.hypot(*(f.centre - q))) < p.visited_radius for q in self.failed)
+        ]
+        if not frontiers:
+            return []
+        grid, _ = self.occupancy()
+        # Unknown space is not free for the planner: paths run through what the lidar has seen.
+        planner = PlanningGrid.of(grid, p.clearance, cell=p.resolution)
+        if len(planner.nodes) == 0:
+            return []
+        dist, pred, start = planner.distances_from(pose.x, pose.y)
+        if start < 0:
+            return []
+        best: tuple[float, int] | None = None
+        for f in frontiers:
+            node = planner.node_at(
+                float(f.centre[0]), float(f.centre[1]), search=int(math.ceil(1.0 / p.resolution))
+            )
+            if node < 0 or not math.isfinite(float(dist[node])):
+                continue
+            if float(dist[node]) < 1.0:
+                continue  # standing on it already
+            score = float(dist[node]) - p.size_weight * f.size
+            if best is None or score < best[0]:
+                best = (score, node)
+        if best is None:
+            return []
+        return planner.path(pred, start, best[1], spacing=1.5)
+
+    def give_up(self, target: np.ndarray) -> None:
+        """Remember a target that could not be reached (not chosen again)."""
+        self.failed.append(np.asarray(target, dtype=float))

@@ -1,0 +1,77 @@
+"""Frontier exploration on a local grid from the lidar (initcli.core.frontier)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from bimtools.site.records import FREE, OCCUPIED
+from initcli.core.frontier import FrontierParams, LocalMap
+from initcli.core.geometry import Pose2D
+from initcli.sim.world import ray_segment_distances
+
+# A 10 x 10 m room (x, y in [0, 10]) with a 1.2 m doorway in its east wall at y in [4.4, 5.6],
+# and a corridor beyond it.
+ROOM = np.array(
+    [
+        [0.0, 0.0, 10.0, 0.0],
+        [10.0, 0.0, 10.0, 4.4],
+        [10.0, 5.6, 10.0, 10.0],
+        [10.0, 10.0, 0.0, 10.0],
+        [0.0, 10.0, 0.0, 0.0],
+        [10.0, 3.0, 30.0, 3.0],  # the corridor's walls
+        [10.0, 7.0, 30.0, 7.0],
+    ]
+)
+ANGLES = np.linspace(-math.pi, math.pi, 360, endpoint=False)
+
+
+def scan_at(pose: Pose2D, max_range: float = 20.0) -> np.ndarray:
+    return ray_segment_distances(np.array([pose.x, pose.y]), pose.yaw + ANGLES, ROOM, max_range)
+
+
+def test_integrate_marks_free_space_and_walls() -> None:
+    local = LocalMap(FrontierParams(half_size=40.0))
+    pose = Pose2D(5.0, 5.0, 0.0)
+    local.integrate(pose, ANGLES, scan_at(pose), 20.0)
+    grid, _ = local.occupancy()
+    assert grid.value_at(5.0, 5.0) == FREE
+    assert grid.value_at(2.0, 8.0) == FREE
+    assert grid.value_at(5.0, 10.02) == OCCUPIED
+    assert OCCUPIED in (grid.value_at(-0.1, 3.0), grid.value_at(0.1, 3.0))
+
+
+def test_the_best_frontier_leads_out_of_the_room() -> None:
+    local = LocalMap(FrontierParams(half_size=40.0))
+    pose = Pose2D(5.0, 5.0, 0.0)
+    for yaw in (0.0, 2.0, 4.0):
+        p = Pose2D(5.0, 5.0, yaw)
+        local.integrate(p, ANGLES, scan_at(p), 20.0)
+    frontiers = local.frontiers()
+    assert frontiers, "the doorway opens onto unknown space"
+    # Beams reach 8 m into the corridor through the doorway; the frontier lies beyond the doorway.
+    assert all(f.centre[0] > 10.0 for f in frontiers)
+    route = local.plan(pose)
+    assert route and route[-1][0] > 10.0
+    # Each waypoint lies in space the lidar has seen free (the route goes through the doorway).
+    grid, _ = local.occupancy()
+    assert all(grid.value_at(float(w[0]), float(w[1])) == FREE for w in route)
+    assert any(4.4 < w[1] < 5.6 and 9.0 < w[0] < 11.5 for w in route)
+
+
+def test_a_failed_target_is_not_chosen_again_and_a_closed_room_has_none() -> None:
+    closed = ROOM.copy()
+    closed[1] = [10.0, 0.0, 10.0, 10.0]  # no doorway
+    local = LocalMap(FrontierParams(half_size=40.0))
+    pose = Pose2D(5.0, 5.0, 0.0)
+    ranges = ray_segment_distances(np.array([5.0, 5.0]), ANGLES, closed, 20.0)
+    local.integrate(pose, ANGLES, ranges, 20.0)
+    assert local.plan(pose) == []
+    open_map = LocalMap(FrontierParams(half_size=40.0))
+    open_map.integrate(pose, ANGLES, scan_at(pose), 20.0)
+    route = open_map.plan(pose)
+    assert route
+    open_map.give_up(route[-1])
+    again = open_map.plan(pose)
+    assert not again or float(np.hypot(*(again[-1] - route[-1]))) >= 1.5
