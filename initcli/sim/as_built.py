@@ -22,7 +22,10 @@ persistent_phantoms    posters or panels detected as a door every time they are 
 never_seen             share of the real features the detector never fires on                 share
 =====================  =====================================================================  ========
 
-Corridor length is estimated as the circulation area over a 2 m corridor width.
+Every installed door that is not open is closed in the simulated world: a leaf across its opening
+(the feature's width, along its wall), whatever pieces of the door the 1 m plan cut happened to hold
+(often only frame parts). Corridor length is estimated as the circulation area over a 2 m corridor
+width.
 """
 
 from __future__ import annotations
@@ -39,6 +42,8 @@ from initcli.sim.world import polygon_edges, ray_segment_distances
 
 CORRIDOR_WIDTH = 2.0  # m: circulation area / this = corridor length for the per-100 m rates
 HOARDING_THICKNESS = 0.1  # m
+LEAF_THICKNESS = 0.04  # m: a closed door leaf
+LEAF_CLASS = "DoorLeaf"
 DOOR_CLASSES = ("door",)  # canonical feature classes that can be missing, shifted or open
 
 
@@ -92,6 +97,14 @@ def _box(centre: np.ndarray, along: np.ndarray, half_length: float, half_depth: 
         centre - along * half_length + across * half_depth,
     ]
     return np.vstack([c, c[:1]])
+
+
+def door_leaf(f: SimFeature) -> Obstacle:
+    """A closed leaf across the opening of door feature ``f``, just behind its face."""
+    along = np.array([-f.norm_y, f.norm_x])
+    centre = np.array([f.x, f.y]) - (LEAF_THICKNESS / 2 + 0.01) * np.array([f.norm_x, f.norm_y])
+    ring = _box(centre, along, max(f.width, 0.6) / 2, LEAF_THICKNESS / 2)
+    return Obstacle("", f.id, LEAF_CLASS, tuple(map(tuple, ring[:-1].tolist())))
 
 
 def _corridor_walls(model_walls: list, circulation: Circulation, min_length: float) -> list:
@@ -157,13 +170,17 @@ def derive_as_built(
     circulation: Circulation,
     params: AsBuiltParams,
     rng: np.random.Generator,
+    doors: frozenset[str] = frozenset(),
 ) -> AsBuiltWorld:
     """The as-built world of one storey from its design ``obstacles``, wall surfaces and ``features``
-    (canonical classes). With every parameter 0 the world is the design, unchanged, and ``rng`` is
-    not drawn from."""
+    (canonical classes). ``doors``: ids of the features that are door leaves (IfcDoor), closed with
+    :func:`door_leaf` unless missing or open. With every parameter 0 the world is the design with
+    its doors closed, and ``rng`` is not drawn from."""
     p = params
     if p == AsBuiltParams():
-        return AsBuiltWorld(list(obstacles), list(features))
+        leaves = [door_leaf(f) for f in features if f.id in doors]
+        return AsBuiltWorld(list(obstacles) + leaves, list(features))
+    closed: list[Obstacle] = []
     changes = {"missing_doors": 0, "shifted_doors": 0, "open_doors": 0, "never_seen": 0}
     by_element: dict[str, list[int]] = {}
     for i, o in enumerate(obstacles):
@@ -174,7 +191,7 @@ def derive_as_built(
     for f in features:
         leaves = by_element.get(f.id, [])
         if f.cls in DOOR_CLASSES:
-            if p.missing_doors > 0 and rng.random() < p.missing_doors:
+            if f.id in doors and p.missing_doors > 0 and rng.random() < p.missing_doors:
                 for i in leaves:
                     out_obstacles[i] = None
                 changes["missing_doors"] += 1
@@ -193,6 +210,8 @@ def derive_as_built(
                 for i in leaves:
                     out_obstacles[i] = None
                 changes["open_doors"] += 1
+            elif f.id in doors:
+                closed.append(door_leaf(f))
         if p.never_seen > 0 and rng.random() < p.never_seen:
             changes["never_seen"] += 1
             continue
@@ -203,7 +222,7 @@ def derive_as_built(
                 continue
             dx, dy = rng.normal(0.0, p.wall_offset, 2)
             out_obstacles[i] = _shift(o, float(dx), float(dy))
-    kept = [o for o in out_obstacles if o is not None]
+    kept = [o for o in out_obstacles if o is not None] + closed
     length = corridor_length(circulation)
     corridor_walls = _corridor_walls(walls, circulation, 2.0)
     segments = (

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
 from bimtools.site.load import StoreyModel
-from bimtools.site.records import FREE, OccupancyGrid
+from bimtools.site.records import FREE, Obstacle, OccupancyGrid
 from initcli.core.geometry import Pose2D
 from initcli.sim.world import Worker, ray_segment_distances
 
@@ -23,22 +24,45 @@ class Circulation:
     grid: OccupancyGrid
     label: np.ndarray  # bool mask of the region
     clearance: np.ndarray  # metres to the nearest non-free cell
+    regions: np.ndarray | None = None  # connected free regions (0: not free), as the world has them
+
+    def region_at(self, x: float, y: float) -> int:
+        """The free region holding a world point (0: not free or outside the map)."""
+        if self.regions is None:
+            return 0
+        row, col = self.grid.world_to_cell(x, y)
+        if not (0 <= row < self.regions.shape[0] and 0 <= col < self.regions.shape[1]):
+            return 0
+        return int(self.regions[row, col])
 
     @staticmethod
-    def of(storey: StoreyModel) -> Circulation:
+    def of(storey: StoreyModel, closed: Sequence[Obstacle] = ()) -> Circulation:
+        """The region of the storey map that most features face. ``closed``: obstacles of the simulated
+        world that the map leaves open (closed door leaves), burnt in first, so that the region is the
+        one a robot can actually drive in: rooms behind closed doors are not part of it."""
         grid = storey.grid
         if grid is None:
             raise ValueError(f"storey {storey.name!r} has no occupancy map")
         free = (grid.cells == FREE).astype(np.uint8)
+        for o in closed:
+            ring = np.asarray(o.exterior, dtype=float).reshape(-1, 2)
+            if len(ring) < 3:
+                continue
+            row, col = grid.world_to_cell(ring[:, 0], ring[:, 1])
+            pts = np.column_stack([col, row]).astype(np.int32)
+            cv2.fillPoly(free, [pts], 0)
+            cv2.polylines(free, [pts], True, 0, thickness=1)
         _, labels = cv2.connectedComponents(free, connectivity=4)
         votes: dict[int, int] = {}
         for f in storey.features:
             row, col = grid.world_to_cell(f.x + 0.6 * f.norm_x, f.y + 0.6 * f.norm_y)
             if 0 <= row < labels.shape[0] and 0 <= col < labels.shape[1] and labels[row, col]:
                 votes[int(labels[row, col])] = votes.get(int(labels[row, col]), 0) + 1
-        main = max(votes, key=votes.get) if votes else int(np.bincount(labels.ravel())[1:].argmax() + 1)
+        main = (
+            max(votes, key=votes.__getitem__) if votes else int(np.bincount(labels.ravel())[1:].argmax() + 1)
+        )
         clearance = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * grid.resolution
-        return Circulation(grid, labels == main, clearance)
+        return Circulation(grid, labels == main, clearance, labels)
 
     def cells(self, min_clearance: float) -> np.ndarray:
         rows, cols = np.nonzero(self.label & (self.clearance >= min_clearance))

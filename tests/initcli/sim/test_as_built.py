@@ -10,7 +10,7 @@ import pytest
 from bimtools.extract.output import write_site
 from bimtools.extract.pipeline import extract_site
 from bimtools.site.load import StoreyModel, load_site
-from initcli.sim.as_built import AsBuiltParams, corridor_length, derive_as_built
+from initcli.sim.as_built import LEAF_CLASS, AsBuiltParams, corridor_length, derive_as_built
 from initcli.sim.scenario import Circulation
 from initcli.sim.synthetic_log import sim_features_from_bim
 
@@ -25,7 +25,8 @@ def block_a(tmp_path_factory: pytest.TempPathFactory) -> StoreyModel:
     return max(site.storeys.values(), key=lambda s: len(s.features))
 
 
-def derive(model: StoreyModel, seed: int = 1, **params: float):
+def derive(model: StoreyModel, seed: int = 1, leaves: bool = False, **params: float):
+    doors = frozenset(f.id for f in model.features if f.ifc_class == "IfcDoor") if leaves else frozenset()
     return derive_as_built(
         model.obstacles,
         model.walls,
@@ -33,6 +34,7 @@ def derive(model: StoreyModel, seed: int = 1, **params: float):
         Circulation.of(model),
         AsBuiltParams(**params),
         np.random.default_rng(seed),
+        doors,
     )
 
 
@@ -48,7 +50,7 @@ def test_ideal_world_is_the_design(block_a: StoreyModel) -> None:
 
 def test_missing_doors_leave_free_doorways_and_nothing_to_detect(block_a: StoreyModel) -> None:
     doors = door_ids(block_a)
-    world = derive(block_a, missing_doors=1.0)
+    world = derive(block_a, leaves=True, missing_doors=1.0)
     assert not doors & {f.id for f in world.features}
     assert not doors & {o.element for o in world.obstacles}
     assert world.changes["missing_doors"] == len(doors)
@@ -111,3 +113,35 @@ def test_same_seed_same_world(block_a: StoreyModel) -> None:
     c = derive(block_a, 8, missing_doors=0.3, door_shift=0.2, wall_offset=0.05, hoarding=2.0)
     assert a.obstacles == b.obstacles and a.features == b.features
     assert a.obstacles != c.obstacles
+
+
+def test_closed_doors_cut_rooms_off_the_circulation_area(block_a: StoreyModel) -> None:
+    leaves = [o for o in block_a.obstacles if o.ifc_class == "IfcDoor"]
+    assert leaves
+    open_plan = Circulation.of(block_a)
+    closed = Circulation.of(block_a, closed=leaves)
+    assert closed.label.sum() <= open_plan.label.sum()
+    # Every cell of the closed-door region is free in the open one; the corridor stays.
+    assert not (closed.label & ~open_plan.label).any()
+    assert closed.label.sum() > 0.5 * open_plan.label.sum() or closed.label.sum() > 1000
+    corridor = closed.cells(0.5)[0]
+    assert closed.region_at(*corridor) > 0
+
+
+def test_every_installed_closed_door_gets_a_leaf_across_its_opening(block_a: StoreyModel) -> None:
+    doors = {f.id: f for f in block_a.features if f.ifc_class == "IfcDoor"}
+    world = derive(block_a, leaves=True)
+    leaves = {o.element: o for o in world.obstacles if o.ifc_class == LEAF_CLASS}
+    assert set(leaves) == set(doors)
+    for fid, leaf in leaves.items():
+        ring = np.asarray(leaf.exterior)
+        f = doors[fid]
+        along = np.array([-f.norm_y, f.norm_x])
+        extent = (ring - [f.x, f.y]) @ along
+        assert abs(extent.max() - extent.min() - max(f.width, 0.6)) < 1e-6  # spans the opening
+        depth = (ring - [f.x, f.y]) @ np.array([f.norm_x, f.norm_y])
+        assert depth.max() <= 0.0  # behind the face, never in the corridor
+    assert not any(o.ifc_class == LEAF_CLASS for o in derive(block_a, leaves=True, open_doors=1.0).obstacles)
+    assert not any(
+        o.ifc_class == LEAF_CLASS for o in derive(block_a, leaves=True, missing_doors=1.0).obstacles
+    )
