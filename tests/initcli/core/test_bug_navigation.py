@@ -14,7 +14,7 @@ from initcli.sim.world import box_edges
 
 def scan_of(points: np.ndarray) -> ScanView:
     """A 360-beam scan from the origin (robot facing +x) against the given wall segments."""
-    from initcli.sim.world import ray_segment_distances
+    from initcli.core.raycast import ray_segment_distances
 
     angles = np.linspace(-math.pi, math.pi, 360, endpoint=False)
     ranges = ray_segment_distances(np.zeros(2), angles, points, 20.0)

@@ -12,7 +12,7 @@ from initcli.core.geometry import Pose2D
 def test_scan_fit_tells_the_right_side_of_a_wall_from_the_wrong_one():
     from bimtools.site.records import FREE, OCCUPIED, OccupancyGrid
     from initcli.core.particle_filter import LikelihoodField, scan_fit
-    from initcli.sim.world import ray_segment_distances
+    from initcli.core.raycast import ray_segment_distances
 
     # a 2 m corridor (y 0-2) beside a 10 m room (y 2-12), walls 1 cell thick, 0.05 m cells
     res = 0.05

@@ -10,7 +10,9 @@ import pytest
 from bimtools.site.load import StoreyModel
 from initcli.config import load_config
 from initcli.core.geometry import Pose2D
+from initcli.core.marker_pose import robot_pose_from_marker
 from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.core.raycast import ray_segment_distances
 from initcli.session.setup import choose_storey, prepare_site
 from initcli.sim.markers import (
     MAX_SHIFT,
@@ -19,10 +21,9 @@ from initcli.sim.markers import (
     MarkerParams,
     detect_markers,
     place_markers,
-    robot_pose_from_marker,
 )
 from initcli.sim.scenario import Circulation
-from initcli.sim.world import SimWorld, ray_segment_distances
+from initcli.sim.world import SimWorld
 from tests.helpers import SAMPLES
 
 CAMERA = CameraIntrinsics(320.0, 320.0, 320.0, 240.0, 640, 480)
