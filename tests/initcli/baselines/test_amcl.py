@@ -44,11 +44,13 @@ def test_outcome_fields_are_consistent(block_a) -> None:
     assert outcome.truth is not None
     assert (outcome.pose is not None) == outcome.localised
     assert 0.0 < outcome.distance_m and 0.0 < outcome.duration_s and 0.0 < outcome.wall_seconds
-    if outcome.localised:
-        assert outcome.distance_m >= 1.0  # no claim before 1 m, as in fine tuning
-        assert trace[-1].variance_xy < config.fine_tuning.covariance
-    else:
-        assert outcome.distance_m > 20.0
+    # From this start (seed 2) AMCL converges after about 1 m of wall following, well inside the
+    # 20 m limit: the claim comes at the first check after 1 m (as in fine tuning) and only once
+    # the particle cloud is tighter than the fine-tuning threshold.
+    assert outcome.localised and outcome.pose is not None
+    assert 1.0 <= outcome.distance_m < 20.0
+    assert trace[-1].variance_xy < config.fine_tuning.covariance
+    assert outcome.pose.distance_to(outcome.truth) < 0.5
     params = GlobalLocalisationParams()
     assert trace and all(params.min_particles <= p.particles <= params.particles for p in trace)
     assert [p.t for p in trace] == sorted(p.t for p in trace)

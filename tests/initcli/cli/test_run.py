@@ -109,13 +109,16 @@ def test_ambiguous_start_triggers_active_exploration(tmp_path):
         ("block_b", "20.0,11.0,0", {"clutter": 0.4, "workers": 6}),  # heavy clutter
     ],
 )
-def test_hard_starts_finish_or_fail_cleanly(tmp_path, name, start, sim):
+def test_hard_starts_initialise(tmp_path, name, start, sim):
+    """Each of these starts initialises (exit 0): the explorer backs off the wall it faces, turns
+    round at the dead end, and gets through the heavy clutter; in the clutter fine tuning reaches
+    its distance limit before the covariance threshold but the pose is already good, so the
+    session still succeeds (the reason says so)."""
     result, doc = run(tmp_path, write_config(tmp_path, name, sim=sim), "--start", start, "--seed", "1")
-    assert result.exit_code in (0, 1), result.output
-    assert doc is not None and isinstance(doc["reason"], str) and doc["reason"]
-    assert doc["success"] == (result.exit_code == 0)
-    if doc["success"]:
-        assert doc["error_translation_m"]["fine"] < 0.5
+    assert result.exit_code == 0, result.output
+    assert doc is not None and doc["success"] is True
+    assert doc["reason"].startswith("initialised")
+    assert doc["error_translation_m"]["fine"] < 0.5
 
 
 @pytest.mark.parametrize(

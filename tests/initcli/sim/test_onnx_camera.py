@@ -39,9 +39,12 @@ def test_onnx_session_completes(tmp_path):
             "--quiet",
         ],
     )
-    assert result.exit_code in (0, 1), result.output
+    # The shipped network finds enough doors, lifts and stairs in the rendered images of block_a
+    # for the session to initialise (exit 0) with a good pose.
+    assert result.exit_code == 0, result.output
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
-    assert summary["reason"]
+    assert summary["success"] is True and summary["reason"] == "initialised"
+    assert summary["error_translation_m"]["fine"] < 0.5
     lines = (tmp_path / "out" / "session.jsonl").read_text().splitlines()
     detections = [json.loads(line) for line in lines if '"type":"detections"' in line]
     assert detections and any(d["objects"] for d in detections), "the network detected something"
