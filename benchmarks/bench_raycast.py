@@ -1,6 +1,6 @@
 """Benchmark of the simulated lidar: ms per 360-beam scan (20 m) on each sample storey.
 
-"before" is the brute force kept as :func:`initcli.sim.world.ray_segment_distances` (every ray
+"before" is the brute force kept as :func:`initcli.core.raycast.ray_segment_distances` (every ray
 against every static segment the grid index returns within range, plus the workers), as
 ``SimWorld.raycast`` did it; "after" is ``SimWorld.raycast`` now (:func:`cast_rays`). Scans are cast
 from random free cells of the storey's occupancy map at random headings; the two answers are
@@ -22,9 +22,10 @@ import numpy as np
 
 from bimtools.site.records import FREE
 from initcli.config import load_config
+from initcli.core.raycast import ray_segment_distances
 from initcli.drivers.sim import LidarSpec
 from initcli.session.setup import build_sim, choose_storey, prepare_site
-from initcli.sim.world import SimWorld, ray_segment_distances
+from initcli.sim.world import SimWorld
 
 ROOT = Path(__file__).resolve().parent.parent
 STOREYS = ("ntu_hallway", "block_a", "block_b")

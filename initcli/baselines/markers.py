@@ -19,14 +19,9 @@ from initcli.baselines.drive import WallFollowingExplorer
 from initcli.baselines.outcome import LocalisationOutcome
 from initcli.config import SessionConfig
 from initcli.core.geometry import Pose2D
+from initcli.core.marker_pose import robot_pose_from_marker
 from initcli.session.setup import SimSetup, camera_of
-from initcli.sim.markers import (
-    Marker,
-    MarkerDetector,
-    MarkerParams,
-    place_markers,
-    robot_pose_from_marker,
-)
+from initcli.sim.markers import Marker, MarkerDetector, MarkerParams, place_markers
 from initcli.sim.scenario import Circulation
 
 __all__ = ["MarkerParams", "deploy_markers", "run_markers"]

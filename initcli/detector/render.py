@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from initcli.core.raycast import ray_segment_params
 from initcli.detector.look import TEX, FeatureLooks, Look, default_look, noise_tile
 from initcli.detector.scene import (
     CLUTTER_PERSON,
@@ -73,16 +74,15 @@ def _tex(rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
 def cast_rays(
     origin: np.ndarray, dirs: np.ndarray, segs: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Rays ``origin + t * dirs`` (W, 2) against segments (S, 4): all t (W, S) (inf = miss) and s."""
+    """Rays ``origin + t * dirs`` (W, 2) against segments (S, 4): all t (W, S) (inf = miss), the
+    position s along each segment and the hits (:func:`initcli.core.raycast.ray_segment_params`;
+    a hit is ``t > 1e-6`` and ``s`` in [0, 1] give or take 1e-9)."""
     a = segs[:, 0:2]
     e = segs[:, 2:4] - a
     ao = a - origin
-    dx, dy = dirs[:, 0:1], dirs[:, 1:2]
-    denom = dx * e[None, :, 1] - dy * e[None, :, 0]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inv = 1.0 / denom
-        t = (ao[:, 0] * e[:, 1] - ao[:, 1] * e[:, 0])[None, :] * inv
-        s = (ao[None, :, 0] * dy - ao[None, :, 1] * dx) * inv
+    _, t, s = ray_segment_params(
+        ao[None, :, 0], ao[None, :, 1], dirs[:, 0:1], dirs[:, 1:2], e[None, :, 0], e[None, :, 1]
+    )
     hit = (t > 1e-6) & (s >= -1e-9) & (s <= 1.0 + 1e-9)
     return np.where(hit, t, np.inf), s, hit
 

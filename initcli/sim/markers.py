@@ -18,15 +18,16 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 
 from bimtools.site.load import StoreyModel
 from bimtools.site.records import WallSegment
 from initcli.core.geometry import Pose2D
-from initcli.core.projection import R_BODY_OPTICAL, CameraIntrinsics, CameraMount, odom_to_optical
+from initcli.core.marker_pose import tag_object_points, tag_rotation
+from initcli.core.projection import CameraIntrinsics, CameraMount, odom_to_optical
+from initcli.core.raycast import ray_segment_distances, sight_blocked
 from initcli.sim.scenario import Circulation
-from initcli.sim.world import SimWorld, ray_segment_distances
+from initcli.sim.world import SimWorld
 
 MARKER_SIZE = 0.2  # m: "20 cm x 20 cm markers" (§4.3)
 MARKER_HEIGHT = 1.0  # m: tag centre above the floor (the sample configs' camera height)
@@ -62,14 +63,12 @@ class Marker:
 
     def rotation(self) -> np.ndarray:
         """``R_bim_marker``: columns are the tag's x (right), y (up), z (out of the wall) axes."""
-        nx, ny = self.normal
-        return np.array([[-ny, 0.0, nx], [nx, 0.0, ny], [0.0, 1.0, 0.0]])
+        return tag_rotation(self.normal)
 
     def object_points(self) -> np.ndarray:
         """The 4 corners in the tag frame in the order ``SOLVEPNP_IPPE_SQUARE`` expects:
         top-left, top-right, bottom-right, bottom-left."""
-        h = self.size / 2.0
-        return np.array([[-h, h, 0.0], [h, h, 0.0], [h, -h, 0.0], [-h, -h, 0.0]])
+        return tag_object_points(self.size)
 
     def corners(self) -> np.ndarray:
         """The 4 corners (same order) in the BIM frame, (4, 3)."""
@@ -89,7 +88,7 @@ class MarkerParams:
     fx = 320) one tag seen 30-50 degrees off its normal gives the robot's position to 1-5 cm at
     2-3 m and ~0.1 m at 4 m; seen head-on the tag's tilt is poorly conditioned (15 cm at 2 m);
     beyond 8-10 m the error is metres, often an IPPE mirror solution (see
-    ``tests/test_sim_markers.py``). With the defaults a 20 cm tag is too small to decode past
+    ``tests/initcli/core/test_marker_pose.py``). With the defaults a 20 cm tag is too small to decode past
     ~6 m (``min_side_px``); the paper's far detection needs ``range`` and ``min_side_px`` relaxed
     (a sharper camera).
     """
@@ -379,15 +378,8 @@ def _occluded(cam_xy: np.ndarray, marker: Marker, segments: np.ndarray) -> bool:
     n = np.array(marker.normal)
     side = np.array([-n[1], n[0]]) * marker.size / 2
     centre = np.array([marker.x, marker.y]) + 0.02 * n
-    for target in (centre, centre + side, centre - side):
-        delta = target - cam_xy
-        dist = float(np.hypot(*delta))
-        hit = float(
-            ray_segment_distances(cam_xy, np.array([math.atan2(delta[1], delta[0])]), segments, dist)[0]
-        )
-        if hit < dist - 1e-6:
-            return True
-    return False
+    targets = np.array([centre, centre + side, centre - side])
+    return bool(sight_blocked(cam_xy, targets, segments).any())
 
 
 class MarkerDetector:
@@ -425,62 +417,3 @@ class MarkerDetector:
             t,
             self.miss_rate,
         )
-
-
-# --- pose ---------------------------------------------------------------------------------------
-
-
-def robot_pose_from_marker(
-    corners_px: np.ndarray, marker: Marker, intrinsics: CameraIntrinsics, mount: CameraMount
-) -> Pose2D:
-    """The robot's planar pose in the BIM frame from one decoded tag (§4.3).
-
-    ``cv2.solvePnP(..., SOLVEPNP_IPPE_SQUARE)`` gives ``T_optical_marker``; with the tag's BIM pose
-    ``T_bim_marker`` and the mount ``T_base_optical = T_base_body T_body_optical``:
-    ``T_bim_base = T_bim_marker inv(T_optical_marker) inv(T_base_optical)``, projected on the floor
-    (x, y, and the heading of the base's x axis).
-
-    Of IPPE's two solutions the one with the smaller reprojection error is kept (as ArUco's
-    ``estimatePoseSingleMarkers`` does; the other is the mirror solution a small, far tag often
-    prefers). OpenCV's IPPE is numerically degenerate for a *noise-free* image of a vertical tag
-    taken by a level camera (the simulator can produce one); a ``SOLVEPNP_ITERATIVE`` solution is
-    therefore also computed and kept when it reprojects better.
-    """
-    k = np.array([[intrinsics.fx, 0.0, intrinsics.cx], [0.0, intrinsics.fy, intrinsics.cy], [0.0, 0.0, 1.0]])
-    rvec, tvec = _solve_tag(marker.object_points(), np.asarray(corners_px, dtype=np.float64).reshape(4, 2), k)
-    t_opt_marker = _homogeneous(cv2.Rodrigues(rvec)[0], tvec.reshape(3))
-    t_bim_marker = _homogeneous(marker.rotation(), marker.centre)
-    t_base_opt = _homogeneous(mount.rotation() @ R_BODY_OPTICAL, mount.translation)
-    t_bim_base = t_bim_marker @ np.linalg.inv(t_opt_marker) @ np.linalg.inv(t_base_opt)
-    return Pose2D(
-        float(t_bim_base[0, 3]), float(t_bim_base[1, 3]), math.atan2(t_bim_base[1, 0], t_bim_base[0, 0])
-    )
-
-
-def _solve_tag(objects: np.ndarray, pixels: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(rvec, tvec)`` of ``T_optical_marker``: the best reprojecting IPPE_SQUARE solution, or the
-    iterative one when it reprojects better (see :func:`robot_pose_from_marker`)."""
-    objects = objects.astype(np.float64).reshape(4, 1, 3)
-    pixels = pixels.reshape(4, 1, 2)
-    solutions: list[tuple[np.ndarray, np.ndarray]] = []
-    n, rvecs, tvecs, _ = cv2.solvePnPGeneric(objects, pixels, k, None, flags=cv2.SOLVEPNP_IPPE_SQUARE)
-    solutions += [(rvecs[i], tvecs[i]) for i in range(n)]
-    ok, rvec, tvec = cv2.solvePnP(objects, pixels, k, None, flags=cv2.SOLVEPNP_ITERATIVE)
-    if ok:
-        solutions.append((rvec, tvec))
-    candidates = []
-    for order, (rvec, tvec) in enumerate(solutions):
-        projected, _ = cv2.projectPoints(objects, rvec, tvec, k, None)
-        error = float(np.sum((projected.reshape(4, 2) - pixels.reshape(4, 2)) ** 2))
-        candidates.append((error, order, rvec, tvec))  # ties: IPPE's first solution
-    if not candidates:
-        raise ValueError("solvePnP found no pose for the tag")
-    _, _, rvec, tvec = min(candidates, key=lambda c: (c[0], c[1]))
-    return rvec, tvec
-
-
-def _homogeneous(rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
-    t = np.eye(4)
-    t[:3, :3] = rotation
-    t[:3, 3] = translation
-    return t

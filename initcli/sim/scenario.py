@@ -12,7 +12,8 @@ import numpy as np
 from bimtools.site.load import StoreyModel
 from bimtools.site.records import FREE, Obstacle, OccupancyGrid
 from initcli.core.geometry import Pose2D
-from initcli.sim.world import Worker, ray_segment_distances
+from initcli.core.raycast import ray_segment_distances
+from initcli.sim.world import Worker
 
 STACK_SIZE = (1.2, 0.5)  # m: a pallet of material against a wall
 

@@ -23,6 +23,7 @@ import numpy as np
 from initcli.core.classes import ClassMap
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.projection import CameraIntrinsics, CameraMount, box_for_point, odom_to_pixel
+from initcli.core.raycast import sight_blocked
 from initcli.io.detection_log import DetectedObject, Detections, Meta, Odom, Record, Truth
 
 DEFAULT_CAMERA = CameraIntrinsics(fx=615.0, fy=615.0, cx=320.0, cy=240.0, width=640, height=480)
@@ -129,23 +130,6 @@ def path_from_waypoints(
     return np.arange(len(arr)) * dt, arr
 
 
-def _occluded(eye: np.ndarray, targets: np.ndarray, walls: np.ndarray) -> np.ndarray:
-    """For each target, does the segment eye -> target cross a wall segment (x1, y1, x2, y2)?"""
-    if len(walls) == 0 or len(targets) == 0:
-        return np.zeros(len(targets), dtype=bool)
-    p = eye[None, None, :]
-    r = (targets - eye)[:, None, :]
-    q = walls[None, :, 0:2]
-    s = (walls[:, 2:4] - walls[:, 0:2])[None, :, :]
-    rxs = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
-    qp = q - p
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0]) / rxs
-        u = (qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0]) / rxs
-    hit = (np.abs(rxs) > 1e-12) & (t > 1e-6) & (t < 1.0 - 1e-6) & (u >= 0.0) & (u <= 1.0)
-    return hit.any(axis=1)
-
-
 def render_image(
     features: Sequence[SimFeature],
     robot_bim: Pose2D,
@@ -181,7 +165,7 @@ def render_image(
         if walls is not None and visible.any():
             idx = np.flatnonzero(visible)
             targets = xy[idx] + 0.05 * normals[idx]  # just in front of the wall surface
-            visible[idx[_occluded(eye, targets, np.asarray(walls, dtype=float).reshape(-1, 4))]] = False
+            visible[idx[sight_blocked(eye, targets, np.asarray(walls, dtype=float).reshape(-1, 4))]] = False
         for i in np.flatnonzero(visible):
             if p.detect_probability < 1.0 and rng.random() > p.detect_probability:
                 continue

@@ -9,18 +9,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bimtools.site.records import Obstacle
+from initcli.core.raycast import cast_rays, segment_directions
 
-EPS = 1e-9
-TWO_PI = 2.0 * math.pi
-
-# Candidate selection for :func:`cast_rays`. The final hit test and distance are computed by the same
-# float64 expressions as :func:`ray_segment_distances`, so these tolerances only need to make the
-# candidate ray/segment pairs a superset of the pairs that can hit; they are generous on purpose.
-ANGLE_MARGIN = 1e-7  # rad added on both sides of a segment's angular interval
-NEAR_SEGMENT = 1e-3  # m: segments closer than this to the origin are tested against every ray
-RANGE_MARGIN = 1e-3  # m: segments farther than max_range + this cannot shorten a ray
-BRUTE_FORCE_PAIRS = 4096  # at most this many ray x segment pairs, the brute force is quicker
-EVEN_TOLERANCE = 1e-9  # rad: how far angles may stray from a0 + k * inc for the index arithmetic
+EPS = 1e-9  # m^2: shortest squared segment length in clearance()
 NEAR_CACHE_SIZE = 256  # blocks of grid cells whose segment indices SimWorld keeps
 
 
@@ -37,148 +28,6 @@ def box_edges(cx: float, cy: float, half_w: float, half_h: float, yaw: float = 0
     )
     rot = corners @ np.array([[c, s], [-s, c]]) + [cx, cy]
     return polygon_edges(rot)
-
-
-def ray_segment_distances(
-    origin: np.ndarray, angles: np.ndarray, segments: np.ndarray, max_range: float
-) -> np.ndarray:
-    """Distance along each ray from ``origin`` to the first segment hit (``max_range`` if none)."""
-    ranges = np.full(len(angles), max_range, dtype=float)
-    if len(segments) == 0:
-        return ranges
-    d = np.column_stack([np.cos(angles), np.sin(angles)])[:, None, :]  # (R, 1, 2)
-    a = segments[None, :, 0:2]
-    e = (segments[:, 2:4] - segments[:, 0:2])[None, :, :]  # (1, S, 2)
-    ao = a - origin[None, None, :]
-    denom = d[..., 0] * e[..., 1] - d[..., 1] * e[..., 0]  # (R, S)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (ao[..., 0] * e[..., 1] - ao[..., 1] * e[..., 0]) / denom
-        u = (ao[..., 0] * d[..., 1] - ao[..., 1] * d[..., 0]) / denom
-    hit = (np.abs(denom) > EPS) & (t > 0) & (u >= 0) & (u <= 1)
-    t = np.where(hit, t, np.inf)
-    return np.minimum(ranges, t.min(axis=1))
-
-
-def segment_directions(segments: np.ndarray) -> np.ndarray:
-    """(S, 4) segments -> (S, 2) direction vectors ``b - a`` (what the ray tests use)."""
-    return segments[:, 2:4] - segments[:, 0:2]
-
-
-def _full_turn(angles: np.ndarray) -> tuple[float, float] | None:
-    """(first angle, increment) when ``angles`` are ``a0 + k * inc`` covering exactly one turn, else None."""
-    n = len(angles)
-    if n < 2:
-        return None
-    a0 = float(angles[0])
-    inc = TWO_PI / n
-    if abs(float(angles[1]) - a0 - inc) > EVEN_TOLERANCE:
-        return None
-    if float(np.max(np.abs(angles - (a0 + inc * np.arange(n))))) > EVEN_TOLERANCE:
-        return None
-    return a0, inc
-
-
-def _ray_runs(
-    angles: np.ndarray, start: np.ndarray, stop: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Rays whose angle lies in ``[start, stop]`` (mod 2 pi; each interval shorter than a turn).
-
-    Returns ``(rays, first, last)``: the rays of interval ``i`` are ``rays[first[i]:last[i]]``, and
-    ``rays[len(angles):2 * len(angles)]`` is every ray once.
-    """
-    n = len(angles)
-    even = _full_turn(angles)
-    if even is not None:
-        # Rays at a0 + k * inc: index arithmetic, over the ray indices written out twice.
-        a0, inc = even
-        first = np.ceil(np.mod(start - a0, TWO_PI) / inc).astype(np.intp)
-        last = first + (np.floor((stop - start) / inc).astype(np.intp) + 2)
-        # ``last`` above may overshoot by one or two rays: harmless (pairs are tested exactly) but
-        # kept below a turn so that no ray appears twice for one segment.
-        np.minimum(last, first + n, out=last)
-        rays = np.arange(2 * n) % n
-        return rays, first, last
-    # Any angles: sorted in [0, 2 pi), written out one turn below, at and above, so that every
-    # interval (start in [-margin, 2 pi]) is one contiguous run.
-    phi = np.mod(angles, TWO_PI)
-    order = np.argsort(phi, kind="stable")
-    sorted_phi = phi[order]
-    ext_phi = np.concatenate([sorted_phi - TWO_PI, sorted_phi, sorted_phi + TWO_PI])
-    width = stop - start
-    start = np.mod(start, TWO_PI)
-    stop = start + width
-    first = np.searchsorted(ext_phi, start, side="left")
-    last = np.searchsorted(ext_phi, stop, side="right")
-    return np.concatenate([order, order, order]), first, last
-
-
-def cast_rays(
-    origin: np.ndarray,
-    angles: np.ndarray,
-    segments: np.ndarray,
-    max_range: float,
-    directions: np.ndarray | None = None,
-) -> np.ndarray:
-    """The result of :func:`ray_segment_distances`, without testing every ray against every segment.
-
-    Segments that cannot come nearer than ``max_range`` are dropped; each remaining segment is
-    tested only against the rays inside the angular interval it subtends from ``origin`` (found by
-    index arithmetic for a full turn of evenly spaced rays, the lidar case, else by binary search
-    in the sorted ray angles). The tests themselves are the brute force's float64 expressions on
-    the same operands, so the ranges are identical to :func:`ray_segment_distances`'s.
-    ``directions`` may pass precomputed :func:`segment_directions` of ``segments``.
-    """
-    origin = np.asarray(origin, dtype=float)
-    angles = np.asarray(angles, dtype=float)
-    n_rays = len(angles)
-    ranges = np.full(n_rays, max_range, dtype=float)
-    if len(segments) == 0 or n_rays == 0:
-        return ranges
-    if n_rays * len(segments) <= BRUTE_FORCE_PAIRS:
-        return ray_segment_distances(origin, angles, segments, max_range)
-    e = segment_directions(segments) if directions is None else directions
-    ao = segments[:, 0:2] - origin  # exactly the brute force's ``a - origin``
-    ex, ey = e[:, 0], e[:, 1]
-    aox, aoy = ao[:, 0], ao[:, 1]
-    # Distance from the origin to each segment: drop those out of range, and zero-length ones
-    # (their denominator is 0: they never hit).
-    ee = ex * ex + ey * ey
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.minimum(np.maximum(-(aox * ex + aoy * ey) / ee, 0.0), 1.0)
-    dist2 = (aox + s * ex) ** 2 + (aoy + s * ey) ** 2
-    ids = np.flatnonzero((ee > 0) & (dist2 <= (max_range + RANGE_MARGIN) ** 2))
-    if len(ids) == 0:
-        return ranges
-    ex, ey, aox, aoy, dist2 = ex[ids], ey[ids], aox[ids], aoy[ids], dist2[ids]
-    bx, by = aox + ex, aoy + ey
-    # Angular interval [start, stop] of each segment seen from the origin (less than half a turn
-    # wide), widened by ANGLE_MARGIN.
-    sweep = np.arctan2(aox * by - aoy * bx, aox * bx + aoy * by)
-    start = np.arctan2(aoy, aox) + np.minimum(sweep, 0.0) - ANGLE_MARGIN
-    stop = start + (np.abs(sweep) + 2.0 * ANGLE_MARGIN)
-    rays, first, last = _ray_runs(angles, start, stop)
-    # A segment passing (almost) through the origin subtends about half a turn either way it is
-    # computed: test it against every ray, once each.
-    near = dist2 < NEAR_SEGMENT * NEAR_SEGMENT
-    if near.any():
-        first[near], last[near] = n_rays, 2 * n_rays
-    counts = np.maximum(last - first, 0)
-    ends = np.cumsum(counts)
-    total = int(ends[-1])
-    if total == 0:
-        return ranges
-    seg = np.repeat(np.arange(len(ids)), counts)
-    ray = rays[np.arange(total) + (first - (ends - counts))[seg]]
-    # The brute force's expressions, pair by pair.
-    dx, dy = np.cos(angles)[ray], np.sin(angles)[ray]
-    pex, pey, paox, paoy = ex[seg], ey[seg], aox[seg], aoy[seg]
-    denom = dx * pey - dy * pex
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (paox * pey - paoy * pex) / denom
-        u = (paox * dy - paoy * dx) / denom
-    hit = (np.abs(denom) > EPS) & (t > 0) & (u >= 0) & (u <= 1)
-    np.minimum.at(ranges, ray[hit], t[hit])
-    return ranges
 
 
 @dataclass
@@ -310,7 +159,8 @@ class SimWorld:
         return np.concatenate([near, moving]) if len(moving) else near
 
     def raycast(self, origin: np.ndarray, angles: np.ndarray, max_range: float, t: float) -> np.ndarray:
-        """Range along each ray to the nearest static segment or worker at ``t`` (see :func:`cast_rays`)."""
+        """Range along each ray to the nearest static segment or worker at ``t`` (see
+        :func:`initcli.core.raycast.cast_rays`)."""
         origin = np.asarray(origin, dtype=float)
         if self._index:
             ids = self.ids_near(float(origin[0]), float(origin[1]), max_range)

@@ -1,0 +1,31 @@
+"""Pose2D / SE(2) helpers: compose, inverse, apply, angle wrapping."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from initcli.core.geometry import Pose2D, transform_poses, wrap_angle
+
+
+def test_pose_compose_inverse_and_apply() -> None:
+    a = Pose2D(1.0, 2.0, 0.7)
+    b = Pose2D(-3.0, 0.5, -2.0)
+    ident = a * a.inverse()
+    assert ident.x == pytest.approx(0.0, abs=1e-12) and ident.y == pytest.approx(0.0, abs=1e-12)
+    assert ident.yaw == pytest.approx(0.0, abs=1e-12)
+    p = np.array([[0.3, -1.2], [4.0, 5.0]])
+    assert np.allclose((a * b).apply(p), a.apply(b.apply(p)))
+    assert np.allclose(a.apply_inverse(a.apply(p)), p)
+    assert np.allclose(a.matrix() @ b.matrix(), (a * b).matrix())
+    assert Pose2D.from_matrix((a * b).matrix()).yaw == pytest.approx((a * b).yaw)
+    poses = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, math.pi / 2]])
+    moved = transform_poses(Pose2D(0.0, 0.0, math.pi / 2), poses)
+    assert np.allclose(moved, [[0.0, 1.0, math.pi / 2], [-1.0, 0.0, -math.pi]])
+
+
+def test_wrap_angle() -> None:
+    assert wrap_angle(3 * math.pi / 2) == pytest.approx(-math.pi / 2)
+    assert np.allclose(wrap_angle(np.array([0.0, 2 * math.pi, -3 * math.pi / 2])), [0.0, 0.0, math.pi / 2])

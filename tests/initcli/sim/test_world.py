@@ -1,0 +1,82 @@
+"""The simulated world: ``SimWorld.raycast`` on the sample storeys against the brute force, the
+grid-index cache, and workers giving way."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from bimtools.site.records import FREE
+from initcli.config import load_config
+from initcli.core.raycast import ray_segment_distances
+from initcli.drivers.sim import LidarSpec
+from initcli.session.setup import build_sim, choose_storey, prepare_site
+from initcli.sim.world import SimWorld, Worker
+from tests.helpers import SAMPLES
+
+LIDAR = LidarSpec()
+
+
+LIDAR_ANGLES = LIDAR.angle_min + LIDAR.angle_increment * np.arange(LIDAR.beams)
+
+
+@pytest.fixture(scope="module", params=["ntu_hallway", "block_a", "block_b"])
+def storey_world(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory):
+    """(SimWorld, (n, 2) free cell centres) of a sample storey."""
+    config = load_config(SAMPLES / f"{request.param}.site.yaml")
+    site = prepare_site(config, tmp_path_factory.mktemp(request.param))
+    storey, _ = choose_storey(config, site)
+    setup = build_sim(config, site, storey, 3)
+    grid = site.storeys[storey].grid
+    rows, cols = np.nonzero(grid.cells == FREE)
+    x, y = grid.cell_centre(rows, cols)
+    return setup.world, np.column_stack([x, y]), setup.start
+
+
+def test_worker_gives_way_after_standing_face_to_face():
+    w = Worker(a=np.array([0.0, 0.0]), b=np.array([8.0, 0.0]), speed=1.0, phase=2.0)
+    robot = np.array([3.0, 0.0])  # 1 m ahead of the worker walking toward it
+    for _ in range(round(0.8 * w.patience / 0.1)):  # waits
+        w.advance(0.1, robot)
+    assert np.allclose(w.position(), [2.0, 0.0])
+    for _ in range(15):  # past its patience: turns round and walks away
+        w.advance(0.1, robot)
+    assert w.position()[0] < 2.0 - 0.3
+    world = SimWorld.from_obstacles([], workers=[w])
+    assert len(world.worker_segments(0.0)) == 4
+
+
+def test_sample_storeys_match_brute_force(storey_world) -> None:
+    world, free, start = storey_world
+    rng = np.random.default_rng(7)
+    origins = [np.array([start.x, start.y])] + list(free[rng.choice(len(free), 120)])
+    for i, origin in enumerate(origins):
+        t = 0.7 * i  # the workers move
+        angles = LIDAR_ANGLES + rng.uniform(-math.pi, math.pi)
+        segments = world.segments_at(float(origin[0]), float(origin[1]), LIDAR.max_range, t)
+        expected = ray_segment_distances(origin, angles, segments, LIDAR.max_range)
+        got = world.raycast(origin, angles, LIDAR.max_range, t)
+        np.testing.assert_array_equal(got < LIDAR.max_range, expected < LIDAR.max_range)
+        np.testing.assert_allclose(got, expected, rtol=0, atol=1e-9)
+
+
+def test_segments_near_cache(storey_world) -> None:
+    """The cached grid query returns what an uncached one does, the same segments each time."""
+    world, free, _ = storey_world
+    rng = np.random.default_rng(11)
+    for x, y in free[rng.choice(len(free), 30)]:
+        for radius in (1.0, 20.0):
+            fresh = SimWorld(world.static.copy()).segments_near(x, y, radius)
+            np.testing.assert_array_equal(world.segments_near(x, y, radius), fresh)
+            np.testing.assert_array_equal(world.segments_near(x, y, radius), fresh)
+    a, b = world.static[:, 0:2], world.static[:, 2:4]
+    x, y = free[0]
+    ab = b - a
+    s = np.clip(
+        np.einsum("ij,ij->i", [x, y] - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-12), 0, 1
+    )
+    within = np.hypot(*(a + ab * s[:, None] - [x, y]).T) <= 20.0
+    near = {tuple(r) for r in world.segments_near(x, y, 20.0)}
+    assert {tuple(r) for r in world.static[within]} <= near
