@@ -31,6 +31,7 @@ import numpy as np
 from initcli.core.geometry import Pose2D
 from initcli.core.particle_filter import LikelihoodField, scan_fit
 from initcli.core.projection import CameraIntrinsics, CameraMount, odom_to_pixel
+from initcli.core.raycast import sight_blocked
 
 
 @dataclass(frozen=True)
@@ -83,25 +84,6 @@ class Verification:
         }
 
 
-def segments_cross(a: np.ndarray, b: np.ndarray, walls: np.ndarray) -> np.ndarray:
-    """For each segment ``a[i] -> b[i]`` (N, 2), does it properly cross any wall (W, 4: x1 y1 x2 y2)?"""
-    a = np.asarray(a, dtype=float).reshape(-1, 2)
-    b = np.asarray(b, dtype=float).reshape(-1, 2)
-    w = np.asarray(walls, dtype=float).reshape(-1, 4)
-    if len(w) == 0 or len(a) == 0:
-        return np.zeros(len(a), dtype=bool)
-    r = (b - a)[:, None, :]
-    q = w[None, :, 0:2]
-    s = (w[:, 2:4] - w[:, 0:2])[None, :, :]
-    rxs = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
-    qp = q - a[:, None, :]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0]) / rxs
-        u = (qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0]) / rxs
-    hit = (np.abs(rxs) > 1e-12) & (t > 1e-6) & (t < 1.0 - 1e-6) & (u >= 0.0) & (u <= 1.0)
-    return hit.any(axis=1)
-
-
 def frames_in_view(
     feature_xy: np.ndarray,
     feature_normals: np.ndarray,
@@ -140,7 +122,7 @@ def frames_in_view(
         if seen.any():
             idx = np.flatnonzero(seen)
             targets = xy[idx] + 0.1 * normals[idx]  # just in front of the host wall's surface
-            blocked = segments_cross(np.repeat(eye[None, :], len(idx), axis=0), targets, walls)
+            blocked = sight_blocked(eye, targets, np.asarray(walls, dtype=float).reshape(-1, 4))
             seen[idx[blocked]] = False
         counts += seen
     return counts

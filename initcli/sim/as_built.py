@@ -36,9 +36,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from bimtools.site.records import Obstacle
+from initcli.core.raycast import ray_segment_distances
 from initcli.sim.scenario import Circulation
 from initcli.sim.synthetic_log import SimFeature
-from initcli.sim.world import polygon_edges, ray_segment_distances
+from initcli.sim.world import polygon_edges
 
 CORRIDOR_WIDTH = 2.0  # m: circulation area / this = corridor length for the per-100 m rates
 HOARDING_THICKNESS = 0.1  # m

@@ -9,7 +9,7 @@ import numpy as np
 from bimtools.site.records import FREE, OCCUPIED
 from initcli.core.frontier import FrontierParams, LocalMap
 from initcli.core.geometry import Pose2D
-from initcli.sim.world import ray_segment_distances
+from initcli.core.raycast import ray_segment_distances
 
 # A 10 x 10 m room (x, y in [0, 10]) with a 1.2 m doorway in its east wall at y in [4.4, 5.6],
 # and a corridor beyond it.

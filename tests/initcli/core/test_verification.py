@@ -18,7 +18,6 @@ from initcli.core.verification import (
     frames_in_view,
     misses_reject,
     path_scan_fit,
-    segments_cross,
     verify_hypothesis,
 )
 
@@ -34,14 +33,6 @@ WALLS = np.array([[-1.0, 0.0, 41.0, 0.0], [-1.0, 2.0, 41.0, 2.0]])
 def path_along(x0: float, x1: float, yaw: float = math.radians(60.0)) -> list[Pose2D]:
     """Robot poses along the corridor centre line, the camera turned toward the north wall."""
     return [Pose2D(float(x), 1.0, yaw) for x in np.arange(x0, x1, 0.25)]
-
-
-def test_segments_cross_finds_proper_crossings_only() -> None:
-    walls = np.array([[0.0, -1.0, 0.0, 1.0]])
-    a = np.array([[-1.0, 0.0], [-1.0, 0.0], [1.0, 5.0]])
-    b = np.array([[1.0, 0.0], [-0.5, 0.0], [1.0, 6.0]])
-    assert segments_cross(a, b, walls).tolist() == [True, False, False]
-    assert segments_cross(a, b, np.zeros((0, 4))).tolist() == [False, False, False]
 
 
 def test_frames_in_view_counts_only_features_in_front_and_in_range() -> None:
