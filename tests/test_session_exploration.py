@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 from initcli.core.bug_navigation import BugNavigator, BugParams, around_side
+from initcli.core.confinement import confined
 from initcli.core.detection_filter import ConfirmedFeature, within_drift_window
 from initcli.core.geometry import Pose2D
 from initcli.core.wall_following import ScanView
 from initcli.drivers.base import SensorFrame
-from initcli.session.runner import confined
 from initcli.sim.world import SimWorld, Worker, box_edges
 
 
@@ -83,16 +83,14 @@ def test_worker_gives_way_after_standing_face_to_face():
     assert len(world.worker_segments(0.0)) == 4
 
 
-def frame_at(t: float, x: float, y: float) -> SensorFrame:
-    return SensorFrame(t, Pose2D(x, y, 0.0))
-
-
 def test_shuttling_is_told_from_travelling():
     trace: list[tuple[float, float, float]] = []
-    hits = [confined(trace, frame_at(t, 5.0 * math.sin(t / 8.0), 0.0), 150.0, 45.0, 8.0) for t in range(200)]
+    hits = [
+        confined(trace, t, Pose2D(5.0 * math.sin(t / 8.0), 0.0, 0.0), 150.0, 45.0, 8.0) for t in range(200)
+    ]
     assert any(hits[140:])  # back and forth over 10 m for minutes
     trace.clear()
-    hits = [confined(trace, frame_at(t, 0.5 * t, 0.0), 150.0, 45.0, 8.0) for t in range(200)]
+    hits = [confined(trace, t, Pose2D(0.5 * t, 0.0, 0.0), 150.0, 45.0, 8.0) for t in range(200)]
     assert not any(hits)  # a long straight drive
 
 
