@@ -10,7 +10,7 @@ import numpy as np
 
 from bimtools.site.load import StoreyModel
 from initcli.core.geometry import Pose2D
-from initcli.session.runner import SessionResult
+from initcli.session.result import SessionResult
 
 
 def _pose(p: Pose2D | None) -> dict | None:
