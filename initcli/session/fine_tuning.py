@@ -26,7 +26,7 @@ from initcli.drivers.base import RobotDriver, SensorFrame
 
 PF_UPDATE_D = 0.25  # m (AMCL update_min_d)
 PF_UPDATE_A = 0.2  # rad (AMCL update_min_a)
-LOST_LIKELIHOOD = 0.12  # mean beam likelihood below which an update counts as lost
+LOST_LIKELIHOOD = 0.12  # per-beam likelihood (geometric mean, best particle) below which an update is lost
 LOST_UPDATES = 5  # lost updates in a row: the filter is lost
 MIN_TRAVEL_M = 1.0  # m followed before the covariance may count as converged
 LANDMARKS = 4  # matched features that weight the particle filter's seed
@@ -60,14 +60,21 @@ def settle(estimate: Pose2D, fit: float, carried: Pose2D, carried_fit: float, re
 
 
 @dataclass(frozen=True)
-class FineOutcome:
-    """How fine tuning ended: the last frame, and the pose and covariance, or why it failed."""
+class FineTuned:
+    """Fine tuning's pose and covariance at its last frame."""
 
     frame: SensorFrame
-    pose: Pose2D | None = None
-    covariance: np.ndarray | None = None
-    converged: bool = False  # the covariance fell below the thresholds (not the distance limit)
-    failure: str | None = None
+    pose: Pose2D
+    covariance: np.ndarray
+    converged: bool  # the covariance fell below the thresholds (not the distance limit, not kept rectified)
+
+
+@dataclass(frozen=True)
+class FineLost:
+    """Fine tuning lost the robot: the scans do not fit the map."""
+
+    frame: SensorFrame
+    reason: str
 
 
 @dataclass
@@ -118,7 +125,7 @@ class FineTuning:
         transform: Pose2D,
         landmarks: tuple[np.ndarray, np.ndarray],
         hooks: FineTuningHooks,
-    ) -> FineOutcome:
+    ) -> FineTuned | FineLost:
         """Track from ``frame`` with the filter seeded at ``seed`` and weighted by the matched
         ``landmarks`` (odom, BIM positions); ``transform`` (odom -> BIM) carries the rectified pose."""
         cfg = self.params
@@ -156,7 +163,7 @@ class FineTuning:
             cov = estimate.covariance
             hooks.emit(frame, {"covariance": float(max(cov[0, 0], cov[1, 1]))})
             if lost >= LOST_UPDATES:
-                return FineOutcome(frame, failure="lost during fine tuning (laser scans do not fit the map)")
+                return FineLost(frame, "lost during fine tuning (laser scans do not fit the map)")
             travelled = driver.distance - start_distance
             if (
                 cov[0, 0] < cfg.covariance
@@ -175,11 +182,9 @@ class FineTuning:
                 hooks.note(
                     frame.t, f"filter drifted (scan fit {fit:.0%}); rectified pose kept ({carried_fit:.0%})"
                 )
-                return FineOutcome(frame, carried, cov, converged=False)
+                return FineTuned(frame, carried, cov, converged=False)
             if verdict == "lost":
-                return FineOutcome(
-                    frame, failure=f"lost during fine tuning (only {fit:.0%} of the scan fits the map)"
-                )
+                return FineLost(frame, f"lost during fine tuning (only {fit:.0%} of the scan fits the map)")
             if verdict == "reseed":
                 # Spread the cloud wider around the estimate and track again.
                 reseeded = True
@@ -187,4 +192,4 @@ class FineTuning:
                 pf.seed(estimate.pose, RESEED_SIGMA_XY, math.radians(cfg.seed_sigma_yaw))
                 start_distance, converged_at = driver.distance, None
                 continue
-            return FineOutcome(frame, estimate.pose, cov, converged=converged_at is not None)
+            return FineTuned(frame, estimate.pose, cov, converged=converged_at is not None)

@@ -35,7 +35,7 @@ from initcli.drivers.base import RobotDriver, SensorFrame
 from initcli.io.detection_log import Meta, State
 from initcli.match.pipeline import MatchReport
 from initcli.session.exploration import ActiveExploration
-from initcli.session.fine_tuning import FineTuning, FineTuningHooks, matched_pairs
+from initcli.session.fine_tuning import FineLost, FineTuning, FineTuningHooks, matched_pairs
 from initcli.session.perception import Perception, match_options
 from initcli.session.result import MatchStep, SessionResult
 
@@ -377,8 +377,8 @@ class Session:
             landmarks = matched_pairs(r.features, r.matched_ids, model.features)
             outcome = tuning.run(self.driver, frame, rectified, transform, landmarks, hooks)
             frame = outcome.frame
-            if outcome.pose is None or outcome.failure is not None:
-                self._fail(frame, outcome.failure or "fine tuning ended without a pose")
+            if isinstance(outcome, FineLost):
+                self._fail(frame, outcome.reason)
                 return
             r.fine_converged = outcome.converged
             pose, cov = outcome.pose, outcome.covariance
