@@ -29,14 +29,11 @@ PAPER_DISTANCE = {"ntu_hallway": 44.88, "block_a": 14.81, "block_b": 16.61}
 def one_session(args: tuple[str, int, str]) -> dict:
     name, seed, workdir = args
     from initcli.config import load_config
-    from initcli.session.runner import Session
-    from initcli.session.setup import build_sim, choose_storey, prepare_site
+    from initcli.session.setup import prepare_site, sim_session
 
     config = load_config(ROOT / "sample_models" / f"{name}.site.yaml")
     site = prepare_site(config, Path(workdir) / name)
-    simulated, matched = choose_storey(config, site)
-    setup = build_sim(config, site, simulated, seed)
-    result = Session(config, site, matched, setup.driver, None, np.random.default_rng(seed + 7919)).run()
+    result = sim_session(config, site, seed).session.run()
     trans, rot = result.errors()
     wrong = result.success and (trans["fine"] or 0.0) > 1.0
     return {

@@ -23,8 +23,8 @@ from initcli.baselines.outcome import LocalisationOutcome
 from initcli.config import SessionConfig
 from initcli.core.geometry import Pose2D
 from initcli.core.global_localisation import GlobalLocalisation, GlobalLocalisationParams
+from initcli.core.motion import motion_delta
 from initcli.session.setup import SimSetup
-from initcli.sim.robot import motion_delta
 
 MIN_TRAVEL = 1.0  # m driven before a convergence claim counts (as in fine tuning)
 

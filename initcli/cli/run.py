@@ -10,7 +10,6 @@ from datetime import datetime
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
 import typer
 from rich.console import Console
 from rich.live import Live
@@ -21,8 +20,8 @@ from bimtools.site.atomic import staged_directory
 from initcli.config import SessionConfig, config_to_dict, load_config
 from initcli.core.geometry import Pose2D
 from initcli.session.outputs import render_report, summary_document, write_summary
-from initcli.session.runner import Session, SessionResult
-from initcli.session.setup import build_sim, choose_storey, prepare_site
+from initcli.session.result import SessionResult
+from initcli.session.setup import prepare_site, sim_session
 
 EXIT_FAILED = 1
 
@@ -93,19 +92,17 @@ def run_session(
     """Run one session into ``out`` (staged: nothing half-written on failure). Returns the summary."""
     with staged_directory(out) as stage:
         site = prepare_site(config, stage)
-        simulated_storey, matched_storey = choose_storey(config, site)
-        setup = build_sim(config, site, simulated_storey, seed, start)
         view = None if quiet else LiveView(console)
-        session = Session(
+        built = sim_session(
             config,
             site,
-            matched_storey,
-            setup.driver,
+            seed,
+            start,
             stage / "session.jsonl",
-            np.random.default_rng(seed + 7919),
             observer=view,
             meta_source=f"bim-init run (sim, seed {seed})",
         )
+        session, setup = built.session, built.setup
         if view is not None:
             with view.live:
                 result: SessionResult = session.run()
@@ -125,7 +122,7 @@ def run_session(
         render_report(
             stage / "report.png",
             result,
-            site.storeys[result.storey or simulated_storey],
+            site.storeys[result.storey or built.simulated_storey],
             f"{config.site.path}: {'success' if result.success else 'failure'} - {result.reason}",
         )
     return doc

@@ -11,4 +11,6 @@ One concept per module; equation numbers of the paper are cited next to the code
 - :mod:`~initcli.core.pose` -- trilateration (Eq. 10), heading (Eq. 11-13), rigid Kabsch.
 - :mod:`~initcli.core.rectify` -- BIM-based rectification (Eq. 17).
 - :mod:`~initcli.core.hypotheses` -- ranking, pose-distinct counting, confidence and verdict.
+- :mod:`~initcli.core.motion` -- the odometry motion model's (rot1, trans, rot2) decomposition.
+- :mod:`~initcli.core.confinement` -- a recent path long but small: looping or shuttling.
 """

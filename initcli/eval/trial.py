@@ -23,10 +23,8 @@ from initcli.core.geometry import Pose2D
 from initcli.eval.records import FailureRule, TrialRecord
 from initcli.eval.scoring import score
 from initcli.eval.sweep import Sweep, apply_sweep, sweep_label
-from initcli.session.runner import Session, SessionResult
-from initcli.session.setup import build_sim, choose_storey
-
-SESSION_RNG_OFFSET = 7919  # the session's own generator (particle filter) is seeded apart from the world
+from initcli.session.result import SessionResult
+from initcli.session.setup import SimSetup, build_sim, choose_storey, sim_session
 
 
 @dataclass(frozen=True)
@@ -59,18 +57,32 @@ def _config(config_path: str) -> SessionConfig:
 
 def session_outcomes(result: SessionResult) -> dict[str, LocalisationOutcome]:
     """``bim`` (coarse + rectification, Eq. 17) and ``bim+pf`` (plus fine tuning, Eq. 18) of a session."""
-    coarse = result.coarse_pose is not None
-    bim = LocalisationOutcome(
-        method="bim",
-        localised=coarse,
-        reason="unique match" if coarse else result.reason,
-        pose=result.rectified_pose if coarse else None,
-        truth=result.truth_at_coarse if coarse else result.truth_pose,
-        distance_m=result.distance_coarse_m if coarse else result.distance_total_m,
-        duration_s=result.duration_s,
-        features=result.features_detected,
-        wall_seconds=result.wall_seconds_coarse if coarse else result.wall_seconds,
-    )
+    # The coarse pose, its distance and its wall time are set together at the unique match.
+    distance_coarse, wall_coarse = result.distance_coarse_m, result.wall_seconds_coarse
+    if result.coarse_pose is not None and distance_coarse is not None and wall_coarse is not None:
+        bim = LocalisationOutcome(
+            method="bim",
+            localised=True,
+            reason="unique match",
+            pose=result.rectified_pose,
+            truth=result.truth_at_coarse,
+            distance_m=distance_coarse,
+            duration_s=result.duration_s,
+            features=result.features_detected,
+            wall_seconds=wall_coarse,
+        )
+    else:
+        bim = LocalisationOutcome(
+            method="bim",
+            localised=False,
+            reason=result.reason,
+            pose=None,
+            truth=result.truth_pose,
+            distance_m=result.distance_total_m,
+            duration_s=result.duration_s,
+            features=result.features_detected,
+            wall_seconds=result.wall_seconds,
+        )
     # The session's final pose is its claim, whether the filter's covariance fell below the
     # thresholds or its distance ran out first (the reason says which).
     fine = result.success and result.pose is not None
@@ -99,14 +111,15 @@ def run_trial(job: TrialJob) -> list[TrialRecord]:
     """Run the job's methods; one scored record per method."""
     config = _trial_config(job)
     site = _site(job.site_dir)
-    simulated, matched = choose_storey(config, site)
     start = Pose2D(*job.start_pose) if job.start_pose is not None else None
     outcomes: list[LocalisationOutcome] = []
     start_pose: tuple[float, float, float] | None = None
 
-    def sim(detect_features: bool = True):
+    def baseline_sim() -> SimSetup:
+        """The same world, start and noise as the session's, without the feature detector."""
         nonlocal start_pose
-        setup = build_sim(config, site, simulated, job.seed, start, detect_features)
+        simulated, _ = choose_storey(config, site)
+        setup = build_sim(config, site, simulated, job.seed, start, detect_features=False)
         start_pose = setup.start.as_tuple()
         return setup
 
@@ -117,9 +130,9 @@ def run_trial(job: TrialJob) -> list[TrialRecord]:
             session_config = dataclasses.replace(
                 config, fine_tuning=dataclasses.replace(config.fine_tuning, enabled=False)
             )
-        setup = sim()
-        rng = np.random.default_rng(job.seed + SESSION_RNG_OFFSET)
-        result = Session(session_config, site, matched, setup.driver, None, rng).run()
+        built = sim_session(session_config, site, job.seed, start)
+        start_pose = built.setup.start.as_tuple()
+        result = built.session.run()
         both = session_outcomes(result)
         outcomes.extend(both[m] for m in session_methods)
     if "amcl" in job.methods:
@@ -127,12 +140,14 @@ def run_trial(job: TrialJob) -> list[TrialRecord]:
         from initcli.core.global_localisation import GlobalLocalisationParams
 
         params = dataclasses.replace(GlobalLocalisationParams(), **dict(job.amcl))
-        outcomes.append(run_amcl(config, site, sim(False), np.random.default_rng(job.seed + 1), params))
+        outcomes.append(run_amcl(config, site, baseline_sim(), np.random.default_rng(job.seed + 1), params))
     if "markers" in job.methods:
         from initcli.baselines.markers import MarkerParams, run_markers
 
         params_m = dataclasses.replace(MarkerParams(), **dict(job.markers))
-        outcomes.append(run_markers(config, site, sim(False), np.random.default_rng(job.seed + 2), params_m))
+        outcomes.append(
+            run_markers(config, site, baseline_sim(), np.random.default_rng(job.seed + 2), params_m)
+        )
     assert start_pose is not None
     sweep = sweep_label(job.sweep, job.sweep_value)
     order = {m: i for i, m in enumerate(job.methods)}
@@ -145,4 +160,3 @@ def run_trial(job: TrialJob) -> list[TrialRecord]:
 
 def trial_seed(base: int, start: int) -> int:
     return base + start
-

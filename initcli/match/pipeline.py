@@ -28,9 +28,7 @@ from initcli.core.detection_filter import (
     ConfirmedFeature,
     FilterParams,
     GivenFeature,
-    Sighting,
     filter_detections,
-    is_truncated,
     within_drift_window,
 )
 from initcli.core.geometry import Pose2D, wrap_angle
@@ -43,9 +41,9 @@ from initcli.core.hypotheses import (
 )
 from initcli.core.matching import OUTLIER, BimIndex, Matcher, MatchOverflow, MatchParams
 from initcli.core.pose import POSE_METHODS, estimate_pose, rigid_align_batch
-from initcli.core.projection import detections_to_odom
 from initcli.core.rectify import WallArray, rectify_pose
 from initcli.io.detection_log import DetectionLog, read_log
+from initcli.match.sightings import sightings_from_log
 
 EXIT_UNIQUE = 0
 EXIT_BAD_INPUT = 2
@@ -206,33 +204,6 @@ def check_classes(log: DetectionLog, cmap: ClassMap, site: Site) -> None:
             f"{log.path}: unknown class name(s) {names}; known: {', '.join(sorted(known))} "
             "(map other names with detector.classes in the site folder's site.yaml)"
         )
-
-
-def sightings_from_log(log: DetectionLog, cmap: ClassMap, edge_margin: float = 2.0) -> list[Sighting]:
-    """Eq. 1-2 for every detected object of the log."""
-    out: list[Sighting] = []
-    cam, mount = log.meta.camera, log.meta.camera_pose
-    for frame, rec in enumerate(log.detections):
-        objs = [o for o in rec.objects if o.depth is not None and math.isfinite(o.depth)]
-        if not objs:
-            continue
-        pts = detections_to_odom(
-            np.array([o.bbox for o in objs]), np.array([o.depth for o in objs]), cam, mount, rec.pose
-        )  # Eq. 1-2
-        for o, p in zip(objs, pts, strict=True):
-            out.append(
-                Sighting(
-                    rec.t,
-                    cmap.canonical(o.cls),
-                    float(p[0]),
-                    float(p[1]),
-                    o.score,
-                    float(o.depth),  # type: ignore[arg-type]
-                    frame,
-                    truncated=is_truncated(o.bbox, cam.width, edge_margin),
-                )
-            )
-    return out
 
 
 def current_odom(log: DetectionLog) -> tuple[Pose2D, np.ndarray, list[str]]:

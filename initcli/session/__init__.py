@@ -1,1 +1,15 @@
-"""``bim-init run``: a whole initialisation session (§3.3.3-3.3.5) on a robot driver."""
+"""``bim-init run``: a whole initialisation session (§3.3.3-3.3.5) on a robot driver.
+
+One module per job:
+
+- :mod:`~initcli.session.runner` -- the state machine of §3.3.4 (explore, match, active, recovery,
+  coarse, fine, done) that drives the robot;
+- :mod:`~initcli.session.perception` -- the detection log it writes, the sightings (Eq. 1-2) and
+  confirmed features (Eq. 3), and the match step (Algorithm 1) on the log so far;
+- :mod:`~initcli.session.exploration` -- active exploration toward the features that tell the
+  hypotheses apart (Eq. 15-16);
+- :mod:`~initcli.session.fine_tuning` -- the particle filter seeded at the rectified pose (Eq. 18);
+- :mod:`~initcli.session.result` -- what a session found, and its errors against truth;
+- :mod:`~initcli.session.setup` -- the site, the storey, the simulated robot and the session on it;
+- :mod:`~initcli.session.outputs` -- ``summary.json`` and ``report.png``.
+"""

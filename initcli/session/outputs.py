@@ -10,7 +10,7 @@ import numpy as np
 
 from bimtools.site.load import StoreyModel
 from initcli.core.geometry import Pose2D
-from initcli.session.runner import SessionResult
+from initcli.session.result import SessionResult
 
 
 def _pose(p: Pose2D | None) -> dict | None:
@@ -73,6 +73,7 @@ def render_report(path: Path, result: SessionResult, storey: StoreyModel, title:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.artist import Artist
     from matplotlib.collections import LineCollection
 
     fig, ax = plt.subplots(figsize=(13, 8))
@@ -124,7 +125,7 @@ def render_report(path: Path, result: SessionResult, storey: StoreyModel, title:
             alpha=0.8,
             label=f"hypotheses, {step.features} features ({step.verdict})",
         )
-    for label, pose, colour in (
+    for label, pose, pose_colour in (
         ("coarse", result.coarse_pose, "tab:orange"),
         ("rectified (Eq. 17)", result.rectified_pose, "tab:purple"),
         ("final", result.pose, "tab:red"),
@@ -135,7 +136,7 @@ def render_report(path: Path, result: SessionResult, storey: StoreyModel, title:
                 [pose.y],
                 [math.cos(pose.yaw)],
                 [math.sin(pose.yaw)],
-                color=colour,
+                color=pose_colour,
                 scale=18,
                 width=0.006,
                 label=f"{label} pose",
@@ -155,10 +156,12 @@ def render_report(path: Path, result: SessionResult, storey: StoreyModel, title:
     ax.set_ylabel("y (m)")
     ax.set_title(title)
     handles, labels = ax.get_legend_handles_labels()
-    seen: dict[str, object] = {}
+    seen: dict[str, Artist] = {}
     for h, lab in zip(handles, labels, strict=True):
         seen.setdefault(lab, h)
-    ax.legend(seen.values(), seen.keys(), fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.legend(
+        list(seen.values()), list(seen.keys()), fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0)
+    )
     fig.tight_layout()
     fig.savefig(path, dpi=130)
     plt.close(fig)

@@ -1,8 +1,10 @@
-"""Assemble a session from its config: the site model, the storey, the simulated robot."""
+"""Assemble a session from its config: the site model, the storey, the simulated robot, and the
+session on it (:func:`sim_session`, shared by ``bim-init run`` and the evaluation trials)."""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -15,11 +17,15 @@ from initcli.core.classes import ClassMap
 from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.drivers.sim import LidarSpec, SimDriver
+from initcli.io.detection_log import DetectedObject
+from initcli.session.runner import Observer, Session
 from initcli.sim.camera import CameraNoise, SimulatedDetector
 from initcli.sim.robot import DiffDriveRobot, OdometryNoise
 from initcli.sim.scenario import Circulation, place_clutter, place_workers, random_start
 from initcli.sim.synthetic_log import sim_features_from_bim
 from initcli.sim.world import SimWorld
+
+SESSION_RNG_OFFSET = 7919  # the session's own generator (particle filter) is seeded apart from the world
 
 
 def prepare_site(config: SessionConfig, workdir: Path) -> Site:
@@ -111,6 +117,7 @@ def build_sim(
         range=config.camera.range,
         max_view_angle_deg=config.camera.max_view_angle,
     )
+    detector: Callable[[Pose2D, float], list[DetectedObject]]
     if not detect_features:
         detector = _no_detections
     elif config.detector.kind == "onnx":
@@ -139,7 +146,34 @@ def build_sim(
     return SimSetup(driver, start, world, storey)
 
 
-def _no_detections(pose: Pose2D, t: float) -> list:
+@dataclass
+class SimSession:
+    """A session on the simulated robot, and what it was built from."""
+
+    session: Session
+    setup: SimSetup
+    simulated_storey: str  # the storey simulated (the session may match against every storey)
+
+
+def sim_session(
+    config: SessionConfig,
+    site: Site,
+    seed: int,
+    start: Pose2D | None = None,
+    log_path: Path | None = None,
+    observer: Observer | None = None,
+    meta_source: str = "bim-init run",
+) -> SimSession:
+    """The session of ``config`` on the simulated robot of ``seed`` (``start`` None: the config's
+    start, else a random one), logging to ``log_path`` (None: no log file)."""
+    simulated, matched = choose_storey(config, site)
+    setup = build_sim(config, site, simulated, seed, start)
+    rng = np.random.default_rng(seed + SESSION_RNG_OFFSET)
+    session = Session(config, site, matched, setup.driver, log_path, rng, observer, meta_source)
+    return SimSession(session, setup, simulated)
+
+
+def _no_detections(pose: Pose2D, t: float) -> list[DetectedObject]:
     return []
 
 

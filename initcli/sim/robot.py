@@ -20,6 +20,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from initcli.core.geometry import Pose2D, wrap_angle
+from initcli.core.motion import apply_delta, motion_delta
 
 
 @dataclass(frozen=True)
@@ -40,28 +41,6 @@ class OdometryNoise:
             alpha3=self.alpha3 * factor,
             alpha4=self.alpha4 * factor,
         )
-
-
-def motion_delta(a: Pose2D, b: Pose2D) -> tuple[float, float, float]:
-    """The (rot1, trans, rot2) decomposition of the motion from ``a`` to ``b``."""
-    dx, dy = b.x - a.x, b.y - a.y
-    trans = math.hypot(dx, dy)
-    rot1 = float(wrap_angle(math.atan2(dy, dx) - a.yaw)) if trans > 1e-6 else 0.0
-    # Driving backwards: express as a backward translation rather than a half turn.
-    if abs(rot1) > math.pi / 2:
-        rot1 = float(wrap_angle(rot1 - math.pi))
-        trans = -trans
-    rot2 = float(wrap_angle(b.yaw - a.yaw - rot1))
-    return rot1, trans, rot2
-
-
-def apply_delta(pose: Pose2D, rot1: float, trans: float, rot2: float) -> Pose2D:
-    heading = pose.yaw + rot1
-    return Pose2D(
-        pose.x + trans * math.cos(heading),
-        pose.y + trans * math.sin(heading),
-        float(wrap_angle(heading + rot2)),
-    )
 
 
 class DiffDriveRobot:

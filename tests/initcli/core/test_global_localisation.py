@@ -17,7 +17,7 @@ from initcli.core.global_localisation import (
     kld_sample_limit,
     low_variance_indices,
 )
-from initcli.sim.robot import apply_delta, motion_delta
+from initcli.core.motion import apply_delta, motion_delta
 
 RES = 0.05
 

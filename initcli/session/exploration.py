@@ -1,0 +1,210 @@
+"""Active exploration (§3.3.4): with several but fewer than m_thre hypotheses, go and look where
+they disagree.
+
+Each hypothesis in turn (the most probable first) names a target: a viewpoint in front of the
+nearest BIM feature of the highest-priority category (fewest in the BIM) that it has not matched
+yet and whose sighting would rule out another hypothesis. The robot follows a route there along
+the BIM's corridors with the modified bug algorithm (Eq. 15-16). A target is given up when the
+robot got there and saw nothing new, stopped getting closer, or ran out of time.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from bimtools.site.load import Site
+from bimtools.site.records import Feature
+from initcli.config import SessionConfig
+from initcli.core.bug_navigation import BugParams, RouteNavigator
+from initcli.core.geometry import Pose2D
+from initcli.core.grid_planner import PlanningGrid
+from initcli.core.wall_following import ScanView, WallFollowParams
+from initcli.drivers.base import SensorFrame
+from initcli.match.pipeline import Hypothesis
+
+VIEW_DISTANCE = 1.8  # m in front of a target feature where active exploration goes to look at it
+ACTIVE_TOP = 5  # hypotheses (most probable first) whose targets active exploration validates
+DISCRIMINATION_RADIUS = 1.5  # m: another hypothesis predicting a same-category feature this close agrees
+VISITED_RADIUS = 2.0  # m: an active-exploration target this close to a visited one is skipped
+PLANNER_MARGIN = 0.1  # m of clearance added to the robot radius when planning routes
+STALL_S = 15.0  # s without getting closer to the route's next waypoint: the route is blocked
+PROGRESS_STEP = 0.5  # m closer to the waypoint that counts as progress
+WAYPOINT_COST = 2.0  # m added to the remaining distance for each waypoint still ahead
+TRAVEL_CAP_S = 120.0  # s of travel allowed toward one target on top of t_thre
+TRAVEL_SLACK = 1.5  # route length / max speed times this: the time allowed to get to a target
+LOOK_S = 2.0  # s spent at a reached target looking for its feature
+MAX_FRUITLESS = 3  # active-exploration targets in a row without a new feature -> random exploration
+
+
+@dataclass(frozen=True)
+class Target:
+    """The viewpoint chosen to validate one hypothesis."""
+
+    viewpoint: np.ndarray  # odom frame, m
+    hypothesis: Hypothesis
+    route_m: float  # length of the route along the BIM's corridors
+
+
+class ActiveExploration:
+    """The hypotheses to validate, the targets visited, and the route being followed."""
+
+    def __init__(self, config: SessionConfig, site: Site, follow: WallFollowParams) -> None:
+        self.site = site
+        self.follow = follow
+        self.t_thre = config.exploration.t_thre  # s to find something at a target
+        self.max_linear = config.robot.max_linear  # m/s
+        self.robot_radius = config.robot.radius  # m
+        self.plan: list[Hypothesis] = []  # hypotheses whose targets are still to visit
+        self.plan_all: list[Hypothesis] = []  # every hypothesis of the last match step
+        self.visited: list[np.ndarray] = []  # odom viewpoints planned so far
+        self.navigator: RouteNavigator | None = None
+        self._planners: dict[str, PlanningGrid | None] = {}
+        self.target_budget = self.t_thre  # s allowed for the current target
+        self.target_started = 0.0  # s
+        self.target_reached_t: float | None = None  # s
+        self.progress: tuple[float, float] = (0.0, math.inf)  # (s, m) of the last progress
+        self.fruitless = 0  # active-exploration targets in a row that brought no new feature
+
+    @property
+    def exhausted(self) -> bool:
+        """Have MAX_FRUITLESS targets in a row brought nothing new?"""
+        return self.fruitless >= MAX_FRUITLESS
+
+    def validate(self, hypotheses: list[Hypothesis]) -> None:
+        """Validate the most probable hypotheses first, then the next ones (§3.3.3)."""
+        self.plan = list(hypotheses[:ACTIVE_TOP])
+        self.plan_all = list(hypotheses)
+
+    def _planner(self, storey: str) -> PlanningGrid | None:
+        if storey not in self._planners:
+            grid = self.site.storeys[storey].grid
+            self._planners[storey] = (
+                PlanningGrid.of(grid, self.robot_radius + PLANNER_MARGIN) if grid is not None else None
+            )
+        return self._planners[storey]
+
+    def _target(self, hypothesis: Hypothesis, odom: Pose2D) -> tuple[list[np.ndarray], float] | None:
+        """A route (odom waypoints) to a viewpoint in front of the BIM feature of the highest-priority
+        category (fewest in the BIM) that ``hypothesis`` has not matched yet, nearest along the
+        BIM's corridors, not visited before; and its length."""
+        features = self.site.storeys[hypothesis.storey].features
+        counts: dict[str, int] = {}
+        for f in features:
+            counts[f.category] = counts.get(f.category, 0) + 1
+        matched = {m for m in hypothesis.matches if m is not None}
+        here = hypothesis.transform * odom
+        planner = self._planner(hypothesis.storey)
+        if planner is None:
+            return None
+        dist, pred, start = planner.distances_from(here.x, here.y)
+        for category in sorted(counts, key=lambda c: (counts[c], c)):
+            best: tuple[float, int, np.ndarray] | None = None
+            for f in features:
+                if f.category != category or f.id in matched:
+                    continue
+                view_bim = np.array([f.x + VIEW_DISTANCE * f.norm_x, f.y + VIEW_DISTANCE * f.norm_y])
+                view = hypothesis.transform.apply_inverse(view_bim)
+                if any(math.hypot(*(view - v)) <= VISITED_RADIUS for v in self.visited):
+                    continue
+                if not self._discriminates(hypothesis, f):
+                    continue
+                node = planner.node_at(*view_bim)
+                if node >= 0 and math.isfinite(dist[node]) and (best is None or dist[node] < best[0]):
+                    best = (float(dist[node]), node, view)
+            if best is not None:
+                self.visited.append(best[2])
+                route = planner.path(pred, start, best[1])
+                return [hypothesis.transform.apply_inverse(p) for p in route], best[0]
+        return None
+
+    def _discriminates(self, hypothesis: Hypothesis, feature: Feature) -> bool:
+        """Would seeing ``feature`` where ``hypothesis`` puts it rule out some other hypothesis?
+
+        Not when every other hypothesis also has a feature of that category there (a symmetric
+        layout): the robot would see something either way and learn nothing.
+        """
+        others = [h for h in self.plan_all if h is not hypothesis]
+        if not others:
+            return True
+        where = hypothesis.transform.apply_inverse(np.array([feature.x, feature.y]))  # odom frame
+        for other in others:
+            p = other.transform.apply(where)
+            same = [
+                g
+                for g in self.site.storeys[other.storey].features
+                if g.category == feature.category
+                and math.hypot(g.x - p[0], g.y - p[1]) < DISCRIMINATION_RADIUS
+            ]
+            if not same:
+                return True
+        return False
+
+    def next_target(self, frame: SensorFrame) -> Target | None:
+        """Start toward the next hypothesis' target; None when none is left.
+
+        Targets of the remaining hypotheses are planned together and the nearest (along the BIM's
+        corridors) is validated first: a wrong hypothesis whose target is close is cheap to refute,
+        and the true one is confirmed as soon as its target feature is seen.
+        """
+        options = []
+        for hypothesis in self.plan:
+            planned = self._target(hypothesis, frame.odom)
+            if planned is not None:
+                options.append((planned[1], hypothesis.rank, hypothesis, planned[0]))
+        del self.visited[len(self.visited) - len(options) :]  # _target marked them; only the chosen one is
+        if not options:
+            self.plan = []
+            return None
+        length, _, hypothesis, route = min(options, key=lambda o: (o[0], o[1]))
+        self.plan = [h for h in self.plan if h is not hypothesis]
+        self.visited.append(route[-1])
+        self.navigator = RouteNavigator(route, BugParams(follow=self.follow))
+        # t_thre to find something, plus the time to get there (capped: under a wrong hypothesis the
+        # route may run into walls).
+        self.target_budget = self.t_thre + min(TRAVEL_SLACK * length / self.max_linear, TRAVEL_CAP_S)
+        self.target_started = frame.t
+        self.target_reached_t = None
+        self.progress = (frame.t, math.inf)
+        return Target(route[-1], hypothesis, length)
+
+    def drive(self, frame: SensorFrame, scan: ScanView | None) -> tuple[float, float]:
+        """The command toward the target; ``scan`` None: stand still (held up, or no scan)."""
+        assert self.navigator is not None
+        if scan is None:
+            v, w, arrived = 0.0, 0.0, False
+        else:
+            v, w, arrived = self.navigator.step(frame.odom, scan)
+        if arrived and self.target_reached_t is None:
+            self.target_reached_t = frame.t
+        return v, w
+
+    def give_up(self, frame: SensorFrame, last_feature_t: float) -> str | None:
+        """Why the current target is given up (counted as fruitless), or None to keep going."""
+        since = max(last_feature_t, self.target_started)
+        reached_and_looked = self.target_reached_t is not None and frame.t - self.target_reached_t > LOOK_S
+        stalled = self.target_reached_t is None and self._stalled(frame)
+        if not (reached_and_looked or stalled or frame.t - since > self.target_budget):
+            return None
+        self.fruitless += 1
+        if reached_and_looked:
+            return "target reached, nothing new"
+        if stalled:
+            return "no progress toward the target"
+        return "time budget passed"
+
+    def _stalled(self, frame: SensorFrame) -> bool:
+        """No progress toward the route's current waypoint for STALL_S seconds."""
+        assert self.navigator is not None
+        if not self.navigator.waypoints:
+            return False
+        remaining = math.hypot(*(self.navigator.waypoints[0] - frame.odom.xy)) + WAYPOINT_COST * len(
+            self.navigator.waypoints
+        )
+        since, best = self.progress
+        if remaining < best - PROGRESS_STEP:
+            self.progress = (frame.t, remaining)
+            return False
+        return frame.t - since > STALL_S

@@ -1,0 +1,195 @@
+"""Fine tuning (Eq. 18): a particle filter seeded at the rectified pose tracks the robot while it
+follows the wall, until its covariance falls below the thresholds or its distance runs out.
+
+When the filter settles, the scan decides what to keep: the rectified pose carried along by
+odometry if the filter drifted away from it and the carried pose fits the scan clearly better;
+a second, wider try if the filter's pose fits the map badly; the filter's pose otherwise.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from bimtools.site.records import Feature, OccupancyGrid
+from initcli.config import FineTuningSection
+from initcli.core.detection_filter import ConfirmedFeature
+from initcli.core.geometry import Pose2D, wrap_angle
+from initcli.core.motion import motion_delta
+from initcli.core.particle_filter import FilterNoise, LaserModel, LikelihoodField, ParticleFilter, scan_fit
+from initcli.core.wall_following import ScanView, WallFollowParams, wall_follow
+from initcli.drivers.base import RobotDriver, SensorFrame
+
+PF_UPDATE_D = 0.25  # m (AMCL update_min_d)
+PF_UPDATE_A = 0.2  # rad (AMCL update_min_a)
+LOST_LIKELIHOOD = 0.12  # per-beam likelihood (geometric mean, best particle) below which an update is lost
+LOST_UPDATES = 5  # lost updates in a row: the filter is lost
+MIN_TRAVEL_M = 1.0  # m followed before the covariance may count as converged
+LANDMARKS = 4  # matched features that weight the particle filter's seed
+LANDMARK_SIGMA = 0.3  # m: how far a matched feature may land from its BIM feature
+MIN_SCAN_FIT = 0.6  # fraction of beams on mapped walls at the final pose (0.76-0.99 when right)
+DRIFTED_M, DRIFTED_DEG = (
+    1.0,
+    20.0,
+)  # m, degrees: the filter moved this far from the carried rectified pose ...
+KEEP_RECTIFIED_MARGIN = (
+    0.1  # scan fit (fraction of beams) by which the carried rectified pose must beat the filter
+)
+RESEED_SIGMA_XY = 2.0  # m: the spread of a second try when the first settled on the wrong side
+
+Settlement = Literal["keep rectified", "reseed", "lost", "accept"]
+
+
+def settle(estimate: Pose2D, fit: float, carried: Pose2D, carried_fit: float, reseeded: bool) -> Settlement:
+    """What to do once the filter settled at ``estimate`` (``fit``: its fraction of the scan on the
+    map), given the rectified pose ``carried`` along by odometry (``carried_fit``)."""
+    apart = estimate.distance_to(carried) > DRIFTED_M or abs(
+        float(wrap_angle(estimate.yaw - carried.yaw))
+    ) > math.radians(DRIFTED_DEG)
+    if apart and carried_fit >= max(fit + KEEP_RECTIFIED_MARGIN, MIN_SCAN_FIT):
+        # A filter that drifted off a good coarse result fits the scan worse than the carried pose.
+        return "keep rectified"
+    if fit < MIN_SCAN_FIT:
+        # The cloud settled where only the beams it kept agree (the far side of a wall, say).
+        return "lost" if reseeded else "reseed"
+    return "accept"
+
+
+@dataclass(frozen=True)
+class FineTuned:
+    """Fine tuning's pose and covariance at its last frame."""
+
+    frame: SensorFrame
+    pose: Pose2D
+    covariance: np.ndarray
+    converged: bool  # the covariance fell below the thresholds (not the distance limit, not kept rectified)
+
+
+@dataclass(frozen=True)
+class FineLost:
+    """Fine tuning lost the robot: the scans do not fit the map."""
+
+    frame: SensorFrame
+    reason: str
+
+
+@dataclass
+class FineTuningHooks:
+    """What fine tuning reports back to the session on every control period."""
+
+    record_frame: Callable[[SensorFrame, int], None]  # log the period (frame, step)
+    note: Callable[[float, str], None]  # log why the state stays ``fine`` (t, why)
+    emit: Callable[[SensorFrame, dict], None]  # the live view's status
+
+
+def matched_pairs(
+    features: list[ConfirmedFeature], matched_ids: list[str | None], bim_features: list[Feature]
+) -> tuple[np.ndarray, np.ndarray]:
+    """(odom positions, BIM positions) of the confirmed ``features`` the coarse match matched
+    (``matched_ids``: the BIM feature of each, None for an outlier)."""
+    by_id = {f.id: f for f in bim_features}
+    pairs = [
+        (f.xy, (by_id[m].x, by_id[m].y)) for f, m in zip(features, matched_ids, strict=False) if m in by_id
+    ]
+    if not pairs:
+        return np.zeros((0, 2)), np.zeros((0, 2))
+    return np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs], dtype=float)
+
+
+class FineTuning:
+    """Eq. 18 on one storey's occupancy grid, wall following on ``side`` meanwhile."""
+
+    def __init__(
+        self,
+        params: FineTuningSection,
+        grid: OccupancyGrid,
+        rng: np.random.Generator,
+        side: int,
+        follow: WallFollowParams,
+    ) -> None:
+        self.params = params
+        self.grid = grid
+        self.rng = rng
+        self.side = side
+        self.follow = follow
+
+    def run(
+        self,
+        driver: RobotDriver,
+        frame: SensorFrame,
+        seed: Pose2D,
+        transform: Pose2D,
+        landmarks: tuple[np.ndarray, np.ndarray],
+        hooks: FineTuningHooks,
+    ) -> FineTuned | FineLost:
+        """Track from ``frame`` with the filter seeded at ``seed`` and weighted by the matched
+        ``landmarks`` (odom, BIM positions); ``transform`` (odom -> BIM) carries the rectified pose."""
+        cfg = self.params
+        pf = ParticleFilter(LikelihoodField(self.grid), cfg.particles, FilterNoise(), LaserModel(), self.rng)
+        pf.seed(seed, cfg.seed_sigma_xy, math.radians(cfg.seed_sigma_yaw))
+        odom_xy, bim_xy = landmarks
+        pf.weight_by_landmarks(frame.odom, odom_xy[-LANDMARKS:], bim_xy[-LANDMARKS:], LANDMARK_SIGMA)
+        start_distance = driver.distance
+        reseeded = False
+        last_update = frame.odom
+        lost = 0
+        step = 0
+        converged_at: float | None = None
+        while True:
+            view = (
+                ScanView.of(frame.scan.angles, frame.scan.ranges, frame.scan.range_max)
+                if frame.scan
+                else None
+            )
+            v, w = wall_follow(view, self.side, self.follow) if view is not None else (0.0, 0.0)
+            frame = driver.step(v, w)
+            step += 1
+            hooks.record_frame(frame, step)
+            scan = frame.scan
+            if scan is None:
+                continue  # nothing to update the filter with; its motion update waits for a scan
+            moved = motion_delta(last_update, frame.odom)
+            if abs(moved[1]) < PF_UPDATE_D and abs(moved[0] + moved[2]) < PF_UPDATE_A:
+                continue
+            pf.predict(moved)
+            last_update = frame.odom
+            pf.update(scan.angles, scan.ranges, scan.range_max)
+            lost = lost + 1 if pf.last_likelihood < LOST_LIKELIHOOD else 0
+            estimate = pf.estimate()
+            cov = estimate.covariance
+            hooks.emit(frame, {"covariance": float(max(cov[0, 0], cov[1, 1]))})
+            if lost >= LOST_UPDATES:
+                return FineLost(frame, "lost during fine tuning (laser scans do not fit the map)")
+            travelled = driver.distance - start_distance
+            if (
+                cov[0, 0] < cfg.covariance
+                and cov[1, 1] < cfg.covariance
+                and cov[2, 2] < cfg.yaw_covariance
+                and travelled >= MIN_TRAVEL_M
+            ):
+                converged_at = frame.t
+            if converged_at is None and travelled < cfg.distance:
+                continue
+            fit = scan_fit(estimate.pose, scan.angles, scan.ranges, scan.range_max, pf.field)
+            carried = transform * frame.odom
+            carried_fit = scan_fit(carried, scan.angles, scan.ranges, scan.range_max, pf.field)
+            verdict = settle(estimate.pose, fit, carried, carried_fit, reseeded)
+            if verdict == "keep rectified":
+                hooks.note(
+                    frame.t, f"filter drifted (scan fit {fit:.0%}); rectified pose kept ({carried_fit:.0%})"
+                )
+                return FineTuned(frame, carried, cov, converged=False)
+            if verdict == "lost":
+                return FineLost(frame, f"lost during fine tuning (only {fit:.0%} of the scan fits the map)")
+            if verdict == "reseed":
+                # Spread the cloud wider around the estimate and track again.
+                reseeded = True
+                hooks.note(frame.t, f"scan fit {fit:.0%}, reseeded")
+                pf.seed(estimate.pose, RESEED_SIGMA_XY, math.radians(cfg.seed_sigma_yaw))
+                start_distance, converged_at = driver.distance, None
+                continue
+            return FineTuned(frame, estimate.pose, cov, converged=converged_at is not None)

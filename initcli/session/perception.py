@@ -1,0 +1,156 @@
+"""What the session sees and writes down: its detection log, the sightings of each image
+(Eq. 1-2), the confirmed features (Eq. 3), and the match step (Algorithm 1) on the log so far.
+
+Every record the session acts on goes to its detection log as it happens (through
+:class:`initcli.io.detection_log.LogWriter`), and the match step runs the same pipeline as
+``bim-init match`` on that log, so the log replays to the same verdict and pose.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+from bimtools.site.load import Site
+from initcli.config import SessionConfig
+from initcli.core.classes import ClassMap
+from initcli.core.detection_filter import ConfirmedFeature, Sighting, filter_detections
+from initcli.drivers.base import SensorFrame
+from initcli.io.detection_log import (
+    DetectionLog,
+    Detections,
+    HypothesesRecord,
+    LogWriter,
+    Meta,
+    Odom,
+    Record,
+    Scan,
+    Truth,
+)
+from initcli.match.pipeline import MatchOptions, MatchReport, match_log
+from initcli.match.sightings import image_sightings
+
+SCAN_LOG_EVERY = 5  # control steps between logged scans (2 Hz at 10 Hz control)
+HYPOTHESES_LOGGED = 5  # hypotheses (most probable first) written with each match step
+
+
+def match_options(config: SessionConfig, storey: str | None) -> MatchOptions:
+    """The ``bim-init match`` options that replay the session's decisions (``storey`` None: all)."""
+    m = config.matching
+    return MatchOptions(
+        storey=storey,
+        alpha=m.alpha,
+        beta_deg=m.beta,
+        max_outliers=m.max_outliers,
+        pose_method=m.pose_method,
+        d_thre=config.exploration.d_thre,
+        merge_radius=m.merge_radius,
+        min_sightings=m.min_sightings,
+        score_threshold=config.detector.score_threshold,
+        top=max(m.m_thre, 5),
+    )
+
+
+class Perception:
+    """The session's detection log (kept in memory for matching, streamed to ``log_path``), and the
+    sightings and confirmed features of the images recorded while ``detecting``."""
+
+    def __init__(
+        self, meta: Meta, log_path: Path | None, cmap: ClassMap, options: MatchOptions, drift_window: float
+    ) -> None:
+        self.meta = meta
+        self.cmap = cmap
+        self.options = options
+        self.drift_window = drift_window  # m of recent path matched when the whole path fits nothing
+        self.log = DetectionLog(path=log_path or Path("session.jsonl"), meta=meta, records=[], lines=[])
+        self._writer = LogWriter(log_path) if log_path else None
+        self.write(meta, keep=False)
+        self.sightings: list[Sighting] = []
+        self.frames = 0  # images recorded so far
+        self.confirmed: list[ConfirmedFeature] = []
+        self.detecting = True  # False once the coarse match is made: the log's detections end there
+
+    def write(self, record: Record, keep: bool = True) -> None:
+        """Write ``record`` to the log file; ``keep`` it in the in-memory log that matching reads."""
+        if keep:
+            self.log.records.append(record)
+            self.log.lines.append(len(self.log.records) + 1)
+        if self._writer is not None:
+            self._writer.write(record)
+
+    def close(self) -> None:
+        if self._writer is not None:
+            self._writer.close()
+            self._writer = None
+
+    def record_frame(self, frame: SensorFrame, step: int) -> None:
+        """Log one control period: odometry, truth, every SCAN_LOG_EVERY-th scan, the image's detections."""
+        t = round(frame.t, 3)
+        self.write(Odom(t, frame.odom.x, frame.odom.y, frame.odom.yaw))
+        if frame.truth is not None:
+            self.write(Truth(t, frame.truth.x, frame.truth.y, frame.truth.yaw))
+        if frame.scan is not None and step % SCAN_LOG_EVERY == 0:
+            s = frame.scan
+            self.write(
+                Scan(
+                    t,
+                    s.angle_min,
+                    s.angle_increment,
+                    s.range_max,
+                    tuple(round(float(r), 3) for r in s.ranges),
+                ),
+                keep=False,
+            )
+        if frame.detections is not None and self.detecting:
+            record = Detections(t, frame.odom, tuple(frame.detections))
+            self.write(record)
+            self.sightings.extend(
+                image_sightings(
+                    record,
+                    self.frames,
+                    self.cmap,
+                    self.meta.camera,
+                    self.meta.camera_pose,
+                    self.options.edge_margin,
+                )
+            )
+            self.frames += 1
+
+    def new_features(self) -> bool:
+        """Run the detection filter (Eq. 3) on every sighting so far; True if it confirmed more features."""
+        confirmed = filter_detections(self.sightings, self.options.filter_params()).features
+        grew = len(confirmed) > len(self.confirmed)
+        self.confirmed = confirmed
+        return grew
+
+    def match(self, t: float, site: Site) -> MatchReport:
+        """Algorithm 1 on the log so far, logged as a ``hypotheses`` record."""
+        report = match_log(self.log, site, self.options)
+        window = self.drift_window
+        if report.n_hypotheses == 0 and window > 0 and len(report.features) > self.options.min_inliers:
+            # Odometry drift: the oldest features no longer fit; match the recent ones
+            # (``bim-init match --drift-window`` replays this).
+            recent = match_log(self.log, site, dataclasses.replace(self.options, drift_window_m=window))
+            if recent.n_hypotheses > 0:
+                report = recent
+        self.write(
+            HypothesesRecord(
+                round(t, 3),
+                {
+                    "verdict": report.verdict,
+                    "count": report.n_hypotheses,
+                    "features": len(report.features),
+                    "storey": report.storey,
+                    "hypotheses": [
+                        {
+                            "matches": h.matches,
+                            "cost": round(h.cost, 4),
+                            "storey": h.storey,
+                            "pose": [round(v, 4) for v in h.pose.as_tuple()],
+                        }
+                        for h in report.hypotheses[:HYPOTHESES_LOGGED]
+                    ],
+                },
+            )
+        )
+        return report

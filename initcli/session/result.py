@@ -1,0 +1,65 @@
+"""What one session found: the poses at each stage, how far it went, and its errors against truth."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from initcli.core.detection_filter import ConfirmedFeature
+from initcli.core.geometry import Pose2D, wrap_angle
+
+
+@dataclass
+class MatchStep:
+    """One matching step, for the report: time, features so far, hypotheses' current poses."""
+
+    t: float  # s
+    features: int
+    verdict: str
+    poses: list[tuple[float, float, float]]  # (x m, y m, yaw rad) in the BIM frame
+
+
+@dataclass
+class SessionResult:
+    success: bool
+    reason: str
+    storey: str | None
+    pose: Pose2D | None = None
+    covariance: np.ndarray | None = None
+    coarse_pose: Pose2D | None = None
+    rectified_pose: Pose2D | None = None
+    features_detected: int = 0
+    distance_coarse_m: float | None = None
+    distance_total_m: float = 0.0
+    duration_s: float = 0.0
+    truth_pose: Pose2D | None = None
+    truth_at_coarse: Pose2D | None = None
+    matched_ids: list[str | None] = field(default_factory=list)
+    transform: Pose2D | None = None  # odom -> BIM of the final estimate
+    true_path: list[tuple[float, float, float]] = field(default_factory=list)
+    odom_path: list[tuple[float, float, float]] = field(default_factory=list)
+    features: list[ConfirmedFeature] = field(default_factory=list)
+    match_steps: list[MatchStep] = field(default_factory=list)
+    states: list[tuple[float, str]] = field(default_factory=list)
+    active_explorations: int = 0
+    loop_escapes: int = 0
+    fine_converged: bool | None = None
+    recoveries: int = 0
+    wall_seconds: float = 0.0
+    wall_seconds_coarse: float | None = None  # wall-clock seconds until the unique match
+
+    def errors(self) -> tuple[dict[str, float | None], dict[str, float | None]]:
+        """Translational (m) and rotational (deg) errors of the coarse, rectified and fine poses."""
+        trans: dict[str, float | None] = {"coarse": None, "rectified": None, "fine": None}
+        rot: dict[str, float | None] = {"coarse": None, "rectified": None, "fine": None}
+        for key, pose, truth in (
+            ("coarse", self.coarse_pose, self.truth_at_coarse),
+            ("rectified", self.rectified_pose, self.truth_at_coarse),
+            ("fine", self.pose if self.covariance is not None else None, self.truth_pose),
+        ):
+            if pose is not None and truth is not None:
+                trans[key] = round(math.hypot(pose.x - truth.x, pose.y - truth.y), 4)
+                rot[key] = round(math.degrees(abs(float(wrap_angle(pose.yaw - truth.yaw)))), 3)
+        return trans, rot
