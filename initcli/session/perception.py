@@ -11,10 +11,13 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
+import numpy as np
+
 from bimtools.site.load import Site
 from initcli.config import SessionConfig
 from initcli.core.classes import ClassMap
 from initcli.core.detection_filter import ConfirmedFeature, Sighting, filter_detections
+from initcli.core.geometry import Pose2D
 from initcli.drivers.base import SensorFrame
 from initcli.io.detection_log import (
     DetectionLog,
@@ -29,6 +32,7 @@ from initcli.io.detection_log import (
 )
 from initcli.match.pipeline import MatchOptions, MatchReport, match_log
 from initcli.match.sightings import image_sightings
+from initcli.match.verify import PathEvidence
 
 SCAN_LOG_EVERY = 5  # control steps between logged scans (2 Hz at 10 Hz control)
 HYPOTHESES_LOGGED = 5  # hypotheses (most probable first) written with each match step
@@ -69,6 +73,9 @@ class Perception:
         self.frames = 0  # images recorded so far
         self.confirmed: list[ConfirmedFeature] = []
         self.detecting = True  # False once the coarse match is made: the log's detections end there
+        self.path = PathEvidence()  # images and scans along the odometry path, for verification
+        self.travel = 0.0  # m of odometry travel so far
+        self._last_odom: Pose2D | None = None
 
     def write(self, record: Record, keep: bool = True) -> None:
         """Write ``record`` to the log file; ``keep`` it in the in-memory log that matching reads."""
@@ -86,24 +93,22 @@ class Perception:
     def record_frame(self, frame: SensorFrame, step: int) -> None:
         """Log one control period: odometry, truth, every SCAN_LOG_EVERY-th scan, the image's detections."""
         t = round(frame.t, 3)
+        if self._last_odom is not None:
+            self.travel += self._last_odom.distance_to(frame.odom)
+        self._last_odom = frame.odom
         self.write(Odom(t, frame.odom.x, frame.odom.y, frame.odom.yaw))
         if frame.truth is not None:
             self.write(Truth(t, frame.truth.x, frame.truth.y, frame.truth.yaw))
         if frame.scan is not None and step % SCAN_LOG_EVERY == 0:
             s = frame.scan
-            self.write(
-                Scan(
-                    t,
-                    s.angle_min,
-                    s.angle_increment,
-                    s.range_max,
-                    tuple(round(float(r), 3) for r in s.ranges),
-                ),
-                keep=False,
-            )
+            ranges = tuple(round(float(r), 3) for r in s.ranges)
+            self.write(Scan(t, s.angle_min, s.angle_increment, s.range_max, ranges), keep=False)
+            angles = s.angle_min + s.angle_increment * np.arange(len(ranges))
+            self.path.add_scan(frame.odom, self.travel, angles, np.array(ranges, dtype=float), s.range_max)
         if frame.detections is not None and self.detecting:
             record = Detections(t, frame.odom, tuple(frame.detections))
             self.write(record)
+            self.path.add_image(frame.odom, self.travel)
             self.sightings.extend(
                 image_sightings(
                     record,

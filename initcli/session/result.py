@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -49,6 +50,8 @@ class SessionResult:
     recoveries: int = 0
     wall_seconds: float = 0.0
     wall_seconds_coarse: float | None = None  # wall-clock seconds until the unique match
+    verifications: list[dict[str, Any]] = field(default_factory=list)  # every check, in order
+    rejected: int = 0  # unique matches that failed verification
 
     def errors(self) -> tuple[dict[str, float | None], dict[str, float | None]]:
         """Translational (m) and rotational (deg) errors of the coarse, rectified and fine poses."""

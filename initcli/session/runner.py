@@ -29,11 +29,13 @@ from initcli.config import SessionConfig, followed_side, turn_in_place_speed, wa
 from initcli.core.bug_navigation import BugNavigator, BugParams
 from initcli.core.classes import ClassMap
 from initcli.core.confinement import ConfinementWatch
-from initcli.core.geometry import wrap_angle
+from initcli.core.geometry import Pose2D, wrap_angle
+from initcli.core.verification import CameraView, Verification, VerificationParams
 from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
 from initcli.io.detection_log import Meta, State
-from initcli.match.pipeline import MatchReport
+from initcli.match.pipeline import Hypothesis, MatchReport
+from initcli.match.verify import StoreyEvidence, verify_transform
 from initcli.session.exploration import ActiveExploration
 from initcli.session.fine_tuning import FineLost, FineTuning, FineTuningHooks, matched_pairs
 from initcli.session.perception import Perception, match_options
@@ -52,6 +54,8 @@ BLIND_REACH = 2.0  # m straight ahead when there is no scan to pick a free beam 
 SHUTTLE_WINDOW_S = 150.0  # s of path checked for shuttling
 SHUTTLE_LENGTH = 45.0  # m driven in that window ...
 SHUTTLE_RADIUS = 8.0  # m ... without leaving a circle this size: follow the other wall
+AGREE_M = 2.0  # m: a fine pose farther than this from the odometry-carried coarse pose disagrees ...
+AGREE_DEG = 30.0  # ... or turned more than this
 
 Observer = Callable[[dict], None]
 
@@ -101,6 +105,9 @@ class Session:
         self.last_feature_t = 0.0  # s: when the last new feature was confirmed
         self.turned = 0.0  # rad turned since the look or recovery rotation began
         self.hypotheses = 0  # of the last match step
+        self.checks = VerificationParams()
+        self.view = CameraView(driver.camera, driver.mount, self.options.min_depth)
+        self._evidence: dict[str, StoreyEvidence] = {}
         self._started = time.perf_counter()
 
     # -- records -------------------------------------------------------------------------------------
@@ -257,14 +264,62 @@ class Session:
         report = self._match(frame.t)
         self.hypotheses = report.n_hypotheses
         if report.n_hypotheses == 1:
-            self._coarse_done(frame, report)
-            return True
+            if self._verified(frame, report.hypotheses[0]):
+                self._coarse_done(frame, report)
+                return True
+            if self.state != "explore":
+                self._set_state(frame.t, "explore", why="the unique match failed verification")
+            return False
         if 1 < report.n_hypotheses < self.config.matching.m_thre:
             self.exploration.validate(report.hypotheses)
             if not self._next_target(frame) and self.state != "explore":
                 self._set_state(frame.t, "explore", why="no target left to validate")
         elif self.state != "explore":
             self._set_state(frame.t, "explore", why=report.verdict)
+        return False
+
+    def _evidence_of(self, storey: str) -> StoreyEvidence:
+        if storey not in self._evidence:
+            self._evidence[storey] = StoreyEvidence.of(self.site.storeys[storey], self.perception.cmap)
+        return self._evidence[storey]
+
+    def _verify(self, storey: str, transform: Pose2D) -> Verification:
+        return verify_transform(
+            transform,
+            self._evidence_of(storey),
+            self.perception.path,
+            self.perception.sightings,
+            self.view,
+            self.checks,
+        )
+
+    def _record_check(
+        self, frame: SensorFrame, stage: str, storey: str, pose: Pose2D, check: Verification, **extra: object
+    ) -> None:
+        """Keep a verification for summary.json and write it to the log."""
+        doc = {
+            "t": round(frame.t, 3),
+            "stage": stage,
+            "storey": storey,
+            "pose": [round(v, 4) for v in pose.as_tuple()],
+        }
+        doc.update(check.as_dict(), **extra)
+        self.result.verifications.append(doc)
+        self._note(
+            frame.t, f"verification ({stage}): " + ("passed" if check.passed else "; ".join(check.reasons))
+        )
+
+    def _verified(self, frame: SensorFrame, hypothesis: Hypothesis) -> bool:
+        """Check a unique match against negative evidence and the lidar before claiming it (beyond
+        the paper): a failed one is logged and exploration goes on."""
+        if not self.checks.enabled:
+            return True
+        pose = hypothesis.rectified_pose or hypothesis.pose
+        check = self._verify(hypothesis.storey, pose * frame.odom.inverse())
+        self._record_check(frame, "coarse", hypothesis.storey, pose, check)
+        if check.passed:
+            return True
+        self.result.rejected += 1
         return False
 
     def _match(self, t: float) -> MatchReport:
@@ -384,6 +439,22 @@ class Session:
             pose, cov = outcome.pose, outcome.covariance
         else:
             pose = transform * frame.odom
+        if self.checks.enabled:
+            check = self._verify(best.storey, pose * frame.odom.inverse())
+            carried = transform * frame.odom
+            apart = pose.distance_to(carried) > AGREE_M or pose.yaw_error(carried) > math.radians(AGREE_DEG)
+            self._record_check(frame, "fine", best.storey, pose, check, agrees_with_coarse=not apart)
+            if not check.passed or apart:
+                why = (
+                    "; ".join(check.reasons)
+                    if not check.passed
+                    else (
+                        f"fine tuning ended {pose.distance_to(carried):.1f} m / "
+                        f"{math.degrees(pose.yaw_error(carried)):.0f} deg from the coarse pose"
+                    )
+                )
+                self._fail(frame, f"the pose failed verification: {why}")
+                return
         r.success = True
         if cov is None:
             r.reason = "initialised (no fine tuning)"
