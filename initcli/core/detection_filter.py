@@ -33,14 +33,14 @@ import numpy as np
 
 @dataclass(frozen=True)
 class FilterParams:
-    """Documented defaults of the detection filter."""
+    """Settings of the detection filter (their one default: ``initcli.match.pipeline.MatchOptions``)."""
 
-    merge_radius: float = 1.0  # m: same-class sightings closer than this are the same feature
-    min_sightings: int = 3  # k: sightings needed to confirm a feature
-    score_threshold: float = 0.5  # detector score below this is ignored
-    min_depth: float = 0.1  # m: depth window readings outside [min, max] are ignored
-    max_depth: float = 10.0  # m
-    edge_margin: float = 2.0  # px: boxes this close to the left/right border are truncated; < 0 keeps them
+    merge_radius: float  # m: same-class sightings closer than this are the same feature
+    min_sightings: int  # k: sightings needed to confirm a feature
+    score_threshold: float  # detector score below this is ignored
+    min_depth: float  # m: depth window readings outside [min, max] are ignored
+    max_depth: float  # m
+    edge_margin: float  # px: boxes this close to the left/right border are truncated; < 0 keeps them
     # A track with a track of another class within merge_radius that has this many times its
     # sightings is a misclassification of that object (rule 6), not a feature of its own.
     class_dominance: float = 4.0
@@ -126,11 +126,11 @@ def is_truncated(bbox: Sequence[float], image_width: float, margin: float) -> bo
 
 def filter_detections(
     sightings: Iterable[Sighting],
-    params: FilterParams | None = None,
+    params: FilterParams,
     given: Sequence[GivenFeature] = (),
 ) -> FilterResult:
     """Aggregate sightings (and given features) into S_object, ordered by confirmation time."""
-    p = params or FilterParams()
+    p = params
     k = max(1, int(p.min_sightings))
     events: list[tuple[float, int, object]] = []
     for order, s in enumerate(sightings):

@@ -25,7 +25,13 @@ from pathlib import Path
 import numpy as np
 
 from bimtools.site.load import Site
-from initcli.config import SessionConfig, followed_side, turn_in_place_speed, wall_follow_params
+from initcli.config import (
+    SessionConfig,
+    followed_side,
+    match_options,
+    turn_in_place_speed,
+    wall_follow_params,
+)
 from initcli.core.bug_navigation import BugNavigator, BugParams, RouteNavigator
 from initcli.core.classes import ClassMap
 from initcli.core.detection_filter import ConfirmedFeature, Sighting, filter_detections, is_truncated
@@ -52,7 +58,7 @@ from initcli.io.detection_log import (
     State,
     Truth,
 )
-from initcli.match.pipeline import Hypothesis, MatchOptions, MatchReport, match_log
+from initcli.match.pipeline import Hypothesis, MatchReport, match_log
 from initcli.sim.robot import motion_delta
 
 SCAN_LOG_EVERY = 5  # control steps between logged scans (2 Hz at 10 Hz control)
@@ -159,19 +165,7 @@ class Session:
         self.rng = rng
         self.observer = observer
         self.cmap = ClassMap(config.detector.classes)
-        m = config.matching
-        self.options = MatchOptions(
-            storey=storey,
-            alpha=m.alpha,
-            beta_deg=m.beta,
-            max_outliers=m.max_outliers,
-            pose_method=m.pose_method,
-            d_thre=config.exploration.d_thre,
-            merge_radius=m.merge_radius,
-            min_sightings=m.min_sightings,
-            score_threshold=config.detector.score_threshold,
-            top=max(m.m_thre, 5),
-        )
+        self.options = match_options(config, storey)
         self.meta = Meta(
             camera=driver.camera,
             camera_pose=driver.mount,
@@ -288,12 +282,14 @@ class Session:
         return grew
 
     def _match(self, t: float) -> MatchReport:
-        report = match_log(self.log, self.site, self.options)
+        report = match_log(self.log, self.site, self.options, self.cmap)
         window = self.config.matching.drift_window
         if report.n_hypotheses == 0 and window > 0 and len(report.features) > self.options.min_inliers:
             # Odometry drift: the oldest features no longer fit; match the recent ones
             # (``bim-init match --drift-window`` replays this).
-            recent = match_log(self.log, self.site, dataclasses.replace(self.options, drift_window_m=window))
+            recent = match_log(
+                self.log, self.site, dataclasses.replace(self.options, drift_window=window), self.cmap
+            )
             if recent.n_hypotheses > 0:
                 report = recent
         self.result.match_steps.append(
