@@ -13,9 +13,14 @@ WORK=$(mktemp -d "${TMPDIR:-/tmp}/bim-init-wheel.XXXXXX")
 trap 'rm -rf "$WORK"' EXIT
 fail() { echo "wheel_smoke: FAILED: $*" >&2; exit 1; }
 
+# Build from a copy of the files git knows (tracked, or untracked and not ignored): nothing is
+# written into the source tree, and nothing ignored there (a venv, build output) gets in.
 echo "wheel_smoke: building the wheel in $WORK/dist"
-"$PYTHON" -m pip wheel --quiet --no-deps --no-build-isolation "$SRC" -w "$WORK/dist" \
-  || "$PYTHON" -m pip wheel --quiet --no-deps "$SRC" -w "$WORK/dist" || fail "pip wheel"
+mkdir -p "$WORK/src"
+git -C "$SRC" ls-files -z --cached --others --exclude-standard \
+  | (cd "$SRC" && xargs -0 cp --parents -P -t "$WORK/src" 2>/dev/null) || fail "copying the source tree"
+"$PYTHON" -m pip wheel --quiet --no-deps --no-build-isolation "$WORK/src" -w "$WORK/dist" \
+  || "$PYTHON" -m pip wheel --quiet --no-deps "$WORK/src" -w "$WORK/dist" || fail "pip wheel"
 WHEEL=$(ls "$WORK"/dist/bim_init-*.whl) || fail "no wheel built"
 # Whatever the command line needs at run time must be inside the wheel.
 "$PYTHON" - "$WHEEL" <<'PY' || fail "files missing from the wheel"

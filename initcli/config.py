@@ -205,7 +205,7 @@ def _message(error: jsonschema.ValidationError) -> tuple[str, str]:
     v = error.validator
     if v == "type":
         types = error.validator_value if isinstance(error.validator_value, list) else [error.validator_value]
-        want = " or ".join(_TYPE_WORDS.get(t, t) for t in types)
+        want = " or ".join(_TYPE_WORDS.get(str(t), str(t)) for t in types)
         return path, f"expected {want}, got {_describe(error.instance)}"
     if v == "enum":
         return (

@@ -205,9 +205,7 @@ def test_repetitive_lattice_equals_algorithm1(seed: int) -> None:
     params = MatchParams(alpha=alpha, beta=beta, max_outliers=0, min_inliers=2, revisits=False)
     assert indexed_matches(b_xy, b_cls, s_xy, s_cls, params) == oracle
     k1 = algorithm1_with_outliers(b_xy.tolist(), b_cls, s_xy.tolist(), s_cls, alpha, beta, 1, 3)
-    assert (
-        indexed_matches(b_xy, b_cls, s_xy, s_cls, replace(params, max_outliers=1, min_inliers=3)) == k1
-    )
+    assert indexed_matches(b_xy, b_cls, s_xy, s_cls, replace(params, max_outliers=1, min_inliers=3)) == k1
 
 
 @pytest.mark.parametrize("seed", range(10))
