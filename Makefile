@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install run test lint samples bench eval clean
+.PHONY: install run test lint wheel-check samples bench eval clean
 
 install: $(STAMP)
 
@@ -23,6 +23,12 @@ test: install
 
 lint: install
 	$(BIN)/ruff check bimtools initcli tests benchmarks
+	$(BIN)/ruff format --check bimtools initcli tests benchmarks
+	$(BIN)/mypy
+
+# Build the wheel, install it into a fresh venv outside the source tree and run both commands there.
+wheel-check: install
+	PYTHON=$(BIN)/python .ci/wheel_smoke.sh
 
 samples: install
 	$(BIN)/python -m bimtools.samples --out sample_models

@@ -39,9 +39,9 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from bimtools.site.load import Site, load_site  # noqa: E402
 from initcli.core.geometry import Pose2D  # noqa: E402
-from initcli.core.matching import BimIndex, Matcher, MatchParams  # noqa: E402
+from initcli.core.matching import BimIndex, Matcher  # noqa: E402
 from initcli.io.detection_log import read_log, write_log  # noqa: E402
-from initcli.match.pipeline import MatchOptions, match_log  # noqa: E402
+from initcli.match.pipeline import MatchOptions, match_log, site_class_map  # noqa: E402
 from initcli.sim.synthetic_floor import SyntheticFloor, doors_along, make_floor, write_site_folder  # noqa: E402
 from initcli.sim.synthetic_log import (  # noqa: E402
     SimFeature,
@@ -103,7 +103,7 @@ def section_incremental(quick: bool) -> None:
         index = BimIndex(floor.xy, floor.classes)
         rng = np.random.default_rng(7)
         for max_out in (0, 1):
-            matcher = Matcher(index, MatchParams(max_outliers=max_out))
+            matcher = Matcher(index, MatchOptions(max_outliers=max_out, revisits=False).match_params())
             times: dict[int, list[float]] = {n: [] for n in range(3, 10)}
             parts: dict[int, list[int]] = {n: [] for n in range(3, 10)}
             for _ in range(reps):
@@ -137,7 +137,7 @@ def section_oracle(quick: bool) -> None:
         index = BimIndex(floor.xy, floor.classes)
         rng = np.random.default_rng(11)
         for max_out in (0, 1):
-            params = MatchParams(max_outliers=max_out, min_inliers=3)
+            params = MatchOptions(max_outliers=max_out, min_inliers=3, revisits=False).match_params()
             t_plain = t_fast = 0.0
             same = 0
             cases = 3 if (n_feat >= 1000 and max_out) else 5
@@ -198,7 +198,7 @@ def section_pipeline(quick: bool, tmp: Path) -> None:
         runs = []
         for _ in range(3):
             t0 = time.perf_counter()
-            report = match_log(read_log(log_path), site, MatchOptions())
+            report = match_log(read_log(log_path), site, MatchOptions(), site_class_map(site))
             runs.append(time.perf_counter() - t0)
         n_records = len(log.records)
         print(
@@ -327,7 +327,10 @@ def section_accuracy(quick: bool, tmp: Path, extra: list[Path]) -> None:
         rows: dict[str, list[tuple[float, float, float, float]]] = {"paper": [], "rigid": []}
         logs = sample_logs(site, n, seed=zlib.crc32(name.encode()) % 1000, tmp=tmp)
         for log, truth, _ in logs:
-            reports = {m: match_log(log, site, MatchOptions(pose_method=m)) for m in ("paper", "rigid")}
+            reports = {
+                m: match_log(log, site, MatchOptions(pose_method=m), site_class_map(site))
+                for m in ("paper", "rigid")
+            }
             if any(r.exit_code != 0 for r in reports.values()):
                 continue
             if reports["rigid"].hypotheses[0].pose.distance_to(truth) > 2.0:
@@ -374,7 +377,7 @@ def section_outliers(quick: bool, tmp: Path, extra: list[Path]) -> None:
                 site, n, seed=500 + zlib.crc32(name.encode()) % 1000, tmp=tmp, phantom=phantom
             ):
                 for k in (0, 1):
-                    r = match_log(log, site, MatchOptions(max_outliers=k, top=100_000))
+                    r = match_log(log, site, MatchOptions(max_outliers=k, top=100_000), site_class_map(site))
                     has = any(h.pose.distance_to(truth) < 1.5 for h in r.hypotheses)
                     if r.exit_code == 0:
                         tallies[k]["unique-correct" if has else "unique-WRONG"] += 1

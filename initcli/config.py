@@ -19,8 +19,10 @@ import yaml
 from bimtools.errors import InputError
 from bimtools.schemas import schema_path
 from initcli.core.wall_following import WallFollowParams
+from initcli.match.pipeline import MatchOptions
 
 SCHEMA_PATH = schema_path("site_config.schema.json")
+_MATCH = MatchOptions()  # the one default of every matching setting
 
 
 @dataclass
@@ -75,20 +77,30 @@ class LidarSection:
 class DetectorSection:
     kind: str = "simulated"  # simulated | onnx
     model: str = "default"
-    score_threshold: float = 0.5
+    score_threshold: float = _MATCH.score_threshold
     rate: float = 5.0  # Hz
     classes: dict[str, str] = field(default_factory=dict)  # detector class -> feature category
 
 
 @dataclass
 class MatchingSection:
-    alpha: float = 0.5  # m, Eq. 7
-    beta: float = 15.0  # degrees, Eq. 9
+    """Every matching tunable of ``bim-init match`` (same names, units and defaults: the defaults are
+    :class:`initcli.match.pipeline.MatchOptions`'s), and the session's own ``m_thre`` and
+    ``drift_window``. The detection filter's score threshold is ``detector.score_threshold`` and the
+    wall clearance of Eq. 17 ``exploration.d_thre``."""
+
+    alpha: float = _MATCH.alpha  # m, Eq. 7
+    beta: float = _MATCH.beta  # degrees, Eq. 9
+    max_outliers: int = _MATCH.max_outliers
+    revisits: bool = _MATCH.revisits
+    pose_method: str = _MATCH.pose_method
+    pose_window: int = _MATCH.pose_window  # rigid: the last N matched features; 0: all
+    min_sightings: int = _MATCH.min_sightings
+    merge_radius: float = _MATCH.merge_radius  # m
+    min_depth: float = _MATCH.min_depth  # m
+    max_depth: float = _MATCH.max_depth  # m
+    edge_margin: float = _MATCH.edge_margin  # px
     m_thre: int = 40  # active exploration only with fewer hypotheses than this
-    max_outliers: int = 1
-    pose_method: str = "rigid"
-    min_sightings: int = 3
-    merge_radius: float = 1.0
     drift_window: float = 50.0  # m: with no consistent match, retry with the features of the last M m
 
 
@@ -96,7 +108,7 @@ class MatchingSection:
 class ExplorationSection:
     wall_side: str = "left"
     wall_distance: float = 0.7  # m kept to the followed wall
-    d_thre: float = 0.5  # m, Eq. 17
+    d_thre: float = _MATCH.d_thre  # m, Eq. 17
     t_thre: float = 25.0  # s without a new feature during active exploration -> recovery
     recovery: bool = True
     initial_look: bool = True  # turn once on the spot before exploring
@@ -193,7 +205,7 @@ def _message(error: jsonschema.ValidationError) -> tuple[str, str]:
     v = error.validator
     if v == "type":
         types = error.validator_value if isinstance(error.validator_value, list) else [error.validator_value]
-        want = " or ".join(_TYPE_WORDS.get(t, t) for t in types)
+        want = " or ".join(_TYPE_WORDS.get(str(t), str(t)) for t in types)
         return path, f"expected {want}, got {_describe(error.instance)}"
     if v == "enum":
         return (
@@ -298,6 +310,29 @@ def config_to_dict(config: SessionConfig) -> dict:
     return doc
 
 
+def match_options(config: SessionConfig, storey: str | None) -> MatchOptions:
+    """The session's matching options: the ``matching:`` section, ``detector.score_threshold`` and
+    ``exploration.d_thre``; enough hypotheses are kept to decide on active exploration (``m_thre``)."""
+    m = config.matching
+    return MatchOptions(
+        storey=storey,
+        alpha=m.alpha,
+        beta=m.beta,
+        top=max(m.m_thre, _MATCH.top),
+        max_outliers=m.max_outliers,
+        revisits=m.revisits,
+        pose_method=m.pose_method,
+        pose_window=m.pose_window,
+        d_thre=config.exploration.d_thre,
+        merge_radius=m.merge_radius,
+        min_sightings=m.min_sightings,
+        score_threshold=config.detector.score_threshold,
+        min_depth=m.min_depth,
+        max_depth=m.max_depth,
+        edge_margin=m.edge_margin,
+    )
+
+
 def followed_side(config: SessionConfig) -> int:
     """+1: follow the left wall, -1: the right one (random exploration, §3.3.4)."""
     return 1 if config.exploration.wall_side == "left" else -1
@@ -316,4 +351,3 @@ def wall_follow_params(config: SessionConfig) -> WallFollowParams:
 def turn_in_place_speed(config: SessionConfig) -> float:
     """rad/s of the look round at the start and of the recovery rotation (§3.3.4)."""
     return 0.6 * config.robot.max_angular
-

@@ -13,6 +13,7 @@ Decided, in this order (documented in the README):
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import cv2
@@ -105,9 +106,10 @@ class SideProbe:
 
 
 def probe_side(
-    regions: FreeRegions, spaces: SpaceIndex, x: float, y: float, direction: np.ndarray
+    regions: FreeRegions, spaces: SpaceIndex, point: np.ndarray, direction: np.ndarray
 ) -> SideProbe:
-    label, px, py = regions.probe(x, y, direction)
+    """The free region and the space just off ``point`` (x, y) in ``direction``."""
+    label, px, py = regions.probe(point[0], point[1], direction)
     return SideProbe(label, spaces.name_at(px, py), (px, py))
 
 
@@ -115,8 +117,8 @@ def choose_side(
     plus: SideProbe,
     minus: SideProbe,
     regions: FreeRegions,
-    is_circulation: callable,
-    is_enclosure_space: callable,
+    is_circulation: Callable[[str], bool],
+    is_enclosure_space: Callable[[str], bool],
 ) -> tuple[int, str]:
     """+1 if the +direction side is the circulation side, -1 if the other; and the rule used."""
     circ_plus, circ_minus = is_circulation(plus.space), is_circulation(minus.space)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import ifcopenshell
 import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
@@ -31,19 +32,25 @@ class DoorCandidate:
     ifc_class: str
     name: str
     opening: Opening
-    entity: object  # ifcopenshell entity, for category rules
-    plus: SideProbe | None = None
+    entity: ifcopenshell.entity_instance  # for category rules
+    plus: SideProbe | None = None  # set by decide_sides
     minus: SideProbe | None = None
     side: int = 1
     rule: str = ""
 
+    def _probe(self, side: int) -> SideProbe:
+        probe = self.plus if side > 0 else self.minus
+        if probe is None:
+            raise RuntimeError(f"door {self.guid}: sides not probed yet (decide_sides)")
+        return probe
+
     @property
     def circulation(self) -> SideProbe:
-        return self.plus if self.side > 0 else self.minus  # type: ignore[return-value]
+        return self._probe(self.side)
 
     @property
     def room(self) -> SideProbe:
-        return self.minus if self.side > 0 else self.plus  # type: ignore[return-value]
+        return self._probe(-self.side)
 
 
 @dataclass
@@ -76,16 +83,19 @@ def _enclosure_space(categories: CategorySet, name: str) -> bool:
 
 def decide_sides(ctx: StoreyContext, doors: list[DoorCandidate]) -> None:
     """Probe both sides of every door, count doors per free region, then pick circulation sides."""
+    probes: list[tuple[SideProbe, SideProbe]] = []
     for door in doors:
         o = door.opening
-        door.plus = probe_side(ctx.regions, ctx.spaces, *o.face(+1), o.across)
-        door.minus = probe_side(ctx.regions, ctx.spaces, *o.face(-1), -o.across)
-        for label in {door.plus.label, door.minus.label} - {0}:
+        plus = probe_side(ctx.regions, ctx.spaces, o.face(+1), o.across)
+        minus = probe_side(ctx.regions, ctx.spaces, o.face(-1), -o.across)
+        door.plus, door.minus = plus, minus
+        probes.append((plus, minus))
+        for label in {plus.label, minus.label} - {0}:
             ctx.regions.doors[label] += 1
-    for door in doors:
+    for door, (plus, minus) in zip(doors, probes, strict=True):
         door.side, door.rule = choose_side(
-            door.plus,
-            door.minus,
+            plus,
+            minus,
             ctx.regions,
             ctx.categories.is_circulation,
             lambda name: _enclosure_space(ctx.categories, name),
@@ -137,7 +147,7 @@ def _best_front(ctx: StoreyContext, footprint: BaseGeometry, exclude: set[int]) 
     """The side of a shaft footprint that faces the circulation area."""
     best: tuple[tuple, Front] | None = None
     for front in rectangle_fronts(footprint):
-        probe = probe_side(ctx.regions, ctx.spaces, *front.point, front.normal)
+        probe = probe_side(ctx.regions, ctx.spaces, front.point, front.normal)
         circulation = ctx.categories.is_circulation(probe.space)
         label_score = ctx.regions.score(probe.label) if probe.label not in exclude else (-1, 0.0)
         key = (circulation, label_score, front.width)

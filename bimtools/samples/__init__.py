@@ -66,9 +66,18 @@ def truth_features(truth: dict[str, Any]) -> list[Feature]:
     """The ground-truth features of a truth document as :class:`Feature` records."""
     return [
         Feature(
-            id=f["ID"], category=f["Category"], x=f["X"], y=f["Y"], norm_x=f["Norm_X"], norm_y=f["Norm_Y"],
-            width=f["Width"], height=f["Height"], storey=f["Storey"], elevation=f.get("Elevation", 0.0),
-            ifc_class=f["IfcClass"], name=f["Name"],
+            id=f["ID"],
+            category=f["Category"],
+            x=f["X"],
+            y=f["Y"],
+            norm_x=f["Norm_X"],
+            norm_y=f["Norm_Y"],
+            width=f["Width"],
+            height=f["Height"],
+            storey=f["Storey"],
+            elevation=f.get("Elevation", 0.0),
+            ifc_class=f["IfcClass"],
+            name=f["Name"],
         )
         for f in truth["features"]
     ]

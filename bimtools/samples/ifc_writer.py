@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import uuid
 from dataclasses import dataclass
+from typing import Any, Literal
 
 import ifcopenshell
 import ifcopenshell.api.aggregate
@@ -168,7 +169,9 @@ class _Writer:
         self.body = self._subcontext(model3d, "Body", "MODEL_VIEW")
         self.axis = self._subcontext(model3d, "Axis", "GRAPH_VIEW")
 
-    def _subcontext(self, parent: Entity, identifier: str, view: str) -> Entity:
+    def _subcontext(
+        self, parent: Entity, identifier: Literal["Body", "Axis"], view: Literal["MODEL_VIEW", "GRAPH_VIEW"]
+    ) -> Entity:
         return ifcopenshell.api.context.add_context(
             self.model, context_type="Model", context_identifier=identifier, target_view=view, parent=parent
         )
@@ -187,7 +190,7 @@ class _Writer:
             element.CompositionType = "ELEMENT"
             parent = self._place(element, Frame(0.0, 0.0, 0.0), parent)
         qto = api.pset.add_qto(self.model, product=self.storey, name="Qto_BuildingStoreyBaseQuantities")
-        heights = {"GrossHeight": STOREY_HEIGHT, "NetHeight": STOREY_HEIGHT}
+        heights: dict[str, Any] = {"GrossHeight": STOREY_HEIGHT, "NetHeight": STOREY_HEIGHT}
         api.pset.edit_qto(self.model, qto=qto, properties=heights)
 
     def _create_door_types(self) -> None:
@@ -231,7 +234,7 @@ class _Writer:
             offset=-half,
         )
         axis = ifcopenshell.api.geometry.add_axis_representation(
-            self.model, context=self.axis, axis=[(0.0, 0.0), (length, 0.0)]
+            self.model, context=self.axis, axis=((0.0, 0.0), (length, 0.0))
         )
         for rep in (axis, body):
             ifcopenshell.api.geometry.assign_representation(self.model, product=wall, representation=rep)
@@ -371,7 +374,10 @@ class _Writer:
         for entity in self.model:
             cls = entity.is_a()
             if cls not in cache:
-                cache[cls] = _set_attributes(schema.declaration_by_name(cls))
+                declaration = schema.declaration_by_name(cls)
+                if not isinstance(declaration, wrapper.entity):
+                    raise TypeError(f"{cls} is not an entity of {self.model.schema}")
+                cache[cls] = _set_attributes(declaration)
             for attr in cache[cls]:
                 value = getattr(entity, attr)
                 if value and all(isinstance(v, ifcopenshell.entity_instance) for v in value):

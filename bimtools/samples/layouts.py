@@ -672,11 +672,19 @@ def block_b() -> FloorPlan:
     d = _DoorMaker(cells)
     # Gates ~4.5 m apart along corridor A, then ~5-8 m apart along corridor B.
     gates: list[tuple[str, Side, float]] = [
-        ("Unit 01", "N", 15.5), ("Unit 02", "N", 24.5), ("Unit 03", "N", 33.5), ("Unit 04", "N", 42.5),
+        ("Unit 01", "N", 15.5),
+        ("Unit 02", "N", 24.5),
+        ("Unit 03", "N", 33.5),
+        ("Unit 04", "N", 42.5),
         ("Unit 05", "W", 11.0),
-        ("Unit 06", "S", 11.0), ("Unit 07", "S", 20.0), ("Unit 08", "S", 29.0), ("Unit 09", "S", 38.0),
+        ("Unit 06", "S", 11.0),
+        ("Unit 07", "S", 20.0),
+        ("Unit 08", "S", 29.0),
+        ("Unit 09", "S", 38.0),
         ("Unit 10", "S", 47.0),
-        ("Unit 11", "W", 16.0), ("Unit 12", "E", 24.5), ("Unit 13", "W", 29.0),
+        ("Unit 11", "W", 16.0),
+        ("Unit 12", "E", 24.5),
+        ("Unit 13", "W", 29.0),
     ]
     for unit, side, at in gates:
         d.into(unit, side, at, "gate", f"{unit} main gate")

@@ -16,6 +16,7 @@ from bimtools.site.records import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
 
 __all__ = ["FREE", "OCCUPIED", "UNKNOWN", "OccupancyGrid", "read_map", "write_map"]
 
+
 def _pgm_bytes(cells: np.ndarray) -> bytes:
     rows, cols = cells.shape
     return f"P5\n{cols} {rows}\n255\n".encode("ascii") + np.ascontiguousarray(cells, dtype=np.uint8).tobytes()

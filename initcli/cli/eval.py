@@ -52,7 +52,9 @@ def evaluate(
     config: Annotated[
         Path | None,
         typer.Option(
-            "--config", metavar="eval.yaml", help="Eval config [default: the three bundled samples]."
+            "--config",
+            metavar="eval.yaml",
+            help="Eval config [default: sample_models/eval.yaml of the source tree].",
         ),
     ] = None,
     starts: Annotated[

@@ -19,13 +19,12 @@ from rich.table import Table
 from bimtools.errors import InputError
 from initcli.core.geometry import Pose2D
 from initcli.io.match_result import report_to_dict
-from initcli.match.pipeline import DEFAULT_POSE_METHOD, EXIT_BAD_INPUT, MatchOptions, MatchReport, run_match
+from initcli.match.pipeline import EXIT_BAD_INPUT, MatchOptions, MatchReport, run_match
 
 
 def _fail(message: str) -> typer.Exit:
     typer.echo(f"bim-init: error: {' '.join(str(message).split())}", err=True)
     return typer.Exit(EXIT_BAD_INPUT)
-
 
 
 def _fmt_pose(p: Pose2D | None) -> str:
@@ -98,6 +97,9 @@ def print_report(report: MatchReport, console: Console) -> None:
     console.print(report.verdict, style="bold", highlight=False)
 
 
+_DEFAULTS = MatchOptions()  # every option's default below is the record's
+
+
 def match(
     log: Annotated[Path, typer.Argument(metavar="LOG.jsonl", help="Detection log (JSON Lines, version 1).")],
     site: Annotated[
@@ -106,14 +108,14 @@ def match(
     storey: Annotated[
         str,
         typer.Option("--storey", metavar="NAME|auto", help="Storey to match against; auto: every storey."),
-    ] = "auto",
+    ] = _DEFAULTS.storey or "auto",
     alpha: Annotated[
         float, typer.Option("--alpha", metavar="M", help="Distance threshold of Eq. 7, metres.")
-    ] = 0.5,
+    ] = _DEFAULTS.alpha,
     beta: Annotated[
         float, typer.Option("--beta", metavar="DEG", help="Angle threshold of Eq. 9, degrees.")
-    ] = 15.0,
-    top: Annotated[int, typer.Option("--top", metavar="K", help="Hypotheses to show.")] = 5,
+    ] = _DEFAULTS.beta,
+    top: Annotated[int, typer.Option("--top", metavar="K", help="Hypotheses to show.")] = _DEFAULTS.top,
     json_out: Annotated[
         bool, typer.Option("--json", help="Print one JSON document instead of tables.")
     ] = False,
@@ -127,29 +129,53 @@ def match(
             help="Let a later detection match a BIM feature matched before (the robot came back); "
             "--no-revisits is the literal Algorithm 1.",
         ),
-    ] = True,
+    ] = _DEFAULTS.revisits,
     max_outliers: Annotated[
         int, typer.Option("--max-outliers", metavar="N", help="False or misclassified detections tolerated.")
-    ] = 1,
+    ] = _DEFAULTS.max_outliers,
     pose_method: Annotated[
         str,
         typer.Option(
             "--pose-method", metavar="paper|rigid", help="paper: Eq. 10-13; rigid: Kabsch on all matches."
         ),
-    ] = DEFAULT_POSE_METHOD,
+    ] = _DEFAULTS.pose_method,
+    pose_window: Annotated[
+        int,
+        typer.Option(
+            "--pose-window",
+            metavar="N",
+            help="rigid: align the last N matched features (odometry drifts); 0: all of them.",
+        ),
+    ] = _DEFAULTS.pose_window,
     d_thre: Annotated[
         float, typer.Option("--d-thre", metavar="M", help="Wall clearance of Eq. 17, metres.")
-    ] = 0.5,
+    ] = _DEFAULTS.d_thre,
     min_sightings: Annotated[
         int, typer.Option("--min-sightings", metavar="K", help="Sightings that confirm a feature.")
-    ] = 3,
+    ] = _DEFAULTS.min_sightings,
     merge_radius: Annotated[
         float,
         typer.Option("--merge-radius", metavar="M", help="Same-class sightings closer than this merge."),
-    ] = 1.0,
+    ] = _DEFAULTS.merge_radius,
     score_threshold: Annotated[
         float, typer.Option("--score-threshold", metavar="S", help="Detections scoring lower are ignored.")
-    ] = 0.5,
+    ] = _DEFAULTS.score_threshold,
+    min_depth: Annotated[
+        float,
+        typer.Option("--min-depth", metavar="M", help="Detections with a depth below this are ignored."),
+    ] = _DEFAULTS.min_depth,
+    max_depth: Annotated[
+        float,
+        typer.Option("--max-depth", metavar="M", help="Detections with a depth above this are ignored."),
+    ] = _DEFAULTS.max_depth,
+    edge_margin: Annotated[
+        float,
+        typer.Option(
+            "--edge-margin",
+            metavar="PX",
+            help="Boxes this close to the left/right image border are cut off and not used; < 0 keeps them.",
+        ),
+    ] = _DEFAULTS.edge_margin,
     drift_window: Annotated[
         float | None,
         typer.Option(
@@ -157,10 +183,10 @@ def match(
             metavar="M",
             help="Match only the features confirmed in the last M metres of travel (odometry drift).",
         ),
-    ] = None,
+    ] = _DEFAULTS.drift_window,
     skip_bad: Annotated[
         bool, typer.Option("--skip-bad", help="Skip malformed log lines (with a count) instead of failing.")
-    ] = False,
+    ] = _DEFAULTS.skip_bad,
 ) -> None:
     """Offline feature matching: confirmed features, ranked pose hypotheses and a verdict.
 
@@ -169,16 +195,20 @@ def match(
     options = MatchOptions(
         storey=None if storey.strip().lower() == "auto" else storey,
         alpha=alpha,
-        beta_deg=beta,
+        beta=beta,
         top=top,
         max_outliers=max_outliers,
         revisits=revisits,
         pose_method=pose_method,
+        pose_window=pose_window,
         d_thre=d_thre,
         min_sightings=min_sightings,
         merge_radius=merge_radius,
         score_threshold=score_threshold,
-        drift_window_m=drift_window,
+        min_depth=min_depth,
+        max_depth=max_depth,
+        edge_margin=edge_margin,
+        drift_window=drift_window,
         skip_bad=skip_bad,
     )
     try:

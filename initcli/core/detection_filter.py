@@ -33,14 +33,14 @@ import numpy as np
 
 @dataclass(frozen=True)
 class FilterParams:
-    """Documented defaults of the detection filter."""
+    """Settings of the detection filter (their one default: ``initcli.match.pipeline.MatchOptions``)."""
 
-    merge_radius: float = 1.0  # m: same-class sightings closer than this are the same feature
-    min_sightings: int = 3  # k: sightings needed to confirm a feature
-    score_threshold: float = 0.5  # detector score below this is ignored
-    min_depth: float = 0.1  # m: depth window readings outside [min, max] are ignored
-    max_depth: float = 10.0  # m
-    edge_margin: float = 2.0  # px: boxes this close to the left/right border are truncated; < 0 keeps them
+    merge_radius: float  # m: same-class sightings closer than this are the same feature
+    min_sightings: int  # k: sightings needed to confirm a feature
+    score_threshold: float  # detector score below this is ignored
+    min_depth: float  # m: depth window readings outside [min, max] are ignored
+    max_depth: float  # m
+    edge_margin: float  # px: boxes this close to the left/right border are truncated; < 0 keeps them
     # A track with a track of another class within merge_radius that has this many times its
     # sightings is a misclassification of that object (rule 6), not a feature of its own.
     class_dominance: float = 4.0
@@ -126,25 +126,26 @@ def is_truncated(bbox: Sequence[float], image_width: float, margin: float) -> bo
 
 def filter_detections(
     sightings: Iterable[Sighting],
-    params: FilterParams | None = None,
+    params: FilterParams,
     given: Sequence[GivenFeature] = (),
 ) -> FilterResult:
     """Aggregate sightings (and given features) into S_object, ordered by confirmation time."""
-    p = params or FilterParams()
+    p = params
     k = max(1, int(p.min_sightings))
-    events: list[tuple[float, int, object]] = []
-    for order, s in enumerate(sightings):
-        events.append((s.t, 1, (order, s)))
-    for order, g in enumerate(given):
-        events.append((g.t, 0, (order, g)))
-    events.sort(key=lambda e: (e[0], e[1], e[2][0]))  # type: ignore[index]
+    # Given features before sightings at the same time, each in input order.
+    events: list[tuple[float, int, int, GivenFeature | Sighting]] = []
+    for order, sighting in enumerate(sightings):
+        events.append((sighting.t, 1, order, sighting))
+    for order, feature in enumerate(given):
+        events.append((feature.t, 0, order, feature))
+    events.sort(key=lambda e: (e[0], e[1], e[2]))
 
     tracks: list[_Track] = []
     result = FilterResult(features=[])
     created = 0
-    for _t, kind, (_order, item) in events:  # type: ignore[misc]
-        if kind == 0:
-            g: GivenFeature = item  # type: ignore[assignment]
+    for _t, _kind, _order, item in events:
+        if isinstance(item, GivenFeature):
+            g = item
             track = _nearest(tracks, g.cls, g.x, g.y, p.merge_radius, frame=None)
             if track is None:
                 tracks.append(
@@ -157,7 +158,7 @@ def filter_detections(
                 if track.confirmed_at is None:
                     track.confirmed_at = g.t
             continue
-        s: Sighting = item  # type: ignore[assignment]
+        s = item
         if not (s.score >= p.score_threshold):
             result.rejected_score += 1
             continue
@@ -185,13 +186,13 @@ def filter_detections(
         _suppress_duplicates(tracks, track, p.merge_radius, s.t, k)
 
     confirmed = [
-        tr
+        (tr.confirmed_at, tr)
         for tr in tracks
         if tr.confirmed_at is not None and (tr.fixed is not None or not _misclassified(tracks, tr, p))
     ]
-    confirmed.sort(key=lambda tr: (tr.confirmed_at, tr.created))
+    confirmed.sort(key=lambda c: (c[0], c[1].created))
     result.unconfirmed_tracks = len(tracks) - len(confirmed)
-    for i, tr in enumerate(confirmed):
+    for i, (t_confirmed, tr) in enumerate(confirmed):
         x, y = tr.pos
         result.features.append(
             ConfirmedFeature(
@@ -201,8 +202,8 @@ def filter_detections(
                 y=float(y),
                 sightings=int(tr.n),
                 t_first=float(tr.t_first),
-                t_confirmed=float(tr.confirmed_at),
-                given=tr.fixed is not None,  # type: ignore[arg-type]
+                t_confirmed=float(t_confirmed),
+                given=tr.fixed is not None,
             )
         )
     return result

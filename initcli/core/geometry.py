@@ -9,10 +9,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import overload
 
 import numpy as np
 
 
+@overload
+def wrap_angle(angle: float) -> float: ...
+@overload
+def wrap_angle(angle: np.ndarray) -> np.ndarray: ...
 def wrap_angle(angle: float | np.ndarray) -> float | np.ndarray:
     """Wrap an angle (or an array of angles) to [-pi, pi)."""
     wrapped = (np.asarray(angle) + np.pi) % (2.0 * np.pi) - np.pi

@@ -75,9 +75,9 @@ def drop_dominated(assign: np.ndarray, n_out: np.ndarray) -> np.ndarray:
         masked[:, mask] = OUTLIER
         seen = {row.tobytes() for row in np.ascontiguousarray(masked)}
         rows = np.ascontiguousarray(assign[members])
-        for h, row in zip(members, rows, strict=True):
+        for member, row in zip(members, rows, strict=True):
             if row.tobytes() in seen:
-                keep[h] = False
+                keep[member] = False
     return keep
 
 

@@ -52,22 +52,26 @@ class MatchOverflow(RuntimeError):
 
 @dataclass(frozen=True)
 class MatchParams:
-    """Thresholds of Algorithm 1 and of the outlier tolerance (documented defaults)."""
+    """Thresholds of Algorithm 1 and of the outlier tolerance.
 
-    alpha: float = 0.5  # m: distance threshold of Eq. 7
-    beta: float = math.radians(15.0)  # rad: angle threshold of Eq. 9
-    max_outliers: int = 1  # detections that may be treated as false/misclassified
-    min_inliers: int = 3  # matched features a full match needs (§3.3.4: three or more)
+    The user-tunable ones have no default here: callers pass them (their one default is
+    ``initcli.match.pipeline.MatchOptions``, where ``beta`` is in degrees).
+    """
+
+    alpha: float  # m: distance threshold of Eq. 7
+    beta: float  # rad: angle threshold of Eq. 9
+    max_outliers: int  # detections that may be treated as false/misclassified
+    min_inliers: int  # matched features a full match needs (§3.3.4: three or more)
+    # Second improvement over the paper (measured in benchmarks/bench_match.py): allow a detected
+    # feature to match a BIM feature already matched earlier in S_object (a revisit). False is the
+    # literal Algorithm 1.
+    revisits: bool
     # A match that declares outliers needs only enough inliers to place the robot (2): with n
     # detections of which up to max_outliers may be false, "one of them was false" must always be
     # enumerated as an alternative, never silently dropped -- otherwise 3 detections including one
     # false one could yield a wrong unique match (measured in benchmarks/bench_match.py).
     min_inliers_outlier: int = 2
     max_partials: int = 20_000_000  # safety cap on partial matches held in memory
-    # Second improvement over the paper (measured in benchmarks/bench_match.py): allow a detected
-    # feature to match a BIM feature already matched earlier in S_object (a revisit). False is the
-    # literal Algorithm 1.
-    revisits: bool = False
 
 
 class BimIndex:
@@ -217,9 +221,9 @@ def _sector_radius(d: float, alpha: float, beta: float) -> float:
 class Matcher:
     """Algorithm 1 over one :class:`BimIndex`, one detected feature at a time."""
 
-    def __init__(self, index: BimIndex, params: MatchParams | None = None) -> None:
+    def __init__(self, index: BimIndex, params: MatchParams) -> None:
         self.index = index
-        self.params = params or MatchParams()
+        self.params = params
 
     def match(self, s_xy: np.ndarray, s_cls: Sequence[str]) -> MatchState:
         """Run Algorithm 1 on the whole detected sequence S_object."""
@@ -396,7 +400,7 @@ class Matcher:
 
 
 def match_sequence(
-    index: BimIndex, s_xy: np.ndarray, s_cls: Sequence[str], params: MatchParams | None = None
+    index: BimIndex, s_xy: np.ndarray, s_cls: Sequence[str], params: MatchParams
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Convenience: the complete matches of S_object as (assign (H, n), n_out (H,), cost (H,))."""
     matcher = Matcher(index, params)

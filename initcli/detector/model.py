@@ -77,9 +77,12 @@ class Detector(nn.Module):
         self.hm = nn.Conv2d(n, arch.nc, 1)
         self.box_conv = ConvBN(n, n)
         self.box = nn.Conv2d(n, 4, 1)
-        nn.init.constant_(self.hm.bias, -math.log((1 - 0.05) / 0.05))
+        hm_bias, box_bias = self.hm.bias, self.box.bias
+        if hm_bias is None or box_bias is None:
+            raise RuntimeError("the head convolutions are built with biases")
+        nn.init.constant_(hm_bias, -math.log((1 - 0.05) / 0.05))
         nn.init.normal_(self.box.weight, std=0.01)
-        nn.init.constant_(self.box.bias, 1.0)
+        nn.init.constant_(box_bias, 1.0)
 
     def forward(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         c8 = self.s8(self.s4(self.stem(x)))

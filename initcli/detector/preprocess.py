@@ -54,6 +54,6 @@ def to_tensor_layout(
     image_rgb: np.ndarray, scale: float = 1.0 / 255.0, dtype: type = np.float32
 ) -> np.ndarray:
     """(H, W, 3) uint8 -> (1, 3, H, W) float, multiplied by ``scale``."""
-    x = np.ascontiguousarray(image_rgb.transpose(2, 0, 1)[None], dtype=dtype)
+    x: np.ndarray = np.ascontiguousarray(image_rgb.transpose(2, 0, 1)[None], dtype=dtype)
     x *= scale
     return x

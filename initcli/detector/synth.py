@@ -266,7 +266,7 @@ def _random_clutter(rng: np.random.Generator, scene: Scene, pl: Placement, cam: 
 
 def _postprocess(rng: np.random.Generator, rgb: np.ndarray) -> np.ndarray:
     """Exposure, white balance, gamma, vignetting, blur, sensor noise."""
-    img = rgb.astype(np.float32) / 255.0
+    img: np.ndarray = rgb.astype(np.float32) / 255.0
     img *= rng.uniform(0.6, 1.4) * rng.uniform(0.9, 1.1, 3).astype(np.float32)
     img = np.clip(img, 0, 1) ** rng.uniform(0.75, 1.35)
     h, w = img.shape[:2]
@@ -367,7 +367,7 @@ def render_sample(placements: Sequence[Placement], index: int, opts: SynthOption
 _WORKER: dict = {}
 
 
-def _init_worker(sites: list[str], opts: SynthOptions) -> None:
+def _init_worker(sites: Sequence[str | Path], opts: SynthOptions) -> None:
     cv2.setNumThreads(1)
     _WORKER["placements"] = load_placements(sites, opts.clearance)
     _WORKER["opts"] = opts

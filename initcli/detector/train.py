@@ -204,7 +204,7 @@ def collate(batch: list) -> tuple:
 class ModelEMA:
     """Exponential moving average of the weights, ramped up over the first steps."""
 
-    def __init__(self, model: torch.nn.Module, decay: float, updates: int = 0) -> None:
+    def __init__(self, model: Detector, decay: float, updates: int = 0) -> None:
         self.ema = deepcopy(model).eval()
         self.decay, self.updates = decay, updates
         for p in self.ema.parameters():
@@ -374,7 +374,7 @@ def train(opts: TrainOptions, on_event: Callback | None = None) -> dict:
             "params": sum(p.numel() for p in net.parameters()),
         },
     )
-    ckpt: dict = {}
+    ckpt = {}
     for epoch in range(start_epoch, opts.epochs):
         train_set.epoch = epoch
         gen = torch.Generator().manual_seed(opts.seed * 1000 + epoch)

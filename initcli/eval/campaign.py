@@ -5,7 +5,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 from collections.abc import Callable, Iterable
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -110,7 +110,7 @@ def run_jobs(jobs: list[TrialJob], workers: int, on_records: Callable[[list[Tria
     # can deadlock the children on a lock held at fork time.
     context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(max_workers=workers, initializer=_init_worker, mp_context=context) as pool:
-        pending = set()
+        pending: set[Future[list[TrialRecord]]] = set()
         queue = list(reversed(jobs))
         while queue or pending:
             while queue and len(pending) < 2 * workers:

@@ -19,7 +19,7 @@ from initcli.eval.records import METHODS, FailureRule
 from initcli.sim.markers import MarkerParams
 
 SCHEMA_PATH = schema_path("eval_config.schema.json")
-SAMPLES = Path(__file__).resolve().parents[2] / "sample_models"
+SAMPLES = Path(__file__).resolve().parents[2] / "sample_models"  # in a source checkout only
 DEFAULT_CONFIG = SAMPLES / "eval.yaml"
 
 
@@ -114,8 +114,19 @@ def parse_eval_config(doc: Any, source: Path) -> EvalConfig:
 
 
 def load_eval_config(path: Path | None) -> EvalConfig:
-    """The eval config at ``path``, or the bundled one (the three sample models)."""
-    path = Path(path) if path is not None else DEFAULT_CONFIG
+    """The eval config at ``path``, or the source tree's sample one (the three sample models).
+
+    The sample models are not part of the installed package: without a source tree ``--config``
+    is required.
+    """
+    if path is None:
+        if not DEFAULT_CONFIG.is_file():
+            raise InputError(
+                f"no eval config given and no sample config at {DEFAULT_CONFIG} (the sample models ship "
+                "with the source tree, not the package): pass --config EVAL.yaml"
+            )
+        path = DEFAULT_CONFIG
+    path = Path(path)
     return parse_eval_config(read_yaml(path, "eval config"), path)
 
 

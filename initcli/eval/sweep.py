@@ -94,7 +94,7 @@ def apply_sweep(config: SessionConfig, sweep: Sweep, value: float) -> SessionCon
     out = copy.deepcopy(config)
     node, name = _resolve(out, sweep.path)
     current = getattr(node, name)
-    if dataclasses.is_dataclass(current):
+    if dataclasses.is_dataclass(current) and not isinstance(current, type):
         scaled = {
             f.name: getattr(current, f.name) * value
             for f in dataclasses.fields(current)

@@ -70,7 +70,8 @@ def table2(
     rows = []
     for site in dict.fromkeys(s.site for s in summaries if not s.sweep_key):
         bim, pf = by.get((site, "bim")), by.get((site, "bim+pf"))
-        if bim is None and pf is None:
+        either = bim or pf
+        if either is None:
             continue
         env = environments.get(site)
         pb, pp = paper_row(env, "bim"), paper_row(env, "bim+pf")
@@ -78,7 +79,7 @@ def table2(
         rows.append(
             [
                 label,
-                fmt((bim or pf).features_mean, 1),
+                fmt(either.features_mean, 1),
                 fmt(pb.features if pb else None, 0),
                 fmt(bim.distance_mean_m if bim else None, 1),
                 fmt(pb.distance_m if pb else None, 2),

@@ -69,7 +69,7 @@ def report_to_dict(report: MatchReport) -> dict[str, Any]:
         ],
         "parameters": {
             "alpha": o.alpha,
-            "beta_deg": o.beta_deg,
+            "beta_deg": o.beta,  # the JSON key keeps its unit
             "top": o.top,
             "max_outliers": o.max_outliers,
             "min_inliers": o.min_inliers,

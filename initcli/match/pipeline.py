@@ -59,24 +59,29 @@ DEFAULT_POSE_METHOD = "rigid"
 
 @dataclass(frozen=True)
 class MatchOptions:
-    """Every tunable of ``bim-init match`` with its documented default."""
+    """Every tunable of ``bim-init match``, each with its one default.
+
+    The command's options (``initcli.cli.match``), the ``matching:`` section of the session config
+    (``initcli.config``) and the defaults written in ``schemas/site_config.schema.json`` all read
+    (or are tested against) these fields. Units are the user's: metres, degrees (``beta``), pixels.
+    """
 
     storey: str | None = None  # None or "auto": every storey when the site has several
     alpha: float = 0.5  # m, Eq. 7
-    beta_deg: float = 15.0  # degrees, Eq. 9
+    beta: float = 15.0  # degrees, Eq. 9 (radians only inside initcli.core)
     top: int = 5  # hypotheses shown
     max_outliers: int = 1  # false/misclassified detections tolerated
     revisits: bool = True  # a later detection may match an already matched BIM feature (came back)
     min_inliers: int = 3  # matched features needed for a hypothesis (§3.3.4)
     pose_method: str = DEFAULT_POSE_METHOD  # 'paper' (Eq. 10-13) or 'rigid'
-    pose_window: int | None = 4  # rigid: align the last N matched features (odometry drifts); None: all
-    drift_window_m: float | None = None  # match only features confirmed in the last M m of travel
+    pose_window: int = 4  # rigid: align the last N matched features (odometry drifts); 0: all
+    drift_window: float | None = None  # m: match only features confirmed in the last M m of travel
     d_thre: float = 0.5  # m, wall clearance of Eq. 17
     pose_radius: float = 1.0  # m, hypotheses closer than this (and within beta in yaw) are one
     merge_radius: float = 1.0  # m, detection filter
     min_sightings: int = 3  # k, detection filter
     score_threshold: float = 0.5  # detection filter
-    min_depth: float = 0.1  # m, detection filter
+    min_depth: float = 0.1  # m, detection filter: depth window readings outside [min, max] are ignored
     max_depth: float = 10.0  # m, detection filter
     edge_margin: float = 2.0  # px, detection filter: boxes cut by the left/right border are dropped
     skip_bad: bool = False
@@ -84,7 +89,7 @@ class MatchOptions:
     def match_params(self) -> MatchParams:
         return MatchParams(
             alpha=self.alpha,
-            beta=math.radians(self.beta_deg),
+            beta=math.radians(self.beta),
             max_outliers=self.max_outliers,
             min_inliers=self.min_inliers,
             revisits=self.revisits,
@@ -103,15 +108,17 @@ class MatchOptions:
     def validate(self) -> None:
         checks = [
             (self.alpha > 0, "--alpha must be > 0"),
-            (0 < self.beta_deg <= 180, "--beta must be in (0, 180] degrees"),
+            (0 < self.beta <= 180, "--beta must be in (0, 180] degrees"),
             (self.top >= 1, "--top must be >= 1"),
-            (self.drift_window_m is None or self.drift_window_m > 0, "--drift-window must be > 0"),
+            (self.drift_window is None or self.drift_window > 0, "--drift-window must be > 0"),
             (self.max_outliers >= 0, "--max-outliers must be >= 0"),
-            (self.min_inliers >= 2, "--min-inliers must be >= 2"),
+            (self.min_inliers >= 2, "min_inliers must be >= 2"),
             (self.pose_method in POSE_METHODS, f"--pose-method must be one of {', '.join(POSE_METHODS)}"),
+            (self.pose_window >= 0, "--pose-window must be >= 0"),
             (self.d_thre >= 0, "--d-thre must be >= 0"),
             (self.merge_radius > 0, "--merge-radius must be > 0"),
             (self.min_sightings >= 1, "--min-sightings must be >= 1"),
+            (0 <= self.min_depth < self.max_depth, "--min-depth must be >= 0 and below --max-depth"),
         ]
         for ok, message in checks:
             if not ok:
@@ -273,17 +280,24 @@ def transform_poses_batch(transforms: np.ndarray, pose: Pose2D) -> np.ndarray:
 def run_match(
     log_path: Path | str, site_path: Path | str, options: MatchOptions | None = None
 ) -> MatchReport:
-    """The whole ``bim-init match`` pipeline; raises :class:`InputError` on bad input."""
+    """The whole ``bim-init match`` pipeline; raises :class:`InputError` on bad input.
+
+    The class mapping is the site folder's (:func:`site_class_map`).
+    """
     opts = options or MatchOptions()
     opts.validate()
     log = read_log(log_path, skip_bad=opts.skip_bad)
     site = load_site(Path(site_path), with_maps=False)
-    return match_log(log, site, opts)
+    return match_log(log, site, opts, site_class_map(site))
 
 
-def match_log(log: DetectionLog, site: Site, opts: MatchOptions) -> MatchReport:
-    """The pipeline on an already-read log and site."""
-    cmap = site_class_map(site)
+def match_log(log: DetectionLog, site: Site, opts: MatchOptions, cmap: ClassMap) -> MatchReport:
+    """The pipeline on an already-read log and site.
+
+    ``cmap`` maps the log's class names to the site's feature categories: the site folder's mapping
+    for ``bim-init match`` (:func:`site_class_map`), the session config's ``detector.classes`` for
+    ``bim-init run``. Nothing is read from disk here.
+    """
     check_classes(log, cmap, site)
     warnings = list(log.warnings)
     notes: list[str] = []
@@ -295,14 +309,12 @@ def match_log(log: DetectionLog, site: Site, opts: MatchOptions) -> MatchReport:
     features = filtered.features
     odom_pose, odom_path, more = current_odom(log)
     warnings.extend(more)
-    if opts.drift_window_m is not None and log.odom and len(features) > opts.min_inliers:
+    if opts.drift_window is not None and log.odom and len(features) > opts.min_inliers:
         odom_t = np.array([o.t for o in log.odom])
-        recent = within_drift_window(
-            features, odom_t, odom_path[:, :2], opts.drift_window_m, opts.min_inliers
-        )
+        recent = within_drift_window(features, odom_t, odom_path[:, :2], opts.drift_window, opts.min_inliers)
         if len(recent) < len(features):
             notes.append(
-                f"matched the {len(recent)} features confirmed in the last {opts.drift_window_m:g} m of "
+                f"matched the {len(recent)} features confirmed in the last {opts.drift_window:g} m of "
                 f"travel; {len(features) - len(recent)} older one(s) left out (odometry drift)"
             )
             features = recent
@@ -374,7 +386,7 @@ def match_log(log: DetectionLog, site: Site, opts: MatchOptions) -> MatchReport:
     current = transform_poses_batch(transform, odom_pose)  # robot pose in BIM per match (rigid)
     order = rank_order(n_out, cost)  # rule 2
     labels, reps = pose_groups(
-        current, storey_ids, order, opts.pose_radius, math.radians(opts.beta_deg)
+        current, storey_ids, order, opts.pose_radius, math.radians(opts.beta)
     )  # rule 3
     support = np.bincount(labels, minlength=len(reps))
     conf = confidences(cost[reps], n_out[reps])  # rule 5
@@ -388,7 +400,7 @@ def match_log(log: DetectionLog, site: Site, opts: MatchOptions) -> MatchReport:
         inl = np.flatnonzero(row != OUTLIER)
         bim_xy = index.xy[row[inl]]
         # Eq. 10-13 or rigid
-        pose = estimate_pose(opts.pose_method, bim_xy, s_xy[inl], odom_pose, opts.pose_window)
+        pose = estimate_pose(opts.pose_method, bim_xy, s_xy[inl], odom_pose, opts.pose_window or None)
         rect_pose, moved = None, False
         if model.walls:
             walls = WallArray.from_segments([(w.x1, w.y1, w.x2, w.y2, *w.normal) for w in model.walls])

@@ -14,7 +14,6 @@ from pathlib import Path
 import numpy as np
 
 from bimtools.site.load import Site
-from initcli.config import SessionConfig
 from initcli.core.classes import ClassMap
 from initcli.core.detection_filter import ConfirmedFeature, Sighting, filter_detections
 from initcli.core.geometry import Pose2D
@@ -36,23 +35,6 @@ from initcli.match.verify import PathEvidence
 
 SCAN_LOG_EVERY = 5  # control steps between logged scans (2 Hz at 10 Hz control)
 HYPOTHESES_LOGGED = 5  # hypotheses (most probable first) written with each match step
-
-
-def match_options(config: SessionConfig, storey: str | None) -> MatchOptions:
-    """The ``bim-init match`` options that replay the session's decisions (``storey`` None: all)."""
-    m = config.matching
-    return MatchOptions(
-        storey=storey,
-        alpha=m.alpha,
-        beta_deg=m.beta,
-        max_outliers=m.max_outliers,
-        pose_method=m.pose_method,
-        d_thre=config.exploration.d_thre,
-        merge_radius=m.merge_radius,
-        min_sightings=m.min_sightings,
-        score_threshold=config.detector.score_threshold,
-        top=max(m.m_thre, 5),
-    )
 
 
 class Perception:
@@ -130,12 +112,14 @@ class Perception:
 
     def match(self, t: float, site: Site) -> MatchReport:
         """Algorithm 1 on the log so far, logged as a ``hypotheses`` record."""
-        report = match_log(self.log, site, self.options)
+        report = match_log(self.log, site, self.options, self.cmap)
         window = self.drift_window
         if report.n_hypotheses == 0 and window > 0 and len(report.features) > self.options.min_inliers:
             # Odometry drift: the oldest features no longer fit; match the recent ones
             # (``bim-init match --drift-window`` replays this).
-            recent = match_log(self.log, site, dataclasses.replace(self.options, drift_window_m=window))
+            recent = match_log(
+                self.log, site, dataclasses.replace(self.options, drift_window=window), self.cmap
+            )
             if recent.n_hypotheses > 0:
                 report = recent
         self.write(

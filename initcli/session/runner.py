@@ -25,7 +25,13 @@ from pathlib import Path
 import numpy as np
 
 from bimtools.site.load import Site
-from initcli.config import SessionConfig, followed_side, turn_in_place_speed, wall_follow_params
+from initcli.config import (
+    SessionConfig,
+    followed_side,
+    match_options,
+    turn_in_place_speed,
+    wall_follow_params,
+)
 from initcli.core.bug_navigation import BugNavigator, BugParams
 from initcli.core.classes import ClassMap
 from initcli.core.confinement import ConfinementWatch
@@ -38,7 +44,7 @@ from initcli.match.pipeline import Hypothesis, MatchReport
 from initcli.match.verify import StoreyEvidence, verify_transform
 from initcli.session.exploration import ActiveExploration
 from initcli.session.fine_tuning import FineLost, FineTuning, FineTuningHooks, matched_pairs
-from initcli.session.perception import Perception, match_options
+from initcli.session.perception import Perception
 from initcli.session.result import MatchStep, SessionResult
 
 __all__ = ["Observer", "Session"]

@@ -91,7 +91,8 @@ def world_clutter(
     tops = [clutter_height] * len(rings)
     kinds = [CLUTTER_BOX] * len(rings)
     for w in world.workers:
-        edges = box_edges(*w.position(t), w.radius, w.radius)
+        x, y = w.position(t)
+        edges = box_edges(x, y, w.radius, w.radius)
         rings.append(np.vstack([edges[:, 0:2], edges[-1:, 2:4]]))
         tops.append(person_height)
         kinds.append(CLUTTER_PERSON)

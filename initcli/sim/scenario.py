@@ -60,7 +60,9 @@ class Circulation:
             if 0 <= row < labels.shape[0] and 0 <= col < labels.shape[1] and labels[row, col]:
                 votes[int(labels[row, col])] = votes.get(int(labels[row, col]), 0) + 1
         main = (
-            max(votes, key=votes.__getitem__) if votes else int(np.bincount(labels.ravel())[1:].argmax() + 1)
+            max(votes, key=lambda label: votes[label])
+            if votes
+            else int(np.bincount(labels.ravel())[1:].argmax() + 1)
         )
         clearance = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * grid.resolution
         return Circulation(grid, labels == main, clearance, labels)
@@ -152,7 +154,9 @@ def place_workers(
         a = np.array([w.x1 + ux * s0, w.y1 + uy * s0]) + offset
         b = a + length * np.array([ux, uy])
         mid = (a + b) / 2
-        if not circulation.contains(*a, 0.3) or not circulation.contains(*b, 0.3):
+        if not circulation.contains(float(a[0]), float(a[1]), 0.3) or not circulation.contains(
+            float(b[0]), float(b[1]), 0.3
+        ):
             continue
         heading = math.atan2(uy, ux)
         free = float(ray_segment_distances(a, np.array([heading]), world_static, 12.0)[0])

@@ -159,7 +159,14 @@ def write_site_folder(
             for i, w in enumerate(np.asarray(wall_array, dtype=float).reshape(-1, 6)):
                 walls.append(
                     WallSegment(
-                        storey, f"{storey}-w{i}", "IfcWall", *map(float, w[:4]), (float(w[4]), float(w[5]))
+                        storey,
+                        f"{storey}-w{i}",
+                        "IfcWall",
+                        float(w[0]),
+                        float(w[1]),
+                        float(w[2]),
+                        float(w[3]),
+                        (float(w[4]), float(w[5])),
                     )
                 )
     write_features(folder / "features.csv", records)

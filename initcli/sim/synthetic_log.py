@@ -169,7 +169,7 @@ def render_image(
         for i in np.flatnonzero(visible):
             if p.detect_probability < 1.0 and rng.random() > p.detect_probability:
                 continue
-            f = features[i]
+            f = features[int(i)]
             box = np.array(box_for_point(u[i], v[i], depth[i], f.width, f.height, camera))
             if p.pixel_noise > 0:
                 box = box + rng.normal(0.0, p.pixel_noise, 4)

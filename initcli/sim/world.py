@@ -147,7 +147,11 @@ class SimWorld:
     def worker_segments(self, t: float) -> np.ndarray:
         if not self.workers:
             return np.zeros((0, 4))
-        return np.concatenate([box_edges(*w.position(t), w.radius, w.radius) for w in self.workers])
+        edges = []
+        for w in self.workers:
+            x, y = w.position(t)
+            edges.append(box_edges(x, y, w.radius, w.radius))
+        return np.concatenate(edges)
 
     def advance(self, dt: float, robot_xy: np.ndarray) -> None:
         for worker in self.workers:

@@ -2,16 +2,20 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from initcli.core.detection_filter import (
     ConfirmedFeature,
-    FilterParams,
     GivenFeature,
     Sighting,
     filter_detections,
     within_drift_window,
 )
+from initcli.match.pipeline import MatchOptions
+
+DEFAULTS = MatchOptions().filter_params()  # the tool's detection-filter settings
 
 
 def s(
@@ -27,9 +31,9 @@ def s(
 
 
 def test_k_sightings_confirm_at_the_kth() -> None:
-    two = filter_detections([s(0.0, 1.0), s(0.2, 1.1)])
+    two = filter_detections([s(0.0, 1.0), s(0.2, 1.1)], DEFAULTS)
     assert two.features == [] and two.unconfirmed_tracks == 1
-    three = filter_detections([s(0.0, 1.0), s(0.2, 1.1), s(0.4, 0.9)])
+    three = filter_detections([s(0.0, 1.0), s(0.2, 1.1), s(0.4, 0.9)], DEFAULTS)
     (f,) = three.features
     assert f.sightings == 3 and f.t_confirmed == 0.4 and f.t_first == 0.0
     assert (f.x, f.y) == (1.0, 0.0)
@@ -38,7 +42,7 @@ def test_k_sightings_confirm_at_the_kth() -> None:
 def test_score_and_depth_thresholds() -> None:
     out = filter_detections(
         [s(0.0, 1.0, score=0.4), s(0.1, 1.0), s(0.2, 1.0, depth=12.0), s(0.3, 1.0, depth=0.0), s(0.4, 1.0)],
-        FilterParams(min_sightings=2),
+        replace(DEFAULTS, min_sightings=2),
     )
     assert out.rejected_score == 1 and out.rejected_depth == 2 and out.used == 2
     assert len(out.features) == 1
@@ -57,7 +61,7 @@ def test_classes_and_radius_separate_features_and_order_is_confirmation_time() -
         s(0.8, 0.35, cls="lift"),
         s(0.9, 0.25, cls="lift"),  # lift at 0.3 confirmed at 0.9
     ]
-    out = filter_detections(sightings)
+    out = filter_detections(sightings, DEFAULTS)
     assert [(f.cls, round(f.x, 1)) for f in out.features] == [("lift", 5.0), ("door", 0.0), ("lift", 0.3)]
     assert [f.index for f in out.features] == [0, 1, 2]
     assert out.unconfirmed_tracks == 1
@@ -66,9 +70,9 @@ def test_classes_and_radius_separate_features_and_order_is_confirmation_time() -
 def test_one_sighting_per_image_per_feature() -> None:
     # two boxes on the same door in each of two images: 2 sightings, not 4
     same = [s(0.0, 1.0, frame=1), s(0.0, 1.2, frame=1), s(0.2, 1.0, frame=2), s(0.2, 1.1, frame=2)]
-    out = filter_detections(same, FilterParams(min_sightings=3, merge_radius=0.1))
+    out = filter_detections(same, replace(DEFAULTS, min_sightings=3, merge_radius=0.1))
     assert out.features == []
-    out = filter_detections(same, FilterParams(min_sightings=2, merge_radius=0.5))
+    out = filter_detections(same, replace(DEFAULTS, min_sightings=2, merge_radius=0.5))
     assert [f.sightings for f in out.features] == [2]
 
 
@@ -84,7 +88,7 @@ def test_duplicates_are_suppressed_when_tracks_drift_together() -> None:
         s(0.6, 0.6),
         s(0.7, 0.5),
     ]
-    out = filter_detections(seq)
+    out = filter_detections(seq, DEFAULTS)
     assert len(out.features) == 1
     assert out.features[0].sightings == len(seq)
     assert out.features[0].t_confirmed == 0.4
@@ -93,6 +97,7 @@ def test_duplicates_are_suppressed_when_tracks_drift_together() -> None:
 def test_given_features_are_confirmed_and_fixed() -> None:
     out = filter_detections(
         [s(1.0, 3.3), s(1.2, 3.4), s(2.0, 7.0), s(2.2, 7.0), s(2.4, 7.0)],
+        DEFAULTS,
         given=[GivenFeature(0.5, "door", 3.0, 0.0)],
     )
     assert [(f.x, f.given) for f in out.features] == [(3.0, True), (7.0, False)]
@@ -101,16 +106,17 @@ def test_given_features_are_confirmed_and_fixed() -> None:
 
 def test_class_confusion_does_not_create_a_feature():
     """Rule 6: a door seen 20 times and called a lift 3 times is one door."""
-    from initcli.core.detection_filter import FilterParams, Sighting, filter_detections
+    from initcli.core.detection_filter import Sighting, filter_detections
 
     sightings = [Sighting(t=0.1 * i, cls="door", x=2.0, y=1.0, frame=i) for i in range(20)]
     sightings += [Sighting(t=0.1 * i + 0.05, cls="lift", x=2.1, y=1.0, frame=100 + i) for i in range(3)]
-    features = filter_detections(sightings, FilterParams()).features
+    features = filter_detections(sightings, DEFAULTS).features
     assert [f.cls for f in features] == ["door"]
     # A real lift next to the door, seen about as often, is kept.
     sightings += [Sighting(t=5 + 0.1 * i, cls="lift", x=2.5, y=1.0, frame=200 + i) for i in range(10)]
-    assert sorted(f.cls for f in filter_detections(sightings, FilterParams()).features) == ["door", "lift"]
-    assert [f.cls for f in filter_detections(sightings[:23], FilterParams(class_dominance=0)).features] == [
+    assert sorted(f.cls for f in filter_detections(sightings, DEFAULTS).features) == ["door", "lift"]
+    no_rule6 = replace(DEFAULTS, class_dominance=0)
+    assert [f.cls for f in filter_detections(sightings[:23], no_rule6).features] == [
         "door",
         "lift",
     ]

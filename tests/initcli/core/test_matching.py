@@ -13,12 +13,17 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from initcli.core.cost import matching_cost
 from initcli.core.matching import OUTLIER, BimIndex, Matcher, MatchParams
+from initcli.match.pipeline import MatchOptions
+
+# The literal Algorithm 1 (no revisits) with the tool's default thresholds.
+LITERAL = MatchOptions(revisits=False).match_params()
 
 
 def _dist(p: Sequence[float], q: Sequence[float]) -> float:
@@ -138,7 +143,7 @@ def test_indexed_matcher_equals_algorithm1(seed: int) -> None:
     b_xy, b_cls, s_xy, s_cls = random_case(rng, int(rng.integers(15, 60)), int(rng.integers(2, 6)), noise=0.1)
     alpha, beta = float(rng.uniform(0.3, 1.5)), math.radians(float(rng.uniform(5, 40)))
     oracle = set(algorithm1(b_xy.tolist(), b_cls, s_xy.tolist(), s_cls, alpha, beta))
-    params = MatchParams(alpha=alpha, beta=beta, max_outliers=0, min_inliers=2)
+    params = MatchParams(alpha=alpha, beta=beta, max_outliers=0, min_inliers=2, revisits=False)
     assert indexed_matches(b_xy, b_cls, s_xy, s_cls, params) == oracle
 
 
@@ -150,14 +155,14 @@ def test_indexed_matcher_with_outliers_equals_oracle(seed: int) -> None:
     k = int(rng.integers(1, 3))
     min_inliers = int(rng.integers(2, 4))
     oracle = algorithm1_with_outliers(b_xy.tolist(), b_cls, s_xy.tolist(), s_cls, alpha, beta, k, min_inliers)
-    params = MatchParams(alpha=alpha, beta=beta, max_outliers=k, min_inliers=min_inliers)
+    params = MatchParams(alpha=alpha, beta=beta, max_outliers=k, min_inliers=min_inliers, revisits=False)
     assert indexed_matches(b_xy, b_cls, s_xy, s_cls, params) == oracle
 
 
 def test_accumulated_cost_equals_eq14() -> None:
     rng = np.random.default_rng(7)
     b_xy, b_cls, s_xy, s_cls = random_case(rng, 40, 5, noise=0.15)
-    params = MatchParams(alpha=1.0, beta=math.radians(30), max_outliers=1, min_inliers=3)
+    params = MatchParams(alpha=1.0, beta=math.radians(30), max_outliers=1, min_inliers=3, revisits=False)
     matcher = Matcher(BimIndex(b_xy, b_cls), params)
     state = matcher.match(s_xy, s_cls)
     rows = state.matches(params)
@@ -172,7 +177,7 @@ def test_true_match_is_found_under_any_rigid_motion() -> None:
     rng = np.random.default_rng(3)
     for _ in range(20):
         b_xy, b_cls, s_xy, s_cls = random_case(rng, 50, 5, noise=0.0)
-        found = indexed_matches(b_xy, b_cls, s_xy, s_cls, MatchParams(max_outliers=1))
+        found = indexed_matches(b_xy, b_cls, s_xy, s_cls, LITERAL)
         assert found, "the noise-free true match must survive"
 
 
@@ -197,19 +202,17 @@ def test_repetitive_lattice_equals_algorithm1(seed: int) -> None:
     alpha, beta = 0.5, math.radians(15)
     oracle = set(algorithm1(b_xy.tolist(), b_cls, s_xy.tolist(), s_cls, alpha, beta))
     assert tuple(walk) in oracle
-    params = MatchParams(alpha=alpha, beta=beta, max_outliers=0, min_inliers=2)
+    params = MatchParams(alpha=alpha, beta=beta, max_outliers=0, min_inliers=2, revisits=False)
     assert indexed_matches(b_xy, b_cls, s_xy, s_cls, params) == oracle
     k1 = algorithm1_with_outliers(b_xy.tolist(), b_cls, s_xy.tolist(), s_cls, alpha, beta, 1, 3)
-    assert (
-        indexed_matches(b_xy, b_cls, s_xy, s_cls, MatchParams(alpha=alpha, beta=beta, max_outliers=1)) == k1
-    )
+    assert indexed_matches(b_xy, b_cls, s_xy, s_cls, replace(params, max_outliers=1, min_inliers=3)) == k1
 
 
 @pytest.mark.parametrize("seed", range(10))
 def test_matches_are_invariant_under_rigid_motions_of_the_detections(seed: int) -> None:
     rng = np.random.default_rng(900 + seed)
     b_xy, b_cls, s_xy, s_cls = random_case(rng, 60, 5, noise=0.1)
-    params = MatchParams(alpha=0.8, beta=math.radians(25), max_outliers=1)
+    params = MatchParams(alpha=0.8, beta=math.radians(25), max_outliers=1, min_inliers=3, revisits=False)
     base = indexed_matches(b_xy, b_cls, s_xy, s_cls, params)
     for _ in range(5):
         yaw = rng.uniform(-math.pi, math.pi)

@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 
 from bimtools.site.load import load_site
+from initcli.core.classes import ClassMap
 from initcli.core.geometry import Pose2D
 from initcli.io.detection_log import read_log, write_log
-from initcli.match.pipeline import MatchOptions, MatchReport, match_log
+from initcli.match.pipeline import MatchOptions, MatchReport, match_log, site_class_map
 from initcli.sim.synthetic_floor import write_site_folder
 from initcli.sim.synthetic_log import SimFeature, SyntheticParams, make_log, path_from_waypoints
 
@@ -68,7 +69,8 @@ def run(
     log = make_log(render, t, path, phantoms=phantoms, params=params, seed=seed, transform_odom=transform)
     log_path = tmp / f"log_{seed}.jsonl"
     write_log(log_path, log.records)
-    report = match_log(read_log(log_path), load_site(site_path, with_maps=False), MatchOptions(**options))
+    site = load_site(site_path, with_maps=False)
+    report = match_log(read_log(log_path), site, MatchOptions(**options), site_class_map(site))
     return report, log.final_pose
 
 
@@ -270,9 +272,8 @@ def test_feature_records_of_an_aggregating_robot(tmp_path, distinct_csv) -> None
         records.append(FeatureRecord(float(k) + 0.5, "DOOR", float(p[0]), float(p[1])))
     records.append(Odom(10.0, 15.0, 0.0, 0.0))
     write_log(tmp_path / "features.jsonl", records)
-    report = match_log(
-        read_log(tmp_path / "features.jsonl"), load_site(distinct_csv), MatchOptions(max_outliers=0)
-    )
+    log, site = read_log(tmp_path / "features.jsonl"), load_site(distinct_csv)
+    report = match_log(log, site, MatchOptions(max_outliers=0), ClassMap())
     assert report.verdict == "unique match"
     assert report.hypotheses[0].matches == seen
     assert all(f.given for f in report.features)
@@ -301,8 +302,8 @@ def test_three_detections_with_a_false_one_are_never_a_wrong_unique_match(tmp_pa
     records.append(Odom(5.0, 0.0, 0.0, 0.0))
     write_log(tmp_path / "three.jsonl", records)
     log, site = read_log(tmp_path / "three.jsonl"), load_site(csv)
-    paper = match_log(log, site, MatchOptions(max_outliers=0))
+    paper = match_log(log, site, MatchOptions(max_outliers=0), ClassMap())
     assert paper.verdict == "unique match" and paper.hypotheses[0].matches == ["L1", "L2", "D"]  # wrong
-    tolerant = match_log(log, site, MatchOptions(max_outliers=1, top=50))
+    tolerant = match_log(log, site, MatchOptions(max_outliers=1, top=50), ClassMap())
     assert tolerant.exit_code == 3
     assert ["L2", "L3", None] in [h.matches for h in tolerant.hypotheses]

@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# The wheel installs and runs anywhere: build it, install it (dependencies from the registry or the
+# pip cache; no torch) into a fresh venv outside the source tree, then, from an empty temp folder
+# with no source tree on the path, run bim-extract on a copied sample IFC and bim-init run on a
+# copied sample site.yaml, and check the packaged data files (schemas, default categories, default
+# ONNX detector). Fails loudly on the first thing missing.
+# usage: .ci/wheel_smoke.sh   (PYTHON=... picks the interpreter that builds the wheel and the venv)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+SRC=$PWD
+PYTHON=${PYTHON:-python3}
+WORK=$(mktemp -d "${TMPDIR:-/tmp}/bim-init-wheel.XXXXXX")
+trap 'rm -rf "$WORK"' EXIT
+fail() { echo "wheel_smoke: FAILED: $*" >&2; exit 1; }
+
+# Build from a copy of the files git knows (tracked, or untracked and not ignored): nothing is
+# written into the source tree, and nothing ignored there (a venv, build output) gets in.
+echo "wheel_smoke: building the wheel in $WORK/dist"
+mkdir -p "$WORK/src"
+git -C "$SRC" ls-files -z --cached --others --exclude-standard \
+  | (cd "$SRC" && xargs -0 cp --parents -P -t "$WORK/src" 2>/dev/null) || fail "copying the source tree"
+"$PYTHON" -m pip wheel --quiet --no-deps --no-build-isolation "$WORK/src" -w "$WORK/dist" \
+  || "$PYTHON" -m pip wheel --quiet --no-deps "$WORK/src" -w "$WORK/dist" || fail "pip wheel"
+WHEEL=$(ls "$WORK"/dist/bim_init-*.whl) || fail "no wheel built"
+# Whatever the command line needs at run time must be inside the wheel.
+"$PYTHON" - "$WHEEL" <<'PY' || fail "files missing from the wheel"
+import sys, zipfile
+names = set(zipfile.ZipFile(sys.argv[1]).namelist())
+need = ["bimtools/default_categories.yaml", "initcli/detector/models/default.onnx",
+        "initcli/detector/models/default.json", "bimtools/schemas/site_config.schema.json",
+        "bimtools/schemas/eval_config.schema.json", "bimtools/schemas/detection_log.schema.json"]
+missing = [n for n in need if n not in names]
+if missing:
+    sys.exit(f"missing: {', '.join(missing)}")
+print(f"wheel_smoke: {len(names)} files in the wheel, data files present")
+PY
+
+echo "wheel_smoke: installing into a fresh venv"
+"$PYTHON" -m venv "$WORK/venv"
+VPY=$WORK/venv/bin/python
+"$VPY" -m pip install --quiet "$WHEEL" || fail "pip install of the wheel"
+if "$VPY" -c "import torch" 2>/dev/null; then fail "torch got installed (it must stay optional)"; fi
+
+RUN=$WORK/run
+mkdir -p "$RUN"
+cp "$SRC/sample_models/block_a.ifc" "$SRC/sample_models/block_a.site.yaml" "$RUN/"
+cd "$RUN"
+export PYTHONPATH=  PYTHONNOUSERSITE=1
+# The installed package, not the source tree, must be what runs.
+"$VPY" - "$SRC" <<'PY' || fail "the installed package is not the one imported"
+import sys, pathlib, bimtools, initcli
+src = pathlib.Path(sys.argv[1]).resolve()
+for mod in (bimtools, initcli):
+    path = pathlib.Path(mod.__file__).resolve()
+    if src in path.parents:
+        sys.exit(f"{mod.__name__} imported from the source tree: {path}")
+from bimtools.ifc.categories import DEFAULT_CATEGORIES
+from initcli.detector import DEFAULT_MODEL
+import onnxruntime
+for f in (DEFAULT_CATEGORIES, DEFAULT_MODEL):
+    if not f.is_file():
+        sys.exit(f"missing packaged file {f}")
+onnxruntime.InferenceSession(str(DEFAULT_MODEL), providers=["CPUExecutionProvider"])
+print("wheel_smoke: installed package imports; default categories and ONNX model load")
+PY
+"$WORK/venv/bin/bim-extract" block_a.ifc -o block_a_site || fail "bim-extract"
+test -s block_a_site/features.csv || fail "bim-extract wrote no features.csv"
+"$WORK/venv/bin/bim-init" run --config block_a.site.yaml --out session --start 10.0,11.0,0 --seed 3 --quiet \
+  || fail "bim-init run"
+test -s session/summary.json || fail "bim-init run wrote no summary.json"
+"$WORK/venv/bin/bim-init" match session/session.jsonl --site block_a_site --top 1 >/dev/null \
+  || fail "bim-init match on the session log"
+if "$WORK/venv/bin/bim-init" eval --out eval_out 2>err.txt; then fail "bim-init eval without --config ran"; fi
+grep -q -- "--config" err.txt || fail "bim-init eval without --config: $(cat err.txt)"
+echo "wheel_smoke: OK ($(basename "$WHEEL"))"
