@@ -316,3 +316,4 @@ def wall_follow_params(config: SessionConfig) -> WallFollowParams:
 def turn_in_place_speed(config: SessionConfig) -> float:
     """rad/s of the look round at the start and of the recovery rotation (§3.3.4)."""
     return 0.6 * config.robot.max_angular
+

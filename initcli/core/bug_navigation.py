@@ -117,3 +117,4 @@ def around_side(scan: ScanView, d_yaw: float, margin: float = 0.3) -> int:
     if abs(min(left, 5.0) - min(right, 5.0)) > margin:
         return 1 if right > left else -1
     return 1 if d_yaw <= 0 else -1  # target to the right: keep the obstacle on the left
+

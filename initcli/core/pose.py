@@ -169,7 +169,7 @@ def rigid_pose(
     bim_xy = np.asarray(bim_xy, dtype=float).reshape(-1, 2)
     odom_xy = np.asarray(odom_xy, dtype=float).reshape(-1, 2)
     if window is not None and len(bim_xy) > max(2, window):
-        bim_xy, odom_xy = bim_xy[-max(2, window) :], odom_xy[-max(2, window) :]
+        bim_xy, odom_xy = bim_xy[-max(2, window):], odom_xy[-max(2, window):]
     transform = rigid_align(odom_xy, bim_xy)
     return transform * robot_odom
 

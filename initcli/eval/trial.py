@@ -145,3 +145,4 @@ def run_trial(job: TrialJob) -> list[TrialRecord]:
 
 def trial_seed(base: int, start: int) -> int:
     return base + start
+
