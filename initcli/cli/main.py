@@ -14,6 +14,7 @@ from initcli.cli.bag2log import bag2log
 from initcli.cli.detector import detector_app
 from initcli.cli.eval import evaluate
 from initcli.cli.match import match
+from initcli.cli.publish_pose import publish_pose
 from initcli.cli.run import run as run_session_command
 
 app = typer.Typer(
@@ -35,6 +36,7 @@ app.command("match")(match)
 app.command("run")(run_session_command)
 app.command("eval")(evaluate)
 app.command("bag2log")(bag2log)
+app.command("publish-pose")(publish_pose)
 app.add_typer(detector_app, name="detector")
 
 
