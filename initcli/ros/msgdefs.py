@@ -15,6 +15,7 @@ that carries no definitions is read with either; :func:`detection_fields` reads 
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -186,3 +187,23 @@ def _field(store: Typestore, kind: int, detail: Any, raw: Any) -> Any:
     if kind == 3 and count:
         out += [_field(store, int(inner_kind), inner_detail, None) for _ in range(count - len(out))]
     return out
+
+
+def to_dict(msg: Any) -> Any:
+    """A message object as rosbridge JSON (``uint8[]`` as base64, as rosbridge sends it)."""
+    import base64
+    import dataclasses
+
+    if dataclasses.is_dataclass(msg):
+        return {
+            f.name: to_dict(getattr(msg, f.name)) for f in dataclasses.fields(msg) if f.name != "__msgtype__"
+        }
+    if isinstance(msg, np.ndarray):
+        if msg.dtype == np.uint8:
+            return base64.b64encode(msg.tobytes()).decode("ascii")
+        return [None if isinstance(v, float) and not math.isfinite(v) else v for v in msg.tolist()]
+    if isinstance(msg, list | tuple):
+        return [to_dict(v) for v in msg]
+    if isinstance(msg, np.generic):
+        return msg.item()
+    return msg
