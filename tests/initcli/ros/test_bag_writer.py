@@ -100,6 +100,7 @@ def test_session_bag_topics_and_initialpose(session):
     moved = math.hypot(p.x - final["x"], p.y - final["y"])
     assert moved == pytest.approx(odom_then.distance_to(odom_end), abs=2e-3)
     turned = math.degrees(quaternion_yaw(q.x, q.y, q.z, q.w) - math.radians(final["yaw_deg"]))
-    assert (turned + 180) % 360 - 180 == pytest.approx(math.degrees(odom_then.yaw - odom_end.yaw), abs=0.05)
+    odom_turn = math.degrees(odom_then.yaw - odom_end.yaw)
+    assert (turned + 180) % 360 - 180 == pytest.approx((odom_turn + 180) % 360 - 180, abs=0.05)
     assert grid.info.width > 0 and len(grid.data) == grid.info.width * grid.info.height
     assert set(grid.data.tolist()) <= {-1, 0, 100} and 100 in set(grid.data.tolist())
