@@ -15,9 +15,9 @@ from initcli.io.detection_log import read_log, write_log
 from initcli.match.pipeline import MatchOptions, run_match
 from initcli.ros.bag_reader import BagSource, bag_to_records
 from initcli.ros.tf import quaternion_yaw
-from tests.conftest import SAMPLES
 
 runner = CliRunner()
+SAMPLES = Path(__file__).resolve().parents[3] / "sample_models"
 
 
 @pytest.fixture(scope="module")
