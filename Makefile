@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install run test lint wheel-check samples bench eval clean
+.PHONY: install run test lint wheel-check samples bench eval clean sample-bag
 
 install: $(STAMP)
 
@@ -17,6 +17,12 @@ $(STAMP): pyproject.toml
 run: install
 	$(BIN)/bim-extract sample_models/block_a.ifc -o runs/block_a_site
 	$(BIN)/bim-init run --config sample_models/block_a.site.yaml --out runs/block_a_session
+
+# The sample bag a user tries first: a simulated session on block_a as a ROS 2 MCAP (opens in Foxglove).
+sample-bag: install
+	$(BIN)/bim-init run --config sample_models/block_a.site.yaml --out runs/sample_bag_session \
+		--start 10.0,11.0,0 --seed 3 --quiet --record runs/block_a_session.mcap
+	$(BIN)/bim-init bag2log runs/block_a_session.mcap -o runs/block_a_session.from_bag.jsonl
 
 test: install
 	$(BIN)/python -m pytest -q

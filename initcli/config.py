@@ -32,11 +32,24 @@ class SiteSection:
 
 
 @dataclass
+class RosbridgeSection:  # robot.driver: rosbridge (initcli/ros/rosbridge_driver.py)
+    host: str = "localhost"
+    port: int = 9090
+    odom_topic: str = "/odom"  # nav_msgs/Odometry
+    scan_topic: str = "/scan"  # sensor_msgs/LaserScan
+    detections_topic: str = "/detections"  # vision_msgs/Detection2DArray
+    depth_topic: str = "/camera/aligned_depth_to_color/image_raw"  # 16UC1 mm or 32FC1 m
+    cmd_vel_topic: str = "/cmd_vel"  # geometry_msgs/Twist
+
+
+@dataclass
 class RobotSection:
-    driver: str = "sim"
+    driver: str = "sim"  # sim | rosbridge
     radius: float = 0.3  # m
     max_linear: float = 0.5  # m/s
     max_angular: float = 1.0  # rad/s
+    drive: bool = True  # rosbridge: false listens only while a person drives
+    rosbridge: RosbridgeSection = field(default_factory=RosbridgeSection)
 
 
 @dataclass

@@ -1,17 +1,20 @@
 """``bim-init``: the typer app that gathers every command face of :mod:`initcli.cli`.
 
 Commands: ``match`` (:mod:`initcli.cli.match`), ``run`` (:mod:`initcli.cli.run`), ``eval``
-(:mod:`initcli.cli.eval`), ``detector`` (:mod:`initcli.cli.detector`). Bad input exits with 2 and one
-line on stderr, never a traceback.
+(:mod:`initcli.cli.eval`), ``detector`` (:mod:`initcli.cli.detector`), ``bag2log``
+(:mod:`initcli.cli.bag2log`), ``publish-pose`` (:mod:`initcli.cli.publish_pose`). Bad input exits
+with 2 and one line on stderr, never a traceback.
 """
 
 from __future__ import annotations
 
 import typer
 
+from initcli.cli.bag2log import bag2log
 from initcli.cli.detector import detector_app
 from initcli.cli.eval import evaluate
 from initcli.cli.match import match
+from initcli.cli.publish_pose import publish_pose
 from initcli.cli.run import run as run_session_command
 
 app = typer.Typer(
@@ -32,6 +35,8 @@ def _root() -> None:
 app.command("match")(match)
 app.command("run")(run_session_command)
 app.command("eval")(evaluate)
+app.command("bag2log")(bag2log)
+app.command("publish-pose")(publish_pose)
 app.add_typer(detector_app, name="detector")
 
 

@@ -17,6 +17,7 @@ from rich.console import Console
 from rich.table import Table
 
 from bimtools.errors import InputError
+from initcli.cli.bag2log import log_or_bag
 from initcli.core.geometry import Pose2D
 from initcli.io.match_result import report_to_dict
 from initcli.match.pipeline import EXIT_BAD_INPUT, MatchOptions, MatchReport, run_match
@@ -212,7 +213,8 @@ def match(
         skip_bad=skip_bad,
     )
     try:
-        report = run_match(log, site, options)
+        with log_or_bag(log) as log_path:  # a ROS bag is converted first (bim-init bag2log)
+            report = run_match(log_path, site, options)
     except InputError as exc:
         raise _fail(str(exc)) from None
 

@@ -148,6 +148,10 @@ def run(
         bool, typer.Option("--quiet", help="No live view or table; print the summary path only.")
     ] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print summary.json.")] = False,
+    record: Annotated[
+        Path | None,
+        typer.Option("--record", metavar="SESSION.mcap", help="Also write the session as a ROS 2 bag."),
+    ] = None,
 ) -> None:
     """Run a whole initialisation session: explore, detect, match, actively explore, rectify, fine-tune."""
     console = Console()
@@ -157,6 +161,10 @@ def run(
         the_seed = int(cfg.sim.seed if seed is None else seed)
         target = out or Path("runs") / datetime.now().strftime("%Y%m%d-%H%M%S")
         doc = run_session(cfg, target, the_seed, start_pose, quiet or as_json, console)
+        if record is not None:
+            from initcli.ros.bag_writer import record_session
+
+            record_session(target, cfg.site_path(), record)
     except InputError as exc:
         print(f"bim-init: error: {' '.join(str(exc).split())}", file=sys.stderr)
         raise typer.Exit(EXIT_BAD_INPUT) from None

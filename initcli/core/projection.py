@@ -151,3 +151,37 @@ def box_for_point(
     half_w = 0.5 * camera.fx * width_m / depth
     half_h = 0.5 * camera.fy * height_m / depth
     return (u - half_w, v - half_h, u + half_w, v + half_h)
+
+
+# --- the camera mount from and to a ROS transform (base frame -> optical frame) ------------------
+
+
+def rpy_from_matrix(r: np.ndarray) -> tuple[float, float, float]:
+    """(roll, pitch, yaw) with ``rpy_matrix(roll, pitch, yaw) == r`` (pitch in [-pi/2, pi/2])."""
+    r = np.asarray(r, dtype=float)
+    pitch = math.asin(max(-1.0, min(1.0, -r[2, 0])))
+    if abs(r[2, 0]) < 1.0 - 1e-9:
+        roll = math.atan2(r[2, 1], r[2, 2])
+        yaw = math.atan2(r[1, 0], r[0, 0])
+    else:  # gimbal lock: roll and yaw share one axis; put it all in yaw
+        roll = 0.0
+        yaw = math.atan2(-r[0, 1], r[1, 1])
+    return roll, pitch, yaw
+
+
+def mount_from_optical(rotation: np.ndarray, translation: np.ndarray) -> CameraMount:
+    """The camera body's pose in the base frame from the optical frame's pose in it.
+
+    ``rotation`` is ``R^{base}_{optical}`` (columns: the optical x right, y down, z forward axes in
+    the base frame), e.g. the ``/tf_static`` chain ``base_link -> camera_color_optical_frame``.
+    ``R^{base}_{body} = R^{base}_{optical} (R^{body}_{optical})^T`` (the inverse of Eq. 2's first step).
+    """
+    r_body = np.asarray(rotation, dtype=float) @ R_BODY_OPTICAL.T
+    roll, pitch, yaw = rpy_from_matrix(r_body)
+    x, y, z = (float(v) for v in np.asarray(translation, dtype=float).reshape(3))
+    return CameraMount(x, y, z, roll, pitch, yaw)
+
+
+def optical_rotation(mount: CameraMount) -> np.ndarray:
+    """``R^{base}_{optical}`` of a mount (Eq. 2: body rotation times the optical-to-body axes)."""
+    return mount.rotation() @ R_BODY_OPTICAL

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from bimtools.site.load import StoreyModel
+from initcli.core.depth import window_depth
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.detector.look import Look
 from initcli.detector.render import View, render_view
@@ -24,19 +25,6 @@ from initcli.detector.runtime import Detection, Detector
 from initcli.detector.scene import CLUTTER_BOX, CLUTTER_PERSON, Camera, Clutter, Scene, camera_pose_in_world
 from initcli.io.detection_log import DetectedObject
 from initcli.sim.world import SimWorld, box_edges
-
-
-def window_depth(
-    depth: np.ndarray, u: float, v: float, n: int = 2, min_depth: float = 0.0, max_depth: float = math.inf
-) -> float | None:
-    """Mean of the valid depths (finite, > 0, in [min_depth, max_depth]) in the (2n+1)^2 window at (u, v)."""
-    h, w = depth.shape[:2]
-    cu, cv = int(math.floor(u)), int(math.floor(v))
-    if not (0 <= cu < w and 0 <= cv < h):
-        return None
-    patch = depth[max(0, cv - n) : min(h, cv + n + 1), max(0, cu - n) : min(w, cu + n + 1)].astype(np.float64)
-    ok = np.isfinite(patch) & (patch > 0) & (patch >= min_depth) & (patch <= max_depth)
-    return float(patch[ok].mean()) if ok.any() else None
 
 
 def detections_to_objects(

@@ -1,0 +1,123 @@
+"""The result where Nav2 takes it: ``/initialpose`` (PoseWithCovarianceStamped), the hypotheses as a
+PoseArray and the session state as a string, as rosbridge JSON messages; and the pose to send,
+from a finished session (``summary.json`` and its ``session.jsonl``)."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from bimtools.errors import InputError
+from initcli.core.geometry import Pose2D
+from initcli.io.detection_log import Detections, HypothesesRecord, Odom, read_log
+from initcli.ros.records import InitialPose
+from initcli.ros.tf import yaw_quaternion
+
+# 6x6 (x, y, z, roll, pitch, yaw) indices of the planar 3x3 (x, y, yaw); AMCL reads 0, 7 and 35.
+_PLANAR = (0, 1, 5)
+
+
+def covariance_6x6(cov: np.ndarray | list | None) -> tuple[float, ...]:
+    """The 3x3 (x, y, yaw) covariance of fine tuning as ROS's row-major 6x6; zeros when unknown."""
+    out = [0.0] * 36
+    if cov is not None:
+        c = np.asarray(cov, dtype=float).reshape(3, 3)
+        for i, a in enumerate(_PLANAR):
+            for j, b in enumerate(_PLANAR):
+                out[6 * a + b] = float(c[i, j])
+    return tuple(out)
+
+
+def stamp_dict(t: float) -> dict[str, int]:
+    sec = math.floor(t)
+    nanosec = int(round((t - sec) * 1e9))
+    if nanosec >= 1_000_000_000:
+        sec, nanosec = sec + 1, nanosec - 1_000_000_000
+    return {"sec": int(sec), "nanosec": nanosec}
+
+
+def pose_dict(x: float, y: float, yaw: float) -> dict[str, Any]:
+    qx, qy, qz, qw = yaw_quaternion(yaw)
+    return {"position": {"x": x, "y": y, "z": 0.0}, "orientation": {"x": qx, "y": qy, "z": qz, "w": qw}}
+
+
+def initial_pose_message(pose: InitialPose) -> dict[str, Any]:
+    """``geometry_msgs/PoseWithCovarianceStamped`` as rosbridge JSON."""
+    return {
+        "header": {"stamp": stamp_dict(pose.stamp), "frame_id": pose.frame_id},
+        "pose": {"pose": pose_dict(pose.x, pose.y, pose.yaw), "covariance": list(pose.covariance)},
+    }
+
+
+def pose_array_message(t: float, poses: list[Pose2D], frame_id: str = "map") -> dict[str, Any]:
+    """``geometry_msgs/PoseArray`` of the hypotheses (base poses in the BIM/map frame)."""
+    return {
+        "header": {"stamp": stamp_dict(t), "frame_id": frame_id},
+        "poses": [pose_dict(p.x, p.y, p.yaw) for p in poses],
+    }
+
+
+def state_message(state: str) -> dict[str, Any]:
+    return {"data": state}
+
+
+def hypothesis_poses(record: HypothesesRecord) -> list[Pose2D]:
+    """The poses of a ``hypotheses`` record written by ``bim-init run``."""
+    out = []
+    for h in record.data.get("hypotheses", []):
+        pose = h.get("pose") if isinstance(h, dict) else None
+        if isinstance(pose, list) and len(pose) == 3:
+            out.append(Pose2D(float(pose[0]), float(pose[1]), float(pose[2])))
+    return out
+
+
+def _odom_at(odom: list[Odom], t: float) -> Pose2D:
+    ts = np.array([o.t for o in odom])
+    i = int(np.clip(np.searchsorted(ts, t), 0, len(odom) - 1))
+    if i > 0 and abs(ts[i - 1] - t) <= abs(ts[i] - t):
+        i -= 1
+    return odom[i].pose
+
+
+def session_initial_pose(summary: dict[str, Any], log_path: Path | None) -> InitialPose:
+    """The pose to send for a finished session, at the time of its last image.
+
+    ``summary["pose"]`` is the base pose at the end of the session; with the session log the
+    map<-odom transform it implies carries the pose back to the last image's odom pose.
+    """
+    if not summary.get("success") or not isinstance(summary.get("pose"), dict):
+        reason = summary.get("reason", "no pose")
+        raise InputError(f"the session did not initialise ({reason}): no pose to send")
+    p = summary["pose"]
+    try:
+        final = Pose2D(float(p["x"]), float(p["y"]), math.radians(float(p["yaw_deg"])))
+    except (KeyError, TypeError, ValueError):
+        raise InputError("summary.json: 'pose' needs x, y and yaw_deg") from None
+    cov = covariance_6x6(summary.get("covariance"))
+    t, pose = float(summary.get("duration_s", 0.0)), final
+    if log_path is not None and log_path.exists():
+        log = read_log(log_path)
+        odom = log.odom
+        images = [d for d in log.detections if odom and d.t <= odom[-1].t + 1e-9]
+        if odom and images:
+            image: Detections = images[-1]
+            map_from_odom = final * odom[-1].pose.inverse()
+            pose = map_from_odom * _odom_at(odom, image.t)
+            t = image.t
+    return InitialPose(t, pose.x, pose.y, pose.yaw, cov)
+
+
+def read_summary(path: Path) -> dict[str, Any]:
+    try:
+        doc = json.loads(Path(path).read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such file") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise InputError(f"{path}: not a summary.json ({exc})") from None
+    if not isinstance(doc, dict) or "success" not in doc:
+        raise InputError(f"{path}: not a bim-init run summary.json (no 'success')")
+    return doc

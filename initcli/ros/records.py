@@ -1,0 +1,116 @@
+"""Typed records of the ROS link: the topics chosen in a bag, transforms, the pose sent to Nav2."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+# Message types, ROS 2 spelling (rosbags names ROS 1 types the same way).
+IMAGE = "sensor_msgs/msg/Image"
+COMPRESSED_IMAGE = "sensor_msgs/msg/CompressedImage"
+CAMERA_INFO = "sensor_msgs/msg/CameraInfo"
+LASER_SCAN = "sensor_msgs/msg/LaserScan"
+ODOMETRY = "nav_msgs/msg/Odometry"
+OCCUPANCY_GRID = "nav_msgs/msg/OccupancyGrid"
+TF_MESSAGE = "tf2_msgs/msg/TFMessage"
+DETECTION_2D_ARRAY = "vision_msgs/msg/Detection2DArray"
+POSE_WITH_COVARIANCE_STAMPED = "geometry_msgs/msg/PoseWithCovarianceStamped"
+POSE_ARRAY = "geometry_msgs/msg/PoseArray"
+TWIST = "geometry_msgs/msg/Twist"
+STRING = "std_msgs/msg/String"
+
+DEPTH_ENCODINGS = ("16UC1", "32FC1", "mono16")  # 16UC1 / mono16: millimetres; 32FC1: metres
+
+# Topic names bim-init writes and publishes.
+INITIALPOSE_TOPIC = "/initialpose"
+HYPOTHESES_TOPIC = "/bim_init/hypotheses"
+STATE_TOPIC = "/bim_init/state"
+MAP_TOPIC = "/map"
+CMD_VEL_TOPIC = "/cmd_vel"
+
+
+@dataclass(frozen=True)
+class Topic:
+    name: str
+    msgtype: str
+    count: int = 0
+
+    def describe(self) -> str:
+        return f"{self.name} ({self.msgtype}, {self.count} messages)"
+
+
+@dataclass(frozen=True)
+class BagTopics:
+    """The topics of a bag that ``bag2log`` reads."""
+
+    perception: Topic  # Image, CompressedImage or Detection2DArray
+    depth: Topic
+    camera_info: Topic
+    odom: Topic | None  # nav_msgs/Odometry; None: odometry from /tf
+    tf: Topic | None
+    tf_static: Topic | None
+    scan: Topic | None
+
+    @property
+    def perception_kind(self) -> str:
+        return {IMAGE: "image", COMPRESSED_IMAGE: "compressed", DETECTION_2D_ARRAY: "detections"}[
+            self.perception.msgtype
+        ]
+
+
+@dataclass(frozen=True)
+class Transform:
+    """``parent -> child``: the child frame's pose in the parent (rotation matrix, translation m)."""
+
+    parent: str
+    child: str
+    rotation: np.ndarray = field(compare=False)
+    translation: np.ndarray = field(compare=False)
+
+
+@dataclass(frozen=True)
+class Bag2LogOptions:
+    image_topic: str | None = None
+    detections_topic: str | None = None
+    depth_topic: str | None = None
+    camera_info_topic: str | None = None
+    odom_topic: str | None = None
+    scan_topic: str | None = None
+    base_frame: str | None = None  # None: the odometry's child frame
+    model: str | Path = "default"
+    rate: float | None = None  # Hz: images used at most this often; None: every image
+    class_names: tuple[str, ...] | dict[str, str] | None = None  # numeric class ids -> names
+    depth_window: int = 2  # n: (2n+1)^2 window of Eq. 1
+    score_threshold: float = 0.25  # detector confidence kept in the log (match filters again)
+    threads: int = 2
+
+
+@dataclass
+class Bag2LogStats:
+    messages: int = 0
+    images: int = 0  # perception messages turned into detections records
+    objects: int = 0
+    odom: int = 0
+    scans: int = 0
+    without_depth: int = 0
+    outside_odometry: int = 0
+    skipped_rate: int = 0
+    seconds: float = 0.0
+    warnings: list[str] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class InitialPose:
+    """``geometry_msgs/PoseWithCovarianceStamped`` for Nav2/AMCL's ``/initialpose``.
+
+    ``covariance`` is the row-major 6x6 of (x, y, z, roll, pitch, yaw); AMCL reads [0], [7], [35].
+    """
+
+    stamp: float  # s: the time of the image the pose rests on
+    x: float
+    y: float
+    yaw: float
+    covariance: tuple[float, ...]
+    frame_id: str = "map"

@@ -1,0 +1,108 @@
+"""The live link to a ROS robot over rosbridge (protocol v2, JSON over websocket) with roslibpy.
+
+:class:`RosbridgeLink` advertises, publishes and subscribes; :func:`publish_initial_pose` sends a
+finished session's pose once to ``/initialpose`` (and the state to ``/bim_init/state``).
+roslibpy is in the ``[ros]`` extra: ``pip install 'bim-init[ros]'``.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+from bimtools.errors import InputError
+from initcli.ros.nav2 import initial_pose_message, state_message
+from initcli.ros.records import INITIALPOSE_TOPIC, STATE_TOPIC, InitialPose
+
+DEFAULT_PORT = 9090
+CONNECT_TIMEOUT_S = 5.0
+ADVERTISE_SETTLE_S = 0.5  # s: subscribers of a new publisher need a moment before the first message
+
+
+def ros_type(msgtype: str) -> str:
+    """rosbridge's spelling (``geometry_msgs/Twist``), which ROS 1 and ROS 2 bridges both accept."""
+    return msgtype.replace("/msg/", "/")
+
+
+class RosbridgeLink:
+    """One connection to a rosbridge server."""
+
+    def __init__(self, host: str = "localhost", port: int = DEFAULT_PORT, timeout: float = CONNECT_TIMEOUT_S):
+        try:
+            import roslibpy
+        except ImportError:
+            raise InputError("the rosbridge link needs roslibpy: pip install 'bim-init[ros]'") from None
+        self._roslibpy = roslibpy
+        self.host, self.port = host, port
+        self.ros = roslibpy.Ros(host=host, port=port)
+        try:
+            self.ros.run(timeout=timeout)
+        except Exception as exc:  # noqa: BLE001 - roslibpy raises its own and twisted's errors
+            raise InputError(
+                f"cannot reach rosbridge at ws://{host}:{port} ({exc or type(exc).__name__})"
+            ) from None
+        self._publishers: dict[str, Any] = {}
+        self._subscribers: list[Any] = []
+        self._lock = threading.Lock()
+
+    @property
+    def connected(self) -> bool:
+        return bool(self.ros.is_connected)
+
+    def advertise(self, topic: str, msgtype: str) -> Any:
+        with self._lock:
+            pub = self._publishers.get(topic)
+            if pub is None:
+                pub = self._roslibpy.Topic(self.ros, topic, ros_type(msgtype))
+                pub.advertise()
+                self._publishers[topic] = pub
+            return pub
+
+    def publish(self, topic: str, msgtype: str, message: dict[str, Any]) -> None:
+        if not self.connected:
+            raise InputError(f"rosbridge at ws://{self.host}:{self.port}: connection lost")
+        self.advertise(topic, msgtype).publish(self._roslibpy.Message(message))
+
+    def subscribe(self, topic: str, msgtype: str, callback: Callable[[dict[str, Any]], None]) -> None:
+        sub = self._roslibpy.Topic(self.ros, topic, ros_type(msgtype))
+        sub.subscribe(callback)
+        self._subscribers.append(sub)
+
+    def close(self) -> None:
+        for sub in self._subscribers:
+            try:
+                sub.unsubscribe()
+            except Exception:  # noqa: BLE001 - closing anyway
+                pass
+        for pub in self._publishers.values():
+            try:
+                pub.unadvertise()
+            except Exception:  # noqa: BLE001
+                pass
+        try:
+            self.ros.close()
+        except Exception:  # noqa: BLE001
+            pass
+
+    def __enter__(self) -> RosbridgeLink:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def publish_initial_pose(
+    pose: InitialPose, host: str = "localhost", port: int = DEFAULT_PORT, settle: float = ADVERTISE_SETTLE_S
+) -> dict[str, Any]:
+    """Send ``pose`` once on ``/initialpose`` (and "initialised" on the state topic); returns the message."""
+    message = initial_pose_message(pose)
+    with RosbridgeLink(host, port) as link:
+        link.advertise(INITIALPOSE_TOPIC, "geometry_msgs/msg/PoseWithCovarianceStamped")
+        link.advertise(STATE_TOPIC, "std_msgs/msg/String")
+        time.sleep(settle)
+        link.publish(INITIALPOSE_TOPIC, "geometry_msgs/msg/PoseWithCovarianceStamped", message)
+        link.publish(STATE_TOPIC, "std_msgs/msg/String", state_message("initialised"))
+        time.sleep(min(settle, 0.2))  # let the frames leave before closing
+    return message

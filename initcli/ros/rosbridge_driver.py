@@ -1,0 +1,243 @@
+"""``robot.driver: rosbridge``: a real robot behind the :class:`~initcli.drivers.base.RobotDriver`
+interface, over rosbridge.
+
+It subscribes to the robot's odometry, laser scan, detections (``vision_msgs/Detection2DArray``,
+the robot's own detector) and aligned depth image; each :meth:`step` sends the command as
+``geometry_msgs/Twist`` on ``cmd_vel`` (``robot.drive: false``: nothing is sent, a person drives),
+waits one control period and reports what arrived. The robot is stopped (a zero Twist) on any
+error, on Ctrl-C and when the driver is closed. The session publishes its hypotheses
+(``/bim_init/hypotheses``), its state (``/bim_init/state``) and the result (``/initialpose``)
+through :meth:`publish_hypotheses`, :meth:`publish_state` and :meth:`publish_initial_pose`.
+"""
+
+from __future__ import annotations
+
+import base64
+import math
+import threading
+import time
+from collections import deque
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+
+from bimtools.errors import InputError
+from initcli.core.depth import window_depth
+from initcli.core.geometry import Pose2D
+from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.drivers.base import LaserScan, SensorFrame
+from initcli.io.detection_log import DetectedObject
+from initcli.ros.bag_reader import DEPTH_SYNC_S, decode_depth
+from initcli.ros.msgdefs import bbox_centre, detection_fields
+from initcli.ros.nav2 import initial_pose_message, pose_array_message, state_message
+from initcli.ros.records import (
+    HYPOTHESES_TOPIC,
+    INITIALPOSE_TOPIC,
+    STATE_TOPIC,
+    TWIST,
+    InitialPose,
+)
+from initcli.ros.rosbridge import RosbridgeLink
+from initcli.ros.tf import quaternion_yaw
+
+CONTROL_RATE = 10.0  # Hz
+ODOM_TIMEOUT_S = 1.0  # s without odometry: the robot is stopped and the session ends
+
+
+def _ns(value: Any) -> Any:
+    """rosbridge JSON -> attribute access (what the bag reader's helpers take)."""
+    if isinstance(value, dict):
+        return SimpleNamespace(**{k: _ns(v) for k, v in value.items()})
+    if isinstance(value, list):
+        return [_ns(v) for v in value]
+    return value
+
+
+def _stamp(msg: dict[str, Any]) -> float:
+    st = msg.get("header", {}).get("stamp", {})
+    return float(st.get("sec", st.get("secs", 0))) + float(st.get("nanosec", st.get("nsecs", 0))) * 1e-9
+
+
+def json_depth(msg: dict[str, Any]) -> np.ndarray:
+    """A rosbridge depth Image (``data`` base64, as rosbridge sends uint8[]) -> metres."""
+    data = msg.get("data", "")
+    raw = base64.b64decode(data) if isinstance(data, str) else bytes(data)
+    return decode_depth(SimpleNamespace(**{**msg, "data": raw}))
+
+
+class RosbridgeDriver:
+    """Commands out, sensors in, over one :class:`RosbridgeLink` (see the module docstring)."""
+
+    control_rate = CONTROL_RATE
+
+    def __init__(
+        self,
+        link: RosbridgeLink,
+        camera: CameraIntrinsics,
+        mount: CameraMount,
+        topics: Any,  # initcli.config.RosbridgeSection
+        drive: bool = True,
+        depth_window: int = 2,
+        max_linear: float = 0.5,
+        max_angular: float = 1.0,
+        odom_timeout: float = ODOM_TIMEOUT_S,
+        period: float | None = None,
+    ) -> None:
+        self.link = link
+        self.camera, self.mount = camera, mount
+        self.topics = topics
+        self.drive = drive
+        self.depth_window = depth_window
+        self.max_linear, self.max_angular = max_linear, max_angular
+        self.odom_timeout = odom_timeout
+        self.period = 1.0 / CONTROL_RATE if period is None else period
+        self._lock = threading.Lock()
+        self._odom: tuple[float, Pose2D] | None = None  # (arrival, pose in the robot's odom frame)
+        self._odom_t = 0.0
+        self._scan: LaserScan | None = None
+        self._detections: deque[dict[str, Any]] = deque(maxlen=20)
+        self._depths: deque[tuple[float, dict[str, Any]]] = deque(maxlen=10)
+        self._origin: Pose2D | None = None
+        self._last: Pose2D | None = None
+        self._distance = 0.0
+        self._t0: float | None = None
+        link.subscribe(topics.odom_topic, "nav_msgs/msg/Odometry", self._on_odom)
+        link.subscribe(topics.scan_topic, "sensor_msgs/msg/LaserScan", self._on_scan)
+        link.subscribe(topics.detections_topic, "vision_msgs/msg/Detection2DArray", self._on_detections)
+        link.subscribe(topics.depth_topic, "sensor_msgs/msg/Image", self._on_depth)
+        if drive:
+            link.advertise(topics.cmd_vel_topic, TWIST)
+
+    # -- subscriptions (roslibpy's thread) ----------------------------------------------------------
+
+    def _on_odom(self, msg: dict[str, Any]) -> None:
+        pose = msg["pose"]["pose"]
+        p, q = pose["position"], pose["orientation"]
+        yaw = quaternion_yaw(q.get("x", 0.0), q.get("y", 0.0), q.get("z", 0.0), q.get("w", 1.0))
+        with self._lock:
+            self._odom = (time.monotonic(), Pose2D(float(p.get("x", 0.0)), float(p.get("y", 0.0)), yaw))
+            self._odom_t = _stamp(msg)
+
+    def _on_scan(self, msg: dict[str, Any]) -> None:
+        ranges = np.array([math.inf if r is None else float(r) for r in msg.get("ranges", [])])
+        with self._lock:
+            self._scan = LaserScan(
+                float(msg["angle_min"]), float(msg["angle_increment"]), float(msg["range_max"]), ranges
+            )
+
+    def _on_detections(self, msg: dict[str, Any]) -> None:
+        with self._lock:
+            self._detections.append(msg)
+
+    def _on_depth(self, msg: dict[str, Any]) -> None:
+        with self._lock:
+            self._depths.append((_stamp(msg), msg))
+
+    # -- RobotDriver --------------------------------------------------------------------------------
+
+    @property
+    def distance(self) -> float:
+        return self._distance
+
+    def _objects(self, msg: dict[str, Any]) -> list[DetectedObject] | None:
+        t = _stamp(msg)
+        with self._lock:
+            best = min(self._depths, key=lambda d: abs(d[0] - t), default=None)
+        if best is None or abs(best[0] - t) > DEPTH_SYNC_S:
+            return None
+        depth = json_depth(best[1])
+        out = []
+        for det in _ns(msg).detections:
+            hyps = detection_fields(det)
+            if not hyps:
+                continue
+            cls, score = max(hyps, key=lambda h: h[1])
+            cu, cv = bbox_centre(det.bbox)
+            sx, sy = float(det.bbox.size_x), float(det.bbox.size_y)
+            z = window_depth(depth, cu, cv, self.depth_window)  # Eq. 1: D at the box centre
+            out.append(DetectedObject(cls, score, (cu - sx / 2, cv - sy / 2, cu + sx / 2, cv + sy / 2), z))
+        return out
+
+    def _frame(self) -> SensorFrame:
+        with self._lock:
+            odom = self._odom
+            scan = self._scan
+            pending = list(self._detections)
+            self._detections.clear()
+        if odom is None or time.monotonic() - odom[0] > self.odom_timeout:
+            self.stop()
+            raise InputError(
+                f"rosbridge: no odometry on {self.topics.odom_topic} for {self.odom_timeout:.1f} s"
+            )
+        if self._origin is None:
+            self._origin = odom[1].inverse()  # the odom frame starts at the current pose (§3.3.1)
+            self._t0 = time.monotonic()
+        pose = self._origin * odom[1]
+        if self._last is not None:
+            self._distance += pose.distance_to(self._last)
+        self._last = pose
+        detections = None
+        for msg in pending:
+            objects = self._objects(msg)
+            if objects is not None:
+                detections = (detections or []) + objects
+        return SensorFrame(time.monotonic() - (self._t0 or 0.0), pose, scan, detections)
+
+    def start(self) -> SensorFrame:
+        deadline = time.monotonic() + self.odom_timeout + 1.0
+        while self._odom is None and time.monotonic() < deadline:
+            time.sleep(0.01)
+        return self._frame()
+
+    def step(self, v: float, w: float) -> SensorFrame:
+        try:
+            self.command(v, w)
+            time.sleep(self.period)
+            return self._frame()
+        except BaseException:  # any error or Ctrl-C: stop the robot first
+            self.stop()
+            raise
+
+    def command(self, v: float, w: float) -> None:
+        if not self.drive:
+            return
+        v = float(np.clip(v, -self.max_linear, self.max_linear))
+        w = float(np.clip(w, -self.max_angular, self.max_angular))
+        self.link.publish(
+            self.topics.cmd_vel_topic,
+            TWIST,
+            {"linear": {"x": v, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": w}},
+        )
+
+    def stop(self) -> None:
+        """Send a zero Twist (ignoring a dead connection: there is nothing else to do)."""
+        if not self.drive:
+            return
+        try:
+            self.command(0.0, 0.0)
+        except Exception:  # noqa: BLE001 - the link is gone; the robot's own watchdog must act
+            pass
+
+    # -- what the session publishes -----------------------------------------------------------------
+
+    def publish_state(self, state: str) -> None:
+        self.link.publish(STATE_TOPIC, "std_msgs/msg/String", state_message(state))
+
+    def publish_hypotheses(self, t: float, poses: list[Pose2D]) -> None:
+        self.link.publish(HYPOTHESES_TOPIC, "geometry_msgs/msg/PoseArray", pose_array_message(t, poses))
+
+    def publish_initial_pose(self, pose: InitialPose) -> None:
+        self.link.publish(
+            INITIALPOSE_TOPIC, "geometry_msgs/msg/PoseWithCovarianceStamped", initial_pose_message(pose)
+        )
+
+    def close(self) -> None:
+        self.stop()
+        self.link.close()
+
+    def __enter__(self) -> RosbridgeDriver:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

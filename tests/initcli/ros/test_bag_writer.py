@@ -1,0 +1,106 @@
+"""Bags out: a simulated session as a ROS 2 MCAP, and the round trip sim -> bag -> bag2log -> match."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from initcli.cli.main import app
+from initcli.io.detection_log import read_log, write_log
+from initcli.match.pipeline import MatchOptions, run_match
+from initcli.ros.bag_reader import BagSource, bag_to_records
+from initcli.ros.tf import quaternion_yaw
+
+runner = CliRunner()
+SAMPLES = Path(__file__).resolve().parents[3] / "sample_models"
+
+
+@pytest.fixture(scope="module")
+def session(tmp_path_factory) -> Path:
+    tmp = tmp_path_factory.mktemp("session")
+    doc = yaml.safe_load((SAMPLES / "block_a.site.yaml").read_text())
+    doc["site"]["path"] = str(SAMPLES / "block_a.ifc")
+    config = tmp / "block_a.yaml"
+    config.write_text(yaml.safe_dump(doc))
+    result = runner.invoke(
+        app,
+        [
+            "run",
+            "--config",
+            str(config),
+            "--out",
+            str(tmp / "out"),
+            "--quiet",
+            "--start",
+            "10.0,11.0,0",
+            "--seed",
+            "3",
+            "--record",
+            str(tmp / "session.mcap"),
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    return tmp
+
+
+def test_round_trip_gives_the_same_verdict_and_pose(session):
+    site = session / "out" / "site"
+    direct = run_match(session / "out" / "session.jsonl", site, MatchOptions())
+    records, stats = bag_to_records(session / "session.mcap")
+    assert stats.without_depth == 0 and stats.outside_odometry == 0
+    write_log(session / "back.jsonl", records)
+    back = run_match(session / "back.jsonl", site, MatchOptions())
+    assert direct.verdict == back.verdict == "unique match"
+    assert back.hypotheses[0].matches == direct.hypotheses[0].matches
+    a, b = direct.hypotheses[0].pose, back.hypotheses[0].pose
+    assert a.distance_to(b) < 1e-3 and abs(a.yaw_error(b)) < 1e-4
+    # the command line takes the bag in place of the log
+    cli = runner.invoke(app, ["match", str(session / "session.mcap"), "--site", str(site), "--json"])
+    assert cli.exit_code == 0, cli.output
+    assert json.loads(cli.stdout)["verdict"] == "unique match"
+
+
+def test_session_bag_topics_and_initialpose(session):
+    summary = json.loads((session / "out" / "summary.json").read_text())
+    with BagSource(session / "session.mcap") as bag:
+        types = {t.name: t.msgtype for t in bag.topics.values()}
+        assert types["/initialpose"] == "geometry_msgs/msg/PoseWithCovarianceStamped"
+        assert types["/map"] == "nav_msgs/msg/OccupancyGrid"
+        assert types["/bim_init/hypotheses"] == "geometry_msgs/msg/PoseArray"
+        for topic in (
+            "/odom",
+            "/tf",
+            "/tf_static",
+            "/scan",
+            "/camera/color/camera_info",
+            "/camera/detections",
+        ):
+            assert topic in types
+        (pose,) = [m for _, _, m in bag.messages(["/initialpose"])]
+        grid = next(m for _, _, m in bag.messages(["/map"]))
+    assert pose.header.frame_id == "map"
+    cov = pose.pose.covariance
+    want = summary["covariance"]
+    assert (cov[0], cov[7], cov[35]) == pytest.approx((want[0][0], want[1][1], want[2][2]))
+    assert cov[1] == pytest.approx(want[0][1]) and cov[5] == pytest.approx(want[0][2])
+    # stamped at the last image; the pose is the final one carried back along the odometry to it
+    log = read_log(session / "out" / "session.jsonl")
+    last_image = log.detections[-1].t
+    stamp = pose.header.stamp.sec + pose.header.stamp.nanosec * 1e-9
+    assert stamp == pytest.approx(last_image, abs=1e-6)
+    odom_then = min(log.odom, key=lambda o: abs(o.t - last_image)).pose
+    odom_end = log.odom[-1].pose
+    p, q = pose.pose.pose.position, pose.pose.pose.orientation
+    final = summary["pose"]
+    moved = math.hypot(p.x - final["x"], p.y - final["y"])
+    assert moved == pytest.approx(odom_then.distance_to(odom_end), abs=2e-3)
+    turned = math.degrees(quaternion_yaw(q.x, q.y, q.z, q.w) - math.radians(final["yaw_deg"]))
+    odom_turn = math.degrees(odom_then.yaw - odom_end.yaw)
+    assert (turned + 180) % 360 - 180 == pytest.approx((odom_turn + 180) % 360 - 180, abs=0.05)
+    assert grid.info.width > 0 and len(grid.data) == grid.info.width * grid.info.height
+    assert set(grid.data.tolist()) <= {-1, 0, 100} and 100 in set(grid.data.tolist())

@@ -1,0 +1,53 @@
+"""The rosbridge link against a rosbridge-v2-protocol server on loopback."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from bimtools.errors import InputError
+from initcli.ros.records import InitialPose
+from tests.initcli.ros.rosbridge_server import RosbridgeServer
+
+pytest.importorskip("roslibpy")
+
+from initcli.ros.rosbridge import RosbridgeLink, publish_initial_pose  # noqa: E402
+
+
+def test_initial_pose_fields():
+    cov = tuple(float(i) for i in range(36))
+    pose = InitialPose(12.25, 3.0, -4.5, math.radians(100.0), cov)
+    with RosbridgeServer() as server:
+        publish_initial_pose(pose, "127.0.0.1", server.port, settle=0.05)
+        assert server.wait_for(lambda: server.published("/initialpose"), 5)
+        adverts = {o["topic"]: o["type"] for o in server.of("advertise")}
+        assert adverts["/initialpose"] == "geometry_msgs/PoseWithCovarianceStamped"
+        assert adverts["/bim_init/state"] == "std_msgs/String"
+        (msg,) = server.published("/initialpose")
+        assert server.wait_for(lambda: server.published("/bim_init/state"), 5)
+        assert server.published("/bim_init/state") == [{"data": "initialised"}]
+    assert msg["header"] == {"stamp": {"sec": 12, "nanosec": 250_000_000}, "frame_id": "map"}
+    p, q = msg["pose"]["pose"]["position"], msg["pose"]["pose"]["orientation"]
+    assert (p["x"], p["y"], p["z"]) == (3.0, -4.5, 0.0)
+    assert math.degrees(2 * math.atan2(q["z"], q["w"])) == pytest.approx(100.0)
+    assert q["x"] == q["y"] == 0.0
+    assert msg["pose"]["covariance"] == list(cov)
+
+
+def test_no_server_is_one_input_error():
+    with RosbridgeServer() as server:
+        port = server.port
+    with pytest.raises(InputError, match=f"cannot reach rosbridge at ws://127.0.0.1:{port}"):
+        RosbridgeLink("127.0.0.1", port, timeout=1.0)
+
+
+def test_subscribe_receives_what_the_robot_publishes():
+    got: list[dict] = []
+    with RosbridgeServer() as server, RosbridgeLink("127.0.0.1", server.port) as link:
+        link.subscribe("/odom", "nav_msgs/msg/Odometry", got.append)
+        assert server.wait_for(lambda: server.of("subscribe"), 5)
+        assert server.of("subscribe")[0]["type"] == "nav_msgs/Odometry"
+        server.send("/odom", {"pose": {"pose": {"position": {"x": 1.5}}}})
+        assert server.wait_for(lambda: got, 5)
+    assert got[0]["pose"]["pose"]["position"]["x"] == 1.5
