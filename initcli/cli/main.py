@@ -1,7 +1,7 @@
 """``bim-init``: the typer app that gathers every command face of :mod:`initcli.cli`.
 
 Commands: ``match`` (:mod:`initcli.cli.match`), ``run`` (:mod:`initcli.cli.run`), ``eval``
-(:mod:`initcli.cli.eval`), ``detector`` (:mod:`initcli.cli.detector`). Bad input exits with 2 and one
+(:mod:`initcli.cli.eval`), ``survey`` (:mod:`initcli.cli.survey`), ``detector`` (:mod:`initcli.cli.detector`). Bad input exits with 2 and one
 line on stderr, never a traceback.
 """
 
@@ -13,6 +13,7 @@ from initcli.cli.detector import detector_app
 from initcli.cli.eval import evaluate
 from initcli.cli.match import match
 from initcli.cli.run import run as run_session_command
+from initcli.cli.survey import survey
 
 app = typer.Typer(
     name="bim-init",
@@ -32,6 +33,7 @@ def _root() -> None:
 app.command("match")(match)
 app.command("run")(run_session_command)
 app.command("eval")(evaluate)
+app.command("survey")(survey)
 app.add_typer(detector_app, name="detector")
 
 
