@@ -47,7 +47,8 @@ class SurveyParams:
     camera: CameraModel = field(default_factory=CameraModel)
     matching: UniquenessParams = field(default_factory=UniquenessParams)
     landmark_spacing: float = 4.0  # m between candidate landmark positions along a corridor wall
-    landmark_candidates: int = 40  # candidates tried at most per landmark
+    landmark_candidates: int = 30  # candidates tried at most per landmark
+    landmark_stride: int = 4  # candidates are scored on every n-th start, the chosen one on all
 
 
 @dataclass
@@ -103,8 +104,12 @@ def plan_storey(storey: StoreyModel, params: SurveyParams, cmap: ClassMap | None
     loop_cum = [_cumulative(visible(lp.poses, features, occluders, params.camera)) for lp in loops]
     k = max(1, round(params.spacing / grid.resolution))
     rows, cols = np.nonzero(circulation.label & (circulation.clearance >= params.start_clearance))
-    on = (rows % k == k // 2) & (cols % k == k // 2)
-    x, y = grid.cell_centre(rows[on], cols[on])
+    # one start per spacing x spacing block of the start region: its cell nearest the block centre
+    block = (rows // k) * (circulation.label.shape[1] // k + 1) + cols // k
+    off = np.hypot(rows % k - (k - 1) / 2, cols % k - (k - 1) / 2)
+    order = np.lexsort((off, block))
+    first = order[np.r_[True, block[order][1:] != block[order][:-1]]] if len(order) else order
+    x, y = grid.cell_centre(rows[first], cols[first])
     positions = np.column_stack([x, y]).astype(float).reshape(-1, 2)
     yaws = np.arange(params.headings) * (2 * math.pi / params.headings)
     starts = np.column_stack(
@@ -174,15 +179,15 @@ def with_feature(
 
 
 def sequences(
-    plan: StoreyPlan, views: SampleViews, params: SurveyParams
+    plan: StoreyPlan, views: SampleViews, params: SurveyParams, which: Sequence[int] | None = None
 ) -> tuple[list[tuple[int, ...]], list[np.ndarray]]:
-    """Per start: the feature indices in the order they are confirmed, and the distance (m) driven
-    when each is (features confirmed beyond ``limit_m`` are left out)."""
+    """Per start (of ``which``, default all): the feature indices in the order they are confirmed,
+    and the distance (m) driven when each is (features confirmed beyond ``limit_m`` are left out)."""
     need0 = params.min_sightings
     out_seq: list[tuple[int, ...]] = []
     out_dist: list[np.ndarray] = []
     n_f = len(plan.features)
-    for i in range(len(plan.starts)):
+    for i in range(len(plan.starts)) if which is None else which:
         when = np.full(n_f, np.inf)
         order = np.full(n_f, np.inf)
         counts = np.cumsum(views.look[i], axis=0)
@@ -307,6 +312,31 @@ def summarise(result: StoreySurvey) -> dict[str, object]:
     }
 
 
+def _with_landmark(
+    plan: StoreyPlan,
+    views: SampleViews,
+    params: SurveyParams,
+    current: np.ndarray,
+    which: np.ndarray,
+    executor: Executor | None,
+) -> np.ndarray:
+    """The distances of the starts ``which`` once the plan's last feature (a landmark) is there; the
+    starts that confirm it only after their unique match keep their distance."""
+    seqs, dists = sequences(plan, views, params, which)
+    new = len(plan.features) - 1
+    limit = params.limit_m
+    changed = [
+        j for j, (i, s) in enumerate(zip(which, seqs, strict=True))
+        if new in s and dists[j][s.index(new)] < min(current[i], limit)
+    ]
+    distance = current[which].copy()
+    if changed:
+        distance[changed] = unique_distances(
+            plan, [seqs[j] for j in changed], [dists[j] for j in changed], params, executor
+        )
+    return distance
+
+
 @dataclass(frozen=True)
 class Landmark:
     x: float
@@ -351,31 +381,24 @@ def suggest_landmarks(
     plan, current = result.plan, result.distance
     chosen: list[Landmark] = []
     limit = params.limit_m
+    pick = np.arange(0, len(plan.starts), max(1, params.landmark_stride))
     for k in range(1, count + 1):
         cls = f"{LANDMARK_CLASS}_{k}"
-        best: tuple[float, np.ndarray, np.ndarray, StoreyPlan, SampleViews] | None = None
+        best: tuple[float, np.ndarray] | None = None
         for x, y, nx, ny in landmark_candidates(plan, params):
             extra = FeatureArrays(np.array([[x, y]]), np.array([[nx, ny]]), np.array([LANDMARK_HEIGHT]), (cls,))
             cand_plan, cand_views = with_feature(plan, views, params, extra)
-            seqs, dists = sequences(cand_plan, cand_views, params)
-            new = len(cand_plan.features) - 1
-            changed = [
-                i for i, s in enumerate(seqs)
-                if new in s and dists[i][s.index(new)] < min(current[i], limit)
-            ]
-            distance = current.copy()
-            if changed:
-                sub = unique_distances(
-                    cand_plan, [seqs[i] for i in changed], [dists[i] for i in changed], params, executor
-                )
-                distance[changed] = sub
+            distance = _with_landmark(cand_plan, cand_views, params, current, pick, executor)
             score = float(np.minimum(distance, limit).mean())
             if best is None or score < best[0] - 1e-9:
-                best = (score, np.array([x, y, nx, ny]), distance, cand_plan, cand_views)
+                best = (score, np.array([x, y, nx, ny]))
             if on_done is not None:
                 on_done(1)
         if best is None:
             break
-        score, where, current, plan, views = best
-        chosen.append(Landmark(*(float(v) for v in where), cls, score))
+        x, y, nx, ny = best[1]
+        extra = FeatureArrays(np.array([[x, y]]), np.array([[nx, ny]]), np.array([LANDMARK_HEIGHT]), (cls,))
+        plan, views = with_feature(plan, views, params, extra)
+        current = _with_landmark(plan, views, params, current, np.arange(len(plan.starts)), executor)
+        chosen.append(Landmark(float(x), float(y), float(nx), float(ny), cls, float(np.minimum(current, limit).mean())))
     return chosen, StoreySurvey(plan, current, params)
