@@ -46,7 +46,9 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--starts", type=int, default=100, help="eval starts compared per sample")
     ap.add_argument("--models", default="ntu_hallway,block_a,block_b")
-    ap.add_argument("--results", type=Path, default=None, help="an eval results.jsonl for per-start agreement")
+    ap.add_argument(
+        "--results", type=Path, default=None, help="an eval results.jsonl for per-start agreement"
+    )
     ap.add_argument("--no-landmarks", action="store_true")
     args = ap.parse_args()
     measured: dict[tuple[str, int], float] = {}
@@ -54,7 +56,9 @@ def main() -> None:
         for line in args.results.read_text().splitlines():
             r = json.loads(line)
             if r["method"] == "bim" and not r.get("sweep_key"):
-                measured[(r["site"], int(r["start"]))] = float(r["distance_m"]) if r["localised"] else math.inf
+                measured[(r["site"], int(r["start"]))] = (
+                    float(r["distance_m"]) if r["localised"] else math.inf
+                )
     executor = LocalExecutor(args.workers)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -96,12 +100,18 @@ def main() -> None:
             }
             pairs = [(at[k], measured[(name, k)]) for k in range(len(at)) if (name, k) in measured]
             if pairs:
-                within = [abs(a - min(m, params.limit_m)) <= 0.25 * max(min(m, params.limit_m), 1.0) for a, m in pairs]
+                within = [
+                    abs(a - min(m, params.limit_m)) <= 0.25 * max(min(m, params.limit_m), 1.0)
+                    for a, m in pairs
+                ]
                 line["per_start_within_25pct"] = f"{sum(within)}/{len(within)}"
             rows.append(line)
             print(json.dumps(line), flush=True)
     executor.close()
-    print("\n| model | starts surveyed | survey s | landmarks s | survey at eval starts mean / median | eval mean / median | ratio |")
+    print(
+        "\n| model | starts surveyed | survey s | landmarks s "
+        "| survey at eval starts mean / median | eval mean / median | ratio |"
+    )
     print("|---|---|---|---|---|---|---|")
     for r in rows:
         print(

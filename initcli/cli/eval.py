@@ -87,11 +87,14 @@ def evaluate(
         str | None, typer.Option("--sites", metavar="NAME,...", help="Only these sites of the config.")
     ] = None,
     executor: Annotated[
-        str, typer.Option("--executor", metavar="local|ray", help="Where the trials run: local processes or Ray.")
+        str,
+        typer.Option("--executor", metavar="local|ray", help="Where the trials run: local processes or Ray."),
     ] = "local",
     address: Annotated[
         str | None,
-        typer.Option("--address", metavar="ADDR", help="Ray cluster (auto, ray://host:10001) [default: a local one]."),
+        typer.Option(
+            "--address", metavar="ADDR", help="Ray cluster (auto, ray://host:10001) [default: a local one]."
+        ),
     ] = None,
 ) -> None:
     """Reproduce the paper's Tables 2 and 3: success, distance and error of every method over many starts."""

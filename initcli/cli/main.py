@@ -1,8 +1,8 @@
 """``bim-init``: the typer app that gathers every command face of :mod:`initcli.cli`.
 
 Commands: ``match`` (:mod:`initcli.cli.match`), ``run`` (:mod:`initcli.cli.run`), ``eval``
-(:mod:`initcli.cli.eval`), ``survey`` (:mod:`initcli.cli.survey`), ``detector`` (:mod:`initcli.cli.detector`). Bad input exits with 2 and one
-line on stderr, never a traceback.
+(:mod:`initcli.cli.eval`), ``detector`` (:mod:`initcli.cli.detector`), ``survey``
+(:mod:`initcli.cli.survey`). Bad input exits with 2 and one line on stderr, never a traceback.
 """
 
 from __future__ import annotations

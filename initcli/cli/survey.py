@@ -45,7 +45,9 @@ def survey_params(config: SessionConfig, spacing: float, headings: int) -> Surve
         wall_distance=config.exploration.wall_distance,
         side=followed_side(config),
         min_sightings=m.min_sightings,
-        camera=CameraModel(camera, mount, max_range=config.camera.range, max_view_angle_deg=config.camera.max_view_angle),
+        camera=CameraModel(
+            camera, mount, max_range=config.camera.range, max_view_angle_deg=config.camera.max_view_angle
+        ),
         matching=UniquenessParams(alpha=m.alpha, beta_deg=m.beta, max_outliers=m.max_outliers),
     )
 
@@ -56,18 +58,28 @@ def survey(
     out: Annotated[Path, typer.Option("--out", metavar="DIR", help="Output folder.")] = Path("survey"),
     config: Annotated[
         Path | None,
-        typer.Option("--config", metavar="site.yaml", help="Camera, matching and exploration settings of a run config."),
+        typer.Option(
+            "--config", metavar="site.yaml", help="Camera, matching and exploration settings of a run config."
+        ),
     ] = None,
-    spacing: Annotated[float, typer.Option("--spacing", metavar="M", min=0.1, help="Metres between start positions.")] = 1.0,
-    headings: Annotated[int, typer.Option("--headings", metavar="N", min=1, help="Start headings per position.")] = 4,
+    spacing: Annotated[
+        float, typer.Option("--spacing", metavar="M", min=0.1, help="Metres between start positions.")
+    ] = 1.0,
+    headings: Annotated[
+        int, typer.Option("--headings", metavar="N", min=1, help="Start headings per position.")
+    ] = 4,
     landmarks: Annotated[
         int, typer.Option("--landmarks", metavar="N", min=0, max=2, help="Extra landmarks to suggest (0-2).")
     ] = 2,
     executor: Annotated[
-        str, typer.Option("--executor", metavar="local|ray", help="Where the matching runs: local processes or Ray.")
+        str,
+        typer.Option(
+            "--executor", metavar="local|ray", help="Where the matching runs: local processes or Ray."
+        ),
     ] = "local",
     workers: Annotated[
-        int | None, typer.Option("--workers", metavar="W", min=1, help="Local processes [default: all cores].")
+        int | None,
+        typer.Option("--workers", metavar="W", min=1, help="Local processes [default: all cores]."),
     ] = None,
     address: Annotated[
         str | None, typer.Option("--address", metavar="ADDR", help="Ray cluster (auto, ray://host:10001).")
@@ -87,9 +99,24 @@ def survey(
         print(f"bim-init: error: {' '.join(str(exc).split())}", file=sys.stderr)
         raise typer.Exit(EXIT_BAD_INPUT) from None
     cmap = site_class_map(model)
-    report: dict[str, object] = {"version": SURVEY_VERSION, "site": str(site), "limit_m": params.limit_m, "storeys": []}
+    report: dict[str, object] = {
+        "version": SURVEY_VERSION,
+        "site": str(site),
+        "limit_m": params.limit_m,
+        "storeys": [],
+    }
     table = Table(title="Survey: distance to a unique match", title_justify="left")
-    for column in ("storey", "starts", "area m2", "<=5 m", "<=10 m", "<=20 m", "median m", "never-unique m2", "landmarks"):
+    for column in (
+        "storey",
+        "starts",
+        "area m2",
+        "<=5 m",
+        "<=10 m",
+        "<=20 m",
+        "median m",
+        "never-unique m2",
+        "landmarks",
+    ):
         table.add_column(column, justify="left" if column == "storey" else "right")
     from initcli.survey.plots import survey_png
 
@@ -119,8 +146,14 @@ def survey(
                     )
                     progress.update(task_l, completed=n_cand)
                     entry["landmarks"] = [
-                        {"x": round(lm.x, 3), "y": round(lm.y, 3), "norm_x": round(lm.norm_x, 4),
-                         "norm_y": round(lm.norm_y, 4), "category": lm.cls, "mean_distance_m": round(lm.mean_distance_m, 2)}
+                        {
+                            "x": round(lm.x, 3),
+                            "y": round(lm.y, 3),
+                            "norm_x": round(lm.norm_x, 4),
+                            "norm_y": round(lm.norm_y, 4),
+                            "category": lm.cls,
+                            "mean_distance_m": round(lm.mean_distance_m, 2),
+                        }
                         for lm in chosen
                     ]
                     entry["with_landmarks"] = summarise(improved)
@@ -132,7 +165,9 @@ def survey(
                 shares = entry["unique_within"]
                 median = entry["median_distance_m"]
                 table.add_row(
-                    name, str(entry["samples"]), f"{entry['area_m2']:.0f}",
+                    name,
+                    str(entry["samples"]),
+                    f"{entry['area_m2']:.0f}",
                     *(f"{100 * shares[k]:.0f} %" for k in ("5m", "10m", "20m")),  # type: ignore[index]
                     "never" if median is None else f"{median:.1f}",
                     f"{entry['never_unique_area_m2']:.0f}",

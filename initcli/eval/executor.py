@@ -64,7 +64,9 @@ class LocalExecutor:
             # spawn, not fork: the parent runs a progress-bar thread, and forking a process with
             # threads can deadlock the children on a lock held at fork time.
             context = multiprocessing.get_context("spawn")
-            self._pool = ProcessPoolExecutor(max_workers=self.slots, initializer=initializer, mp_context=context)
+            self._pool = ProcessPoolExecutor(
+                max_workers=self.slots, initializer=initializer, mp_context=context
+            )
         elif initializer is not None:
             initializer()
 
@@ -148,7 +150,9 @@ def make_executor(kind: str, workers: int | None = None, address: str | None = N
 
 
 def map_unordered(
-    executor: Executor, calls: Sequence[tuple[Any, ...]] | Iterable[tuple[Any, ...]], window: int | None = None
+    executor: Executor,
+    calls: Sequence[tuple[Any, ...]] | Iterable[tuple[Any, ...]],
+    window: int | None = None,
 ) -> Iterator[tuple[int, Any]]:
     """Run each ``(fn, *args)`` of ``calls``; yield ``(index, result)`` as they finish, with at most
     ``window`` (default twice the slots) in flight so an interrupt loses little work."""

@@ -106,7 +106,9 @@ class Entry:
     length: float  # m of the approach
 
 
-def join_loop(start: np.ndarray, loops: list[Loop], walls: np.ndarray, side: int, step: float) -> Entry | None:
+def join_loop(
+    start: np.ndarray, loops: list[Loop], walls: np.ndarray, side: int, step: float
+) -> Entry | None:
     """Where a wall follower starting at ``start`` (x, y, yaw) reaches the loops: the nearest loop point
     on its followed side with a clear line of sight (else the nearest one in view at all)."""
     if not loops:

@@ -5,8 +5,6 @@ from __future__ import annotations
 import io
 from pathlib import Path
 
-import numpy as np
-
 from bimtools.site.atomic import write_bytes_atomic
 from initcli.survey.survey import Landmark, StoreySurvey
 
@@ -20,19 +18,34 @@ def _panel(ax, result: StoreySurvey, title: str, landmarks: list[Landmark], norm
     pos = plan.positions
     size = result.params.spacing
     sc = ax.scatter(
-        pos[~never, 0], pos[~never, 1], c=value[~never], cmap="viridis_r", norm=norm, marker="s",
-        s=(size * 2.2) ** 2 * 6, linewidths=0, zorder=2,
+        pos[~never, 0],
+        pos[~never, 1],
+        c=value[~never],
+        cmap="viridis_r",
+        norm=norm,
+        marker="s",
+        s=(size * 2.2) ** 2 * 6,
+        linewidths=0,
+        zorder=2,
     )
     if never.any():
         ax.scatter(
-            pos[never, 0], pos[never, 1], marker="x", color="crimson", s=14, lw=0.8, zorder=3,
+            pos[never, 0],
+            pos[never, 1],
+            marker="x",
+            color="crimson",
+            s=14,
+            lw=0.8,
+            zorder=3,
             label="never unique (most headings)",
         )
     base = len(plan.features) - len(landmarks)
     f = plan.features
     for cls in sorted(set(f.cls[:base])):
         idx = [i for i in range(base) if f.cls[i] == cls]
-        ax.scatter(f.xy[idx, 0], f.xy[idx, 1], s=16, marker="o", edgecolors="k", linewidths=0.5, zorder=4, label=cls)
+        ax.scatter(
+            f.xy[idx, 0], f.xy[idx, 1], s=16, marker="o", edgecolors="k", linewidths=0.5, zorder=4, label=cls
+        )
     for lm in landmarks:
         ax.scatter([lm.x], [lm.y], s=110, marker="*", color="orange", edgecolors="k", zorder=5)
         ax.annotate(lm.cls, (lm.x, lm.y), textcoords="offset points", xytext=(5, 5), fontsize=7)
@@ -45,7 +58,10 @@ def _panel(ax, result: StoreySurvey, title: str, landmarks: list[Landmark], norm
 
 
 def survey_png(
-    path: Path, result: StoreySurvey, with_landmarks: StoreySurvey | None = None, landmarks: list[Landmark] | None = None
+    path: Path,
+    result: StoreySurvey,
+    with_landmarks: StoreySurvey | None = None,
+    landmarks: list[Landmark] | None = None,
 ) -> None:
     """``survey_<storey>.png``: the heat map; with landmarks, a second panel with them placed."""
     import matplotlib

@@ -172,8 +172,16 @@ def with_feature(
     bounds = np.cumsum([0, *sizes])
     approach = [np.hstack([a, flat[bounds[i] : bounds[i + 1]]]) for i, a in enumerate(views.approach)]
     new_plan = StoreyPlan(
-        plan.name, features, plan.occluders, plan.walls, plan.circulation, plan.loops, cum,
-        plan.starts, plan.position, plan.positions,
+        plan.name,
+        features,
+        plan.occluders,
+        plan.walls,
+        plan.circulation,
+        plan.loops,
+        cum,
+        plan.starts,
+        plan.position,
+        plan.positions,
     )
     return new_plan, SampleViews(np.concatenate([views.look, look_extra], axis=2), approach, views.entries)
 
@@ -248,7 +256,10 @@ def unique_distances(
     size = math.ceil(len(order) / n_chunks) if order else 1
     parts = [order[lo : lo + size] for lo in range(0, len(order), size)]
     out = np.full(len(seqs), np.inf)
-    calls = [(_match_chunk, plan.features.xy, plan.features.cls, [seqs[i] for i in p], params.matching) for p in parts]
+    calls = [
+        (_match_chunk, plan.features.xy, plan.features.cls, [seqs[i] for i in p], params.matching)
+        for p in parts
+    ]
     for k, counts in map_unordered(executor, calls):
         for i, n in zip(parts[k], counts, strict=True):
             if n > 0:
@@ -304,7 +315,9 @@ def summarise(result: StoreySurvey) -> dict[str, object]:
         "positions": len(result.plan.positions),
         "headings": result.params.headings,
         "area_m2": round(len(result.plan.positions) * cell, 2),
-        "unique_within": {f"{int(r)}m": round(float(np.mean(d <= r)) if n else 0.0, 4) for r in UNIQUE_WITHIN},
+        "unique_within": {
+            f"{int(r)}m": round(float(np.mean(d <= r)) if n else 0.0, 4) for r in UNIQUE_WITHIN
+        },
         "median_distance_m": round(median, 2) if math.isfinite(median) else None,
         "mean_distance_m": round(float(finite.mean()), 2) if len(finite) else None,
         "never_unique_share": round(float(np.mean(~np.isfinite(d))) if n else 0.0, 4),
@@ -326,7 +339,8 @@ def _with_landmark(
     new = len(plan.features) - 1
     limit = params.limit_m
     changed = [
-        j for j, (i, s) in enumerate(zip(which, seqs, strict=True))
+        j
+        for j, (i, s) in enumerate(zip(which, seqs, strict=True))
         if new in s and dists[j][s.index(new)] < min(current[i], limit)
     ]
     distance = current[which].copy()
@@ -386,7 +400,9 @@ def suggest_landmarks(
         cls = f"{LANDMARK_CLASS}_{k}"
         best: tuple[float, np.ndarray] | None = None
         for x, y, nx, ny in landmark_candidates(plan, params):
-            extra = FeatureArrays(np.array([[x, y]]), np.array([[nx, ny]]), np.array([LANDMARK_HEIGHT]), (cls,))
+            extra = FeatureArrays(
+                np.array([[x, y]]), np.array([[nx, ny]]), np.array([LANDMARK_HEIGHT]), (cls,)
+            )
             cand_plan, cand_views = with_feature(plan, views, params, extra)
             distance = _with_landmark(cand_plan, cand_views, params, current, pick, executor)
             score = float(np.minimum(distance, limit).mean())
@@ -400,5 +416,7 @@ def suggest_landmarks(
         extra = FeatureArrays(np.array([[x, y]]), np.array([[nx, ny]]), np.array([LANDMARK_HEIGHT]), (cls,))
         plan, views = with_feature(plan, views, params, extra)
         current = _with_landmark(plan, views, params, current, np.arange(len(plan.starts)), executor)
-        chosen.append(Landmark(float(x), float(y), float(nx), float(ny), cls, float(np.minimum(current, limit).mean())))
+        chosen.append(
+            Landmark(float(x), float(y), float(nx), float(ny), cls, float(np.minimum(current, limit).mean()))
+        )
     return chosen, StoreySurvey(plan, current, params)

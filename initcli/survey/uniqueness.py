@@ -64,7 +64,10 @@ def count_hypotheses(state: MatchState, index: BimIndex, params: UniquenessParam
     c, s = np.cos(yaw), np.sin(yaw)
     current = np.column_stack([t[:, 0] + c * here[0] - s * here[1], t[:, 1] + s * here[0] + c * here[1], yaw])
     _, reps = pose_groups(
-        current, np.zeros(len(current), dtype=np.intp), rank_order(n_out, cost), params.pose_radius,
+        current,
+        np.zeros(len(current), dtype=np.intp),
+        rank_order(n_out, cost),
+        params.pose_radius,
         math.radians(params.beta_deg),
     )
     return len(reps)

@@ -46,7 +46,9 @@ class FeatureArrays:
     def __len__(self) -> int:
         return len(self.xy)
 
-    def with_feature(self, x: float, y: float, nx: float, ny: float, height: float, cls: str) -> FeatureArrays:
+    def with_feature(
+        self, x: float, y: float, nx: float, ny: float, height: float, cls: str
+    ) -> FeatureArrays:
         return FeatureArrays(
             np.vstack([self.xy, [[x, y]]]),
             np.vstack([self.normal, [[nx, ny]]]),

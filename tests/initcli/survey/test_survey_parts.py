@@ -27,8 +27,11 @@ def test_visibility_is_the_simulators_render_image():
     walls = np.array([[4.0, 0.0, 4.0, 8.0], [0.0, 9.0, 10.0, 9.0]])
     model = CameraModel()
     sim = [SimFeature(str(i), "door", *xy[i], *normal[i], 1.0, height[i]) for i in range(n)]
-    params = SyntheticParams(min_range=model.min_range, max_range=model.max_range,
-                             max_view_angle=math.radians(model.max_view_angle_deg))
+    params = SyntheticParams(
+        min_range=model.min_range,
+        max_range=model.max_range,
+        max_view_angle=math.radians(model.max_view_angle_deg),
+    )
     poses = np.column_stack([rng.uniform(0, 12, (40, 2)), rng.uniform(-math.pi, math.pi, 40)])
     ours = visible(poses, features, walls, model)
     assert ours.any()
@@ -45,7 +48,9 @@ def _room(width_m: float, height_m: float, res: float = 0.05) -> tuple[Occupancy
     grid = OccupancyGrid(cells=cells, resolution=res, origin=(0.0, 0.0, 0.0))
     import cv2
 
-    clearance = cv2.distanceTransform((cells == FREE).astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * res
+    clearance = (
+        cv2.distanceTransform((cells == FREE).astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * res
+    )
     return grid, cells == FREE, clearance
 
 
