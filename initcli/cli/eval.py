@@ -23,6 +23,7 @@ from rich.table import Table
 from bimtools.errors import EXIT_BAD_INPUT, InputError
 from initcli.eval.campaign import default_workers, plan_jobs, prepare_sites, run_jobs
 from initcli.eval.config import load_eval_config, parse_methods
+from initcli.eval.executor import make_executor
 from initcli.eval.records import TrialRecord
 from initcli.eval.report import RunStats, write_report
 from initcli.eval.results_file import ResultsWriter, read_results
@@ -87,6 +88,16 @@ def evaluate(
     sites: Annotated[
         str | None, typer.Option("--sites", metavar="NAME,...", help="Only these sites of the config.")
     ] = None,
+    executor: Annotated[
+        str,
+        typer.Option("--executor", metavar="local|ray", help="Where the trials run: local processes or Ray."),
+    ] = "local",
+    address: Annotated[
+        str | None,
+        typer.Option(
+            "--address", metavar="ADDR", help="Ray cluster (auto, ray://host:10001) [default: a local one]."
+        ),
+    ] = None,
 ) -> None:
     """Reproduce the paper's Tables 2 and 3: success, distance and error of every method over many starts."""
     console = Console(stderr=False)
@@ -105,10 +116,11 @@ def evaluate(
         previous: list[TrialRecord] = read_results(results_path) if resume and results_path.exists() else []
         with err.status("preparing site models (extracting IFC)..."):
             prepared = prepare_sites(eval_config, out / ".sites", only)
+        runner = make_executor(executor, workers, address)
     except InputError as exc:
         print(f"bim-init: error: {' '.join(str(exc).split())}", file=sys.stderr)
         raise typer.Exit(EXIT_BAD_INPUT) from None
-    n_workers = workers or default_workers()
+    n_workers = runner.slots if executor != "local" else workers or default_workers()
     done = {r.key for r in previous}
     jobs = plan_jobs(eval_config, prepared, chosen, starts, the_sweep, done)
     total = sum(len(j.methods) for j in jobs)
@@ -147,12 +159,14 @@ def evaluate(
                 last = batch[-1]
                 progress.update(task, advance=len(batch), last=f"{last.site} #{last.start}")
 
-            run_jobs(jobs, n_workers, finished)
+            run_jobs(jobs, n_workers, finished, runner)
     except KeyboardInterrupt:
         err.print(
             f"interrupted: {len(records)} trials saved in {results_path}; rerun with --resume to continue"
         )
         raise typer.Exit(EXIT_INTERRUPTED) from None
+    finally:
+        runner.close()
     stats = RunStats(ran, time.perf_counter() - started, n_workers)
     summaries = write_report(out, records, environments, eval_config.rule, stats, command)
     header, rows = table2(summaries, environments)

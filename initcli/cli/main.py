@@ -2,8 +2,8 @@
 
 Commands: ``match`` (:mod:`initcli.cli.match`), ``run`` (:mod:`initcli.cli.run`), ``eval``
 (:mod:`initcli.cli.eval`), ``detector`` (:mod:`initcli.cli.detector`), ``bag2log``
-(:mod:`initcli.cli.bag2log`), ``publish-pose`` (:mod:`initcli.cli.publish_pose`). Bad input exits
-with 2 and one line on stderr, never a traceback.
+(:mod:`initcli.cli.bag2log`), ``publish-pose`` (:mod:`initcli.cli.publish_pose`), ``survey``
+(:mod:`initcli.cli.survey`). Bad input exits with 2 and one line on stderr, never a traceback.
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ from initcli.cli.eval import evaluate
 from initcli.cli.match import match
 from initcli.cli.publish_pose import publish_pose
 from initcli.cli.run import run as run_session_command
+from initcli.cli.survey import survey
 
 app = typer.Typer(
     name="bim-init",
@@ -37,6 +38,7 @@ app.command("run")(run_session_command)
 app.command("eval")(evaluate)
 app.command("bag2log")(bag2log)
 app.command("publish-pose")(publish_pose)
+app.command("survey")(survey)
 app.add_typer(detector_app, name="detector")
 
 

@@ -82,13 +82,17 @@ def ray_segment_distances(
 
 def sight_blocked(eye: np.ndarray, targets: np.ndarray, segments: np.ndarray) -> np.ndarray:
     """For each of the (n, 2) ``targets``: does a segment (x1, y1, x2, y2) cross the sight line
-    ``eye -> target``? Here ``d = target - eye``, so a crossing is ``SIGHT_END < t < 1 - SIGHT_END``
-    with ``0 <= u <= 1`` (a segment touching the eye or the target itself does not block)."""
+    ``eye -> target``? ``eye`` is one point (2,) or one per target (n, 2). Here ``d = target - eye``,
+    so a crossing is ``SIGHT_END < t < 1 - SIGHT_END`` with ``0 <= u <= 1`` (a segment touching the
+    eye or the target itself does not block)."""
+    targets = np.asarray(targets, dtype=float).reshape(-1, 2)
+    segments = np.asarray(segments, dtype=float).reshape(-1, 4)
     if len(segments) == 0 or len(targets) == 0:
         return np.zeros(len(targets), dtype=bool)
-    d = (targets - eye)[:, None, :]  # (n, 1, 2)
+    eyes = np.broadcast_to(np.asarray(eye, dtype=float).reshape(-1, 2), targets.shape)
+    d = (targets - eyes)[:, None, :]  # (n, 1, 2)
     e = segment_directions(segments)[None, :, :]  # (1, S, 2)
-    w = segments[None, :, 0:2] - eye[None, None, :]
+    w = segments[None, :, 0:2] - eyes[:, None, :]
     denom, t, u = ray_segment_params(w[..., 0], w[..., 1], d[..., 0], d[..., 1], e[..., 0], e[..., 1])
     hit = (np.abs(denom) > SIGHT_PARALLEL) & (t > SIGHT_END) & (t < 1.0 - SIGHT_END) & (u >= 0.0) & (u <= 1.0)
     return hit.any(axis=1)

@@ -1,16 +1,15 @@
-"""Planning and running the trials of an evaluation, in parallel processes, resumable."""
+"""Planning and running the trials of an evaluation, in parallel processes or on a Ray cluster, resumable."""
 
 from __future__ import annotations
 
-import multiprocessing
-import os
 from collections.abc import Callable, Iterable
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass
 from pathlib import Path
 
 from initcli.config import load_config
 from initcli.eval.config import EvalConfig, EvalSite
+from initcli.eval.executor import Executor, LocalExecutor, map_unordered
+from initcli.eval.executor import default_workers as default_workers
 from initcli.eval.records import TrialKey, TrialRecord
 from initcli.eval.sweep import Sweep, sweep_label
 from initcli.eval.trial import TrialJob, run_trial, trial_seed
@@ -85,36 +84,18 @@ def _starts(site: EvalSite, override: int | None) -> int:
     return override if override is not None else site.starts
 
 
-def _init_worker() -> None:
-    """One thread per worker process: the trials are the parallelism."""
+def run_jobs(
+    jobs: list[TrialJob],
+    workers: int,
+    on_records: Callable[[list[TrialRecord]], None],
+    executor: Executor | None = None,
+) -> None:
+    """Run the jobs on ``executor`` (default: ``workers`` local processes, 1: in this process);
+    report each job's records as it ends. Ctrl-C stops it; the records reported so far stand."""
+    runner = executor or LocalExecutor(workers)
     try:
-        import cv2
-
-        cv2.setNumThreads(1)
-    except ImportError:  # pragma: no cover - opencv is a core dependency
-        pass
-
-
-def default_workers() -> int:
-    return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
-
-
-def run_jobs(jobs: list[TrialJob], workers: int, on_records: Callable[[list[TrialRecord]], None]) -> None:
-    """Run the jobs on ``workers`` processes (1: in this process); report each job's records as it ends."""
-    if workers <= 1:
-        _init_worker()
-        for job in jobs:
-            on_records(run_trial(job))
-        return
-    # spawn, not fork: the parent runs a progress-bar thread, and forking a process with threads
-    # can deadlock the children on a lock held at fork time.
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=workers, initializer=_init_worker, mp_context=context) as pool:
-        pending: set[Future[list[TrialRecord]]] = set()
-        queue = list(reversed(jobs))
-        while queue or pending:
-            while queue and len(pending) < 2 * workers:
-                pending.add(pool.submit(run_trial, queue.pop()))
-            finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-            for future in finished:
-                on_records(future.result())
+        for _, records in map_unordered(runner, [(run_trial, job) for job in jobs]):
+            on_records(records)
+    finally:
+        if executor is None:
+            runner.close()

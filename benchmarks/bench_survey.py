@@ -1,0 +1,125 @@
+"""Benchmark ``bim-init survey`` on the three samples: speed, and agreement with the simulated sessions.
+
+- speed: a storey's samples (1 m spacing x 4 headings) surveyed on ``--workers`` processes (goal:
+  under a minute on 2 cores), and the greedy landmark suggestion;
+- agreement: the survey's distance to a unique match at the eval's own random starts (seed 1 + k,
+  the starts ``bim-init eval`` draws) against the eval's measured coarse distance of the ``bim``
+  method (100 starts, README "Results": mean 30.4 / 14.3 / 20.8 m, median 28 / 3.2 / 4.3 m);
+  with ``--results DIR/results.jsonl`` of an eval run, per start as well (share within 25 %).
+
+    python benchmarks/bench_survey.py [--workers 2] [--starts 100] [--models ...] [--results FILE]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+EVAL_MEAN = {"ntu_hallway": 30.4, "block_a": 14.3, "block_b": 20.8}  # m, README Results, bim, 100 starts
+EVAL_MEDIAN = {"ntu_hallway": 28.0, "block_a": 3.2, "block_b": 4.3}
+
+
+def main() -> None:
+    from initcli.cli.survey import survey_params
+    from initcli.config import load_config
+    from initcli.eval.executor import LocalExecutor
+    from initcli.eval.trial import trial_seed
+    from initcli.session.setup import build_sim, choose_storey, prepare_site
+    from initcli.survey.survey import (
+        plan_storey,
+        sample_views,
+        sequences,
+        suggest_landmarks,
+        summarise,
+        survey_storey,
+        unique_distances,
+    )
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--starts", type=int, default=100, help="eval starts compared per sample")
+    ap.add_argument("--models", default="ntu_hallway,block_a,block_b")
+    ap.add_argument(
+        "--results", type=Path, default=None, help="an eval results.jsonl for per-start agreement"
+    )
+    ap.add_argument("--no-landmarks", action="store_true")
+    args = ap.parse_args()
+    measured: dict[tuple[str, int], float] = {}
+    if args.results is not None:
+        for line in args.results.read_text().splitlines():
+            r = json.loads(line)
+            if r["method"] == "bim" and not r.get("sweep_key"):
+                measured[(r["site"], int(r["start"]))] = (
+                    float(r["distance_m"]) if r["localised"] else math.inf
+                )
+    executor = LocalExecutor(args.workers)
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for name in args.models.split(","):
+            config = load_config(ROOT / "sample_models" / f"{name}.site.yaml")
+            site = prepare_site(config, Path(tmp) / name)
+            simulated, _ = choose_storey(config, site)
+            params = survey_params(config, 1.0, 4)
+            t0 = time.perf_counter()
+            plan = plan_storey(site.storeys[simulated], params)
+            result, views = survey_storey(plan, params, executor)
+            t_survey = time.perf_counter() - t0
+            t_land = math.nan
+            if not args.no_landmarks:
+                t1 = time.perf_counter()
+                suggest_landmarks(result, views, 2, executor)
+                t_land = time.perf_counter() - t1
+            summary = summarise(result)
+            # the eval's starts: the same random corridor starts bim-init eval draws (seed 1 + k)
+            starts = [build_sim(config, site, simulated, trial_seed(1, k)).start for k in range(args.starts)]
+            plan.starts = np.array([[s.x, s.y, s.yaw] for s in starts])
+            plan.position = np.arange(len(starts))
+            v = sample_views(plan, params)
+            seqs, dists = sequences(plan, v, params)
+            at = np.minimum(unique_distances(plan, seqs, dists, params, executor), params.limit_m)
+            line = {
+                "model": name,
+                "storey": simulated,
+                "samples": summary["samples"],
+                "survey_s": round(t_survey, 1),
+                "landmarks_s": round(t_land, 1),
+                "survey_median_m": summary["median_distance_m"],
+                "unique_within": summary["unique_within"],
+                "at_eval_starts_mean_m": round(float(at.mean()), 1),
+                "at_eval_starts_median_m": round(float(np.median(at)), 1),
+                "eval_mean_m": EVAL_MEAN.get(name),
+                "eval_median_m": EVAL_MEDIAN.get(name),
+                "mean_ratio": round(float(at.mean()) / EVAL_MEAN[name], 2) if name in EVAL_MEAN else None,
+            }
+            pairs = [(at[k], measured[(name, k)]) for k in range(len(at)) if (name, k) in measured]
+            if pairs:
+                within = [
+                    abs(a - min(m, params.limit_m)) <= 0.25 * max(min(m, params.limit_m), 1.0)
+                    for a, m in pairs
+                ]
+                line["per_start_within_25pct"] = f"{sum(within)}/{len(within)}"
+            rows.append(line)
+            print(json.dumps(line), flush=True)
+    executor.close()
+    print(
+        "\n| model | starts surveyed | survey s | landmarks s "
+        "| survey at eval starts mean / median | eval mean / median | ratio |"
+    )
+    print("|---|---|---|---|---|---|---|")
+    for r in rows:
+        print(
+            f"| {r['model']} | {r['samples']} | {r['survey_s']} | {r['landmarks_s']} | "
+            f"{r['at_eval_starts_mean_m']} / {r['at_eval_starts_median_m']} m | "
+            f"{r['eval_mean_m']} / {r['eval_median_m']} m | {r['mean_ratio']} |"
+        )
+
+
+if __name__ == "__main__":
+    main()

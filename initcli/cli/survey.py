@@ -1,0 +1,184 @@
+"""``bim-init survey``: where on a floor the robot can be put down and initialise, from the BIM alone."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from bimtools.errors import EXIT_BAD_INPUT, InputError
+from bimtools.site.atomic import write_text_atomic
+from bimtools.site.load import load_site
+from initcli.config import SessionConfig, followed_side, load_config
+from initcli.eval.executor import make_executor
+from initcli.match.pipeline import site_class_map
+from initcli.session.setup import camera_of
+from initcli.survey.survey import (
+    SurveyParams,
+    plan_storey,
+    suggest_landmarks,
+    summarise,
+    survey_storey,
+)
+from initcli.survey.uniqueness import UniquenessParams
+from initcli.survey.visibility import CameraModel
+
+EXIT_INTERRUPTED = 130
+SURVEY_VERSION = 1
+
+
+def survey_params(config: SessionConfig, spacing: float, headings: int) -> SurveyParams:
+    """The survey's settings from a session config (camera, matching, exploration, limits)."""
+    camera, mount = camera_of(config)
+    m = config.matching
+    return SurveyParams(
+        spacing=spacing,
+        headings=headings,
+        limit_m=config.limits.max_distance,
+        initial_look=config.exploration.initial_look,
+        wall_distance=config.exploration.wall_distance,
+        side=followed_side(config),
+        min_sightings=m.min_sightings,
+        camera=CameraModel(
+            camera, mount, max_range=config.camera.range, max_view_angle_deg=config.camera.max_view_angle
+        ),
+        matching=UniquenessParams(alpha=m.alpha, beta_deg=m.beta, max_outliers=m.max_outliers),
+    )
+
+
+def survey(
+    site: Annotated[Path, typer.Argument(metavar="SITE", help="A bim-extract output folder.")],
+    storey: Annotated[str, typer.Option("--storey", metavar="NAME|all", help="Storey to survey.")] = "all",
+    out: Annotated[Path, typer.Option("--out", metavar="DIR", help="Output folder.")] = Path("survey"),
+    config: Annotated[
+        Path | None,
+        typer.Option(
+            "--config", metavar="site.yaml", help="Camera, matching and exploration settings of a run config."
+        ),
+    ] = None,
+    spacing: Annotated[
+        float, typer.Option("--spacing", metavar="M", min=0.1, help="Metres between start positions.")
+    ] = 1.0,
+    headings: Annotated[
+        int, typer.Option("--headings", metavar="N", min=1, help="Start headings per position.")
+    ] = 4,
+    landmarks: Annotated[
+        int, typer.Option("--landmarks", metavar="N", min=0, max=2, help="Extra landmarks to suggest (0-2).")
+    ] = 2,
+    executor: Annotated[
+        str,
+        typer.Option(
+            "--executor", metavar="local|ray", help="Where the matching runs: local processes or Ray."
+        ),
+    ] = "local",
+    workers: Annotated[
+        int | None,
+        typer.Option("--workers", metavar="W", min=1, help="Local processes [default: all cores]."),
+    ] = None,
+    address: Annotated[
+        str | None, typer.Option("--address", metavar="ADDR", help="Ray cluster (auto, ray://host:10001).")
+    ] = None,
+) -> None:
+    """Map the distance to a unique match over a floor from its features and walls alone (no noise):
+    sampled starts look round, follow the wall and match until one hypothesis is left."""
+    console = Console()
+    err = Console(stderr=True)
+    try:
+        model = load_site(site)
+        session = load_config(config) if config is not None else SessionConfig()
+        params = survey_params(session, spacing, headings)
+        names = list(model.storeys) if storey == "all" else [model.storey(storey).name]
+        runner = make_executor(executor, workers, address)
+    except InputError as exc:
+        print(f"bim-init: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        raise typer.Exit(EXIT_BAD_INPUT) from None
+    cmap = site_class_map(model)
+    report: dict[str, object] = {
+        "version": SURVEY_VERSION,
+        "site": str(site),
+        "limit_m": params.limit_m,
+        "storeys": [],
+    }
+    table = Table(title="Survey: distance to a unique match", title_justify="left")
+    for column in (
+        "storey",
+        "starts",
+        "area m2",
+        "<=5 m",
+        "<=10 m",
+        "<=20 m",
+        "median m",
+        "never-unique m2",
+        "landmarks",
+    ):
+        table.add_column(column, justify="left" if column == "storey" else "right")
+    from initcli.survey.plots import survey_png
+
+    try:
+        with Progress(
+            TextColumn("[bold]survey[/bold] {task.fields[storey]}"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TimeElapsedColumn(),
+            console=err,
+        ) as progress:
+            for name in names:
+                try:
+                    plan = plan_storey(model.storeys[name], params, cmap)
+                except ValueError as exc:
+                    err.print(f"storey {name}: skipped ({exc})")
+                    continue
+                task = progress.add_task("starts", total=len(plan.starts), storey=name)
+                result, views = survey_storey(plan, params, runner, lambda n, t=task: progress.advance(t, n))
+                entry = summarise(result)
+                chosen, improved = [], None
+                if landmarks:
+                    n_cand = landmarks * params.landmark_candidates
+                    task_l = progress.add_task("landmarks", total=n_cand, storey=f"{name} landmarks")
+                    chosen, improved = suggest_landmarks(
+                        result, views, landmarks, runner, lambda n, t=task_l: progress.advance(t, n)
+                    )
+                    progress.update(task_l, completed=n_cand)
+                    entry["landmarks"] = [
+                        {
+                            "x": round(lm.x, 3),
+                            "y": round(lm.y, 3),
+                            "norm_x": round(lm.norm_x, 4),
+                            "norm_y": round(lm.norm_y, 4),
+                            "category": lm.cls,
+                            "mean_distance_m": round(lm.mean_distance_m, 2),
+                        }
+                        for lm in chosen
+                    ]
+                    entry["with_landmarks"] = summarise(improved)
+                stem = "".join(c if c.isalnum() or c in "-_" else "_" for c in name)
+                out.mkdir(parents=True, exist_ok=True)
+                survey_png(out / f"survey_{stem}.png", result, improved, chosen)
+                entry["map"] = f"survey_{stem}.png"
+                report["storeys"].append(entry)  # type: ignore[union-attr]
+                shares = entry["unique_within"]
+                median = entry["median_distance_m"]
+                table.add_row(
+                    name,
+                    str(entry["samples"]),
+                    f"{entry['area_m2']:.0f}",
+                    *(f"{100 * shares[k]:.0f} %" for k in ("5m", "10m", "20m")),  # type: ignore[index]
+                    "never" if median is None else f"{median:.1f}",
+                    f"{entry['never_unique_area_m2']:.0f}",
+                    ", ".join(f"({lm.x:.1f}, {lm.y:.1f})" for lm in chosen) or "-",
+                )
+    except KeyboardInterrupt:
+        err.print("interrupted: nothing written for the unfinished storey")
+        raise typer.Exit(EXIT_INTERRUPTED) from None
+    finally:
+        runner.close()
+    out.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(out / "survey.json", json.dumps(report, indent=2) + "\n")
+    console.print(table)
+    console.print(f"wrote {out}/survey.json and the maps")

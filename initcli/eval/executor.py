@@ -1,0 +1,176 @@
+"""Where independent tasks run: this machine's process pool, or a Ray cluster.
+
+An :class:`Executor` is a small protocol -- ``submit(fn, *args)`` returns a handle, ``wait_any``
+returns the handles that finished, ``result`` their value -- so that the evaluation campaign and
+the survey share one scheduling loop (:func:`map_unordered`, a bounded window of tasks in flight,
+results in completion order) whatever runs them. ``ray`` is optional (``pip install
+bim-init[cluster]``); ``ray.init()`` with no address starts a local instance, ``address="auto"``
+joins the cluster this machine belongs to, ``ray://host:10001`` a remote one.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from typing import Any, Protocol
+
+from bimtools.errors import InputError
+
+EXECUTORS = ("local", "ray")
+
+
+def default_workers() -> int:
+    return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
+
+
+def init_worker() -> None:
+    """One thread per worker process: the tasks are the parallelism."""
+    try:
+        import cv2
+
+        cv2.setNumThreads(1)
+    except ImportError:  # pragma: no cover - opencv is a core dependency
+        pass
+
+
+class Executor(Protocol):
+    slots: int  # tasks that run at once
+
+    def submit(self, fn: Callable[..., Any], *args: Any) -> Any: ...
+
+    def wait_any(self, handles: set[Any]) -> tuple[set[Any], set[Any]]: ...
+
+    def result(self, handle: Any) -> Any: ...
+
+    def close(self) -> None: ...
+
+
+class _Done:
+    """A result computed in this process."""
+
+    def __init__(self, value: Any) -> None:
+        self.value = value
+
+
+class LocalExecutor:
+    """``workers`` spawned processes (1: run in this process, no pool)."""
+
+    def __init__(self, workers: int = 1, initializer: Callable[[], None] | None = init_worker) -> None:
+        self.slots = max(1, workers)
+        self._pool: ProcessPoolExecutor | None = None
+        if self.slots > 1:
+            # spawn, not fork: the parent runs a progress-bar thread, and forking a process with
+            # threads can deadlock the children on a lock held at fork time.
+            context = multiprocessing.get_context("spawn")
+            self._pool = ProcessPoolExecutor(
+                max_workers=self.slots, initializer=initializer, mp_context=context
+            )
+        elif initializer is not None:
+            initializer()
+
+    def submit(self, fn: Callable[..., Any], *args: Any) -> Future | _Done:
+        if self._pool is None:
+            return _Done(fn(*args))
+        return self._pool.submit(fn, *args)
+
+    def wait_any(self, handles: set[Any]) -> tuple[set[Any], set[Any]]:
+        done = {h for h in handles if isinstance(h, _Done)}
+        if done:
+            return done, handles - done
+        finished, pending = wait(handles, return_when=FIRST_COMPLETED)
+        return set(finished), set(pending)
+
+    def result(self, handle: Any) -> Any:
+        return handle.value if isinstance(handle, _Done) else handle.result()
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
+            self._pool = None
+
+
+class RayExecutor:
+    """Tasks on a Ray cluster: ``address`` None starts a local instance (``num_cpus`` of them)."""
+
+    def __init__(self, address: str | None = None, num_cpus: int | None = None) -> None:
+        try:
+            import ray
+        except ImportError:
+            raise InputError(
+                "--executor ray needs the ray package: pip install 'bim-init[cluster]' (or pip install ray)"
+            ) from None
+        self._ray = ray
+        self._owned = not ray.is_initialized()
+        if self._owned:
+            kwargs: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False}
+            if address is None:
+                kwargs["num_cpus"] = num_cpus
+            try:
+                ray.init(address=address, **kwargs)
+            except (ConnectionError, RuntimeError, ValueError) as exc:
+                raise InputError(f"--address {address}: cannot connect to the Ray cluster ({exc})") from None
+        self.slots = max(1, int(ray.cluster_resources().get("CPU", 1)))
+        self._remote: dict[Callable[..., Any], Any] = {}
+
+    def submit(self, fn: Callable[..., Any], *args: Any) -> Any:
+        remote = self._remote.get(fn)
+        if remote is None:
+            remote = self._remote[fn] = self._ray.remote(num_cpus=1)(_ray_task).options(name=fn.__name__)
+        return remote.remote(fn, *args)
+
+    def wait_any(self, handles: set[Any]) -> tuple[set[Any], set[Any]]:
+        ready, _ = self._ray.wait(list(handles), num_returns=1)
+        done = set(ready)
+        return done, handles - done
+
+    def result(self, handle: Any) -> Any:
+        return self._ray.get(handle)
+
+    def close(self) -> None:
+        if self._owned and self._ray.is_initialized():
+            self._ray.shutdown()
+
+
+def _ray_task(fn: Callable[..., Any], *args: Any) -> Any:
+    init_worker()
+    return fn(*args)
+
+
+def make_executor(kind: str, workers: int | None = None, address: str | None = None) -> Executor:
+    """``local`` (``workers`` processes, default all cores) or ``ray`` (``address``: None, auto, ray://...)."""
+    if kind == "local":
+        if address:
+            raise InputError("--address needs --executor ray")
+        return LocalExecutor(workers or default_workers())
+    if kind == "ray":
+        return RayExecutor(address, workers)
+    raise InputError(f"--executor must be one of {', '.join(EXECUTORS)}, got {kind!r}")
+
+
+def map_unordered(
+    executor: Executor,
+    calls: Sequence[tuple[Any, ...]] | Iterable[tuple[Any, ...]],
+    window: int | None = None,
+) -> Iterator[tuple[int, Any]]:
+    """Run each ``(fn, *args)`` of ``calls``; yield ``(index, result)`` as they finish, with at most
+    ``window`` (default twice the slots) in flight so an interrupt loses little work."""
+    todo = list(calls)
+    limit = window or 2 * executor.slots
+    pending: dict[Any, int] = {}
+    queue = list(reversed(range(len(todo))))
+    try:
+        while queue or pending:
+            while queue and len(pending) < limit:
+                k = queue.pop()
+                fn, *args = todo[k]
+                pending[executor.submit(fn, *args)] = k
+            finished, _ = executor.wait_any(set(pending))
+            for handle in [h for h in pending if h in finished]:  # in submission order
+                k = pending.pop(handle)
+                yield k, executor.result(handle)
+    finally:
+        if pending and isinstance(executor, RayExecutor):
+            for handle in pending:
+                executor._ray.cancel(handle, force=True)

@@ -1,0 +1,422 @@
+"""The survey of one storey: start samples, their feature sequences, the distance to a unique match.
+
+Pure parts on arrays (no files, no terminal): :func:`plan_storey` precomputes the storey (features,
+occluding edges, wall-following loops and what the camera sees along them), :func:`sample_views`
+what each start sees during its look round and its approach to a loop, :func:`sequences` the order
+in which features get confirmed (after ``min_sightings`` images, as the detection filter does) and
+at what distance, :func:`survey_storey` runs the matching on an executor, :func:`summarise` gives
+the numbers of ``survey.json`` and :func:`suggest_landmarks` the greedy landmark placement.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bimtools.site.load import StoreyModel
+from initcli.core.classes import ClassMap
+from initcli.eval.executor import Executor, LocalExecutor, map_unordered
+from initcli.sim.scenario import Circulation
+from initcli.sim.world import polygon_edges
+from initcli.survey.exploration import Entry, Loop, follow_loops, join_loop, look_round
+from initcli.survey.uniqueness import UniquenessParams, first_unique
+from initcli.survey.visibility import CameraModel, FeatureArrays, visible
+
+LANDMARK_CLASS = "landmark"  # each suggested landmark gets its own category: landmark_1, landmark_2
+LANDMARK_HEIGHT = 2.0  # m: a sign whose centre is at the camera's height
+UNIQUE_WITHIN = (5.0, 10.0, 20.0)  # m: the shares of survey.json
+
+
+@dataclass(frozen=True)
+class SurveyParams:
+    """Every setting of the survey with its one default (the session's defaults where they exist)."""
+
+    spacing: float = 1.0  # m between sample positions
+    headings: int = 4  # start headings per position
+    limit_m: float = 150.0  # m driven without a unique match: never unique (paper §4.3)
+    step_m: float = 0.1  # m between images along the path (0.5 m/s at 5 Hz)
+    look_step: float = 0.12  # rad between images of the look round (0.6 rad/s at 5 Hz)
+    initial_look: bool = True  # turn once on the spot first, as the session does
+    wall_distance: float = 0.7  # m kept to the followed wall
+    side: int = 1  # +1 left wall, -1 right wall
+    start_clearance: float = 0.6  # m from the nearest obstacle for a start (as random starts)
+    min_sightings: int = 3  # images before a feature is confirmed (detection filter)
+    camera: CameraModel = field(default_factory=CameraModel)
+    matching: UniquenessParams = field(default_factory=UniquenessParams)
+    landmark_spacing: float = 4.0  # m between candidate landmark positions along a corridor wall
+    landmark_candidates: int = 30  # candidates tried at most per landmark
+    landmark_stride: int = 4  # candidates are scored on every n-th start, the chosen one on all
+
+
+@dataclass
+class StoreyPlan:
+    """One storey, precomputed: features, occluders, loops, what the loops see, the start samples."""
+
+    name: str
+    features: FeatureArrays
+    occluders: np.ndarray  # (W, 4) wall and obstacle edges
+    walls: np.ndarray  # (V, 6) wall surfaces x1 y1 x2 y2 nx ny (landmark candidates)
+    circulation: Circulation
+    loops: list[Loop]
+    loop_cum: list[np.ndarray]  # per loop (2P + 1, F): images showing each feature along two laps
+    starts: np.ndarray  # (S, 3) x, y, yaw
+    position: np.ndarray  # (S,) index of the start's position
+    positions: np.ndarray  # (M, 2)
+
+
+def storey_features(storey: StoreyModel, cmap: ClassMap | None = None) -> FeatureArrays:
+    cmap = cmap or ClassMap()
+    f = storey.features
+    return FeatureArrays(
+        np.array([[x.x, x.y] for x in f], dtype=float).reshape(-1, 2),
+        np.array([[x.norm_x, x.norm_y] for x in f], dtype=float).reshape(-1, 2),
+        np.array([x.height for x in f], dtype=float),
+        tuple(cmap.canonical(x.category) for x in f),
+    )
+
+
+def occluders_of(storey: StoreyModel) -> np.ndarray:
+    """What hides a feature: the obstacle outlines (as the simulator's world), else the wall surfaces."""
+    parts = [polygon_edges(np.asarray(o.exterior)) for o in storey.obstacles]
+    parts += [polygon_edges(np.asarray(h)) for o in storey.obstacles for h in o.holes]
+    if not parts:
+        parts = [np.array([[w.x1, w.y1, w.x2, w.y2] for w in storey.walls], dtype=float).reshape(-1, 4)]
+    return np.concatenate(parts).reshape(-1, 4)
+
+
+def _cumulative(vis: np.ndarray) -> np.ndarray:
+    twice = np.vstack([vis, vis]).astype(np.int32)
+    return np.vstack([np.zeros((1, vis.shape[1]), dtype=np.int32), np.cumsum(twice, axis=0, dtype=np.int32)])
+
+
+def plan_storey(storey: StoreyModel, params: SurveyParams, cmap: ClassMap | None = None) -> StoreyPlan:
+    """Precompute a storey; raises ValueError when it has no occupancy map."""
+    circulation = Circulation.of(storey)
+    grid = circulation.grid
+    features = storey_features(storey, cmap)
+    occluders = occluders_of(storey)
+    loops = follow_loops(
+        circulation.label, circulation.clearance, grid, params.wall_distance, params.side, params.step_m
+    )
+    loop_cum = [_cumulative(visible(lp.poses, features, occluders, params.camera)) for lp in loops]
+    k = max(1, round(params.spacing / grid.resolution))
+    rows, cols = np.nonzero(circulation.label & (circulation.clearance >= params.start_clearance))
+    # one start per spacing x spacing block of the start region: its cell nearest the block centre
+    block = (rows // k) * (circulation.label.shape[1] // k + 1) + cols // k
+    off = np.hypot(rows % k - (k - 1) / 2, cols % k - (k - 1) / 2)
+    order = np.lexsort((off, block))
+    first = order[np.r_[True, block[order][1:] != block[order][:-1]]] if len(order) else order
+    x, y = grid.cell_centre(rows[first], cols[first])
+    positions = np.column_stack([x, y]).astype(float).reshape(-1, 2)
+    yaws = np.arange(params.headings) * (2 * math.pi / params.headings)
+    starts = np.column_stack(
+        [np.repeat(positions, params.headings, axis=0), np.tile(yaws, len(positions))]
+    ).reshape(-1, 3)
+    position = np.repeat(np.arange(len(positions)), params.headings)
+    walls = np.array([[w.x1, w.y1, w.x2, w.y2, *w.normal] for w in storey.walls], dtype=float).reshape(-1, 6)
+    return StoreyPlan(
+        storey.name, features, occluders, walls, circulation, loops, loop_cum, starts, position, positions
+    )
+
+
+@dataclass
+class SampleViews:
+    """What every start sees before it reaches its loop, and where it joins the loop."""
+
+    look: np.ndarray  # (S, K, F) images of the look round
+    approach: list[np.ndarray]  # per start (A, F) images of the approach
+    entries: list[Entry | None]
+
+
+def _look_poses(plan: StoreyPlan, params: SurveyParams) -> np.ndarray:
+    if not params.initial_look:
+        return plan.starts[:, None, :]
+    return np.stack([look_round(s, params.look_step) for s in plan.starts])
+
+
+def sample_views(plan: StoreyPlan, params: SurveyParams) -> SampleViews:
+    looks = _look_poses(plan, params)
+    s, k = looks.shape[:2]
+    look = visible(looks.reshape(-1, 3), plan.features, plan.occluders, params.camera).reshape(s, k, -1)
+    entries = [join_loop(st, plan.loops, plan.occluders, params.side, params.step_m) for st in plan.starts]
+    approach_poses = [e.approach if e is not None else np.zeros((0, 3)) for e in entries]
+    flat = visible(np.concatenate(approach_poses), plan.features, plan.occluders, params.camera)
+    bounds = np.cumsum([0] + [len(a) for a in approach_poses])
+    approach = [flat[bounds[i] : bounds[i + 1]] for i in range(len(entries))]
+    return SampleViews(look, approach, entries)
+
+
+def with_feature(
+    plan: StoreyPlan, views: SampleViews, params: SurveyParams, extra: FeatureArrays
+) -> tuple[StoreyPlan, SampleViews]:
+    """The plan and views with the features of ``extra`` appended (a suggested landmark)."""
+    features = FeatureArrays(
+        np.vstack([plan.features.xy, extra.xy]),
+        np.vstack([plan.features.normal, extra.normal]),
+        np.concatenate([plan.features.height, extra.height]),
+        (*plan.features.cls, *extra.cls),
+    )
+    cum = [
+        np.hstack([c, _cumulative(visible(lp.poses, extra, plan.occluders, params.camera))])
+        for lp, c in zip(plan.loops, plan.loop_cum, strict=True)
+    ]
+    looks = _look_poses(plan, params)
+    s, k = looks.shape[:2]
+    look_extra = visible(looks.reshape(-1, 3), extra, plan.occluders, params.camera).reshape(s, k, -1)
+    sizes = [len(a) for a in views.approach]
+    poses = np.concatenate([e.approach if e is not None else np.zeros((0, 3)) for e in views.entries])
+    flat = visible(poses, extra, plan.occluders, params.camera)
+    bounds = np.cumsum([0, *sizes])
+    approach = [np.hstack([a, flat[bounds[i] : bounds[i + 1]]]) for i, a in enumerate(views.approach)]
+    new_plan = StoreyPlan(
+        plan.name,
+        features,
+        plan.occluders,
+        plan.walls,
+        plan.circulation,
+        plan.loops,
+        cum,
+        plan.starts,
+        plan.position,
+        plan.positions,
+    )
+    return new_plan, SampleViews(np.concatenate([views.look, look_extra], axis=2), approach, views.entries)
+
+
+def sequences(
+    plan: StoreyPlan, views: SampleViews, params: SurveyParams, which: Sequence[int] | None = None
+) -> tuple[list[tuple[int, ...]], list[np.ndarray]]:
+    """Per start (of ``which``, default all): the feature indices in the order they are confirmed,
+    and the distance (m) driven when each is (features confirmed beyond ``limit_m`` are left out)."""
+    need0 = params.min_sightings
+    out_seq: list[tuple[int, ...]] = []
+    out_dist: list[np.ndarray] = []
+    n_f = len(plan.features)
+    for i in range(len(plan.starts)) if which is None else which:
+        when = np.full(n_f, np.inf)
+        order = np.full(n_f, np.inf)
+        counts = np.cumsum(views.look[i], axis=0)
+        hit = counts >= need0
+        got = hit.any(axis=0)
+        when[got] = 0.0
+        order[got] = hit.argmax(axis=0)[got]
+        seen = counts[-1] if len(counts) else np.zeros(n_f, dtype=int)
+        entry = views.entries[i]
+        if entry is not None and len(views.approach[i]):
+            a = views.approach[i]
+            ca = seen[None, :] + np.cumsum(a, axis=0)
+            hit = (ca >= need0) & ~got[None, :]
+            new = hit.any(axis=0)
+            step = entry.length / len(a)
+            first = hit.argmax(axis=0)
+            when[new] = (first[new] + 1) * step
+            order[new] = 1e6 + first[new]
+            got |= new
+            seen = ca[-1]
+        if entry is not None:
+            cum = plan.loop_cum[entry.loop]
+            p = len(plan.loops[entry.loop])
+            e = entry.index
+            need = need0 - np.minimum(seen, need0)
+            lap = min(p, int((params.limit_m - entry.length) / params.step_m) + 1)
+            for f in np.flatnonzero(~got):
+                j = int(np.searchsorted(cum[:, f], cum[e, f] + need[f], side="left"))
+                if j - 1 - e < lap and j > e:
+                    when[f] = entry.length + (j - 1 - e) * params.step_m
+                    order[f] = 2e6 + (j - 1 - e)
+        keep = np.flatnonzero(np.isfinite(when) & (when <= params.limit_m))
+        keep = keep[np.lexsort((order[keep], when[keep]))]
+        out_seq.append(tuple(int(f) for f in keep))
+        out_dist.append(when[keep])
+    return out_seq, out_dist
+
+
+def _match_chunk(
+    xy: np.ndarray, classes: tuple[str, ...], seqs: list[tuple[int, ...]], params: UniquenessParams
+) -> list[int]:
+    return first_unique(xy, classes, seqs, params)
+
+
+def unique_distances(
+    plan: StoreyPlan,
+    seqs: list[tuple[int, ...]],
+    dists: list[np.ndarray],
+    params: SurveyParams,
+    executor: Executor | None = None,
+    on_done: Callable[[int], None] | None = None,
+    chunks: int | None = None,
+) -> np.ndarray:
+    """(S,) metres driven to a unique match per start; ``inf``: never unique within the limit."""
+    order = sorted(range(len(seqs)), key=lambda i: seqs[i])
+    executor = executor or LocalExecutor(1)
+    n_chunks = chunks or max(1, min(len(order), 8 * executor.slots))
+    size = math.ceil(len(order) / n_chunks) if order else 1
+    parts = [order[lo : lo + size] for lo in range(0, len(order), size)]
+    out = np.full(len(seqs), np.inf)
+    calls = [
+        (_match_chunk, plan.features.xy, plan.features.cls, [seqs[i] for i in p], params.matching)
+        for p in parts
+    ]
+    for k, counts in map_unordered(executor, calls):
+        for i, n in zip(parts[k], counts, strict=True):
+            if n > 0:
+                out[i] = float(dists[i][n - 1])
+        if on_done is not None:
+            on_done(len(parts[k]))
+    return out
+
+
+@dataclass
+class StoreySurvey:
+    """The survey of one storey: the plan, the per-start distances, the per-position map values."""
+
+    plan: StoreyPlan
+    distance: np.ndarray  # (S,) m, inf: never unique
+    params: SurveyParams
+
+    @property
+    def position_distance(self) -> np.ndarray:
+        """(M,) mean over headings of the distance capped at the limit."""
+        capped = np.minimum(self.distance, self.params.limit_m)
+        return np.bincount(self.plan.position, capped, len(self.plan.positions)) / self.params.headings
+
+    @property
+    def position_never(self) -> np.ndarray:
+        """(M,) share of the headings that never become unique."""
+        never = ~np.isfinite(self.distance)
+        return np.bincount(self.plan.position, never, len(self.plan.positions)) / self.params.headings
+
+
+def survey_storey(
+    plan: StoreyPlan,
+    params: SurveyParams,
+    executor: Executor | None = None,
+    on_done: Callable[[int], None] | None = None,
+) -> tuple[StoreySurvey, SampleViews]:
+    views = sample_views(plan, params)
+    seqs, dists = sequences(plan, views, params)
+    distance = unique_distances(plan, seqs, dists, params, executor, on_done)
+    return StoreySurvey(plan, distance, params), views
+
+
+def summarise(result: StoreySurvey) -> dict[str, object]:
+    """The per-storey numbers of ``survey.json``."""
+    d = result.distance
+    n = len(d)
+    cell = result.params.spacing**2
+    finite = d[np.isfinite(d)]
+    median = float(np.median(d)) if n else math.inf
+    return {
+        "storey": result.plan.name,
+        "samples": n,
+        "positions": len(result.plan.positions),
+        "headings": result.params.headings,
+        "area_m2": round(len(result.plan.positions) * cell, 2),
+        "unique_within": {
+            f"{int(r)}m": round(float(np.mean(d <= r)) if n else 0.0, 4) for r in UNIQUE_WITHIN
+        },
+        "median_distance_m": round(median, 2) if math.isfinite(median) else None,
+        "mean_distance_m": round(float(finite.mean()), 2) if len(finite) else None,
+        "never_unique_share": round(float(np.mean(~np.isfinite(d))) if n else 0.0, 4),
+        "never_unique_area_m2": round(float(result.position_never.sum() * cell), 2),
+    }
+
+
+def _with_landmark(
+    plan: StoreyPlan,
+    views: SampleViews,
+    params: SurveyParams,
+    current: np.ndarray,
+    which: np.ndarray,
+    executor: Executor | None,
+) -> np.ndarray:
+    """The distances of the starts ``which`` once the plan's last feature (a landmark) is there; the
+    starts that confirm it only after their unique match keep their distance."""
+    seqs, dists = sequences(plan, views, params, which)
+    new = len(plan.features) - 1
+    limit = params.limit_m
+    changed = [
+        j
+        for j, (i, s) in enumerate(zip(which, seqs, strict=True))
+        if new in s and dists[j][s.index(new)] < min(current[i], limit)
+    ]
+    distance = current[which].copy()
+    if changed:
+        distance[changed] = unique_distances(
+            plan, [seqs[j] for j in changed], [dists[j] for j in changed], params, executor
+        )
+    return distance
+
+
+@dataclass(frozen=True)
+class Landmark:
+    x: float
+    y: float
+    norm_x: float
+    norm_y: float
+    cls: str
+    mean_distance_m: float  # the survey's mean capped distance with this and the earlier landmarks
+
+
+def landmark_candidates(plan: StoreyPlan, params: SurveyParams) -> np.ndarray:
+    """(C, 4) x, y, nx, ny on corridor walls, ``landmark_spacing`` apart, off the existing features."""
+    out = []
+    for x1, y1, x2, y2, nx, ny in plan.walls:
+        length = math.hypot(x2 - x1, y2 - y1)
+        if length < 1.0:
+            continue
+        n = max(1, int(length // params.landmark_spacing))
+        for s in (np.arange(n) + 0.5) / n:
+            px, py = x1 + s * (x2 - x1), y1 + s * (y2 - y1)
+            if not plan.circulation.contains(px + 0.6 * nx, py + 0.6 * ny, 0.3):
+                continue
+            if len(plan.features) and np.hypot(*(plan.features.xy - [px, py]).T).min() < 1.0:
+                continue
+            out.append((px, py, nx, ny))
+    cand = np.array(out, dtype=float).reshape(-1, 4)
+    if len(cand) > params.landmark_candidates:
+        cand = cand[np.linspace(0, len(cand) - 1, params.landmark_candidates).round().astype(int)]
+    return cand
+
+
+def suggest_landmarks(
+    result: StoreySurvey,
+    views: SampleViews,
+    count: int,
+    executor: Executor | None = None,
+    on_done: Callable[[int], None] | None = None,
+) -> tuple[list[Landmark], StoreySurvey]:
+    """Greedy: the candidate wall position whose landmark (a category of its own) cuts the mean capped
+    distance most, then the next one given the first. Returns the landmarks and the survey with them."""
+    params = result.params
+    plan, current = result.plan, result.distance
+    chosen: list[Landmark] = []
+    limit = params.limit_m
+    pick = np.arange(0, len(plan.starts), max(1, params.landmark_stride))
+    for k in range(1, count + 1):
+        cls = f"{LANDMARK_CLASS}_{k}"
+        best: tuple[float, np.ndarray] | None = None
+        for x, y, nx, ny in landmark_candidates(plan, params):
+            extra = FeatureArrays(
+                np.array([[x, y]]), np.array([[nx, ny]]), np.array([LANDMARK_HEIGHT]), (cls,)
+            )
+            cand_plan, cand_views = with_feature(plan, views, params, extra)
+            distance = _with_landmark(cand_plan, cand_views, params, current, pick, executor)
+            score = float(np.minimum(distance, limit).mean())
+            if best is None or score < best[0] - 1e-9:
+                best = (score, np.array([x, y, nx, ny]))
+            if on_done is not None:
+                on_done(1)
+        if best is None:
+            break
+        x, y, nx, ny = best[1]
+        extra = FeatureArrays(np.array([[x, y]]), np.array([[nx, ny]]), np.array([LANDMARK_HEIGHT]), (cls,))
+        plan, views = with_feature(plan, views, params, extra)
+        current = _with_landmark(plan, views, params, current, np.arange(len(plan.starts)), executor)
+        chosen.append(
+            Landmark(float(x), float(y), float(nx), float(ny), cls, float(np.minimum(current, limit).mean()))
+        )
+    return chosen, StoreySurvey(plan, current, params)

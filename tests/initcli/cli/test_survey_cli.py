@@ -1,0 +1,62 @@
+"""``bim-init survey`` end to end on the block_b sample: survey.json (valid against its schema), the
+map, landmarks that do not lengthen the mean distance, and bad input."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import jsonschema
+import pytest
+from typer.testing import CliRunner
+
+from bimtools.schemas import schema_path
+from initcli.cli.main import app
+from initcli.config import load_config
+from initcli.session.setup import prepare_site
+
+SAMPLES = Path(__file__).resolve().parents[3] / "sample_models"
+runner = CliRunner()
+
+
+@pytest.fixture(scope="module")
+def site_dir(tmp_path_factory) -> Path:
+    site = prepare_site(load_config(SAMPLES / "block_b.site.yaml"), tmp_path_factory.mktemp("survey"))
+    return Path(site.root)
+
+
+def test_survey_writes_a_valid_report_and_a_map(site_dir, tmp_path):
+    out = tmp_path / "out"
+    args = [
+        "survey",
+        str(site_dir),
+        "--out",
+        str(out),
+        "--spacing",
+        "2",
+        "--headings",
+        "2",
+        "--landmarks",
+        "1",
+    ]
+    result = runner.invoke(app, [*args, "--workers", "1"])
+    assert result.exit_code == 0, result.output
+    report = json.loads((out / "survey.json").read_text())
+    jsonschema.validate(report, json.loads(schema_path("survey.schema.json").read_text()))
+    (storey,) = report["storeys"]
+    assert storey["samples"] == 2 * storey["positions"] > 10
+    shares = storey["unique_within"]
+    assert 0 <= shares["5m"] <= shares["10m"] <= shares["20m"] <= 1
+    assert (out / storey["map"]).stat().st_size > 10_000
+    (landmark,) = storey["landmarks"]
+    before = storey["mean_distance_m"]
+    assert landmark["category"] == "landmark_1"
+    assert storey["with_landmarks"]["unique_within"]["20m"] >= shares["20m"] - 1e-9 or before is None
+    assert "Survey" in result.output
+
+
+def test_unknown_storey_and_executor_exit_2(site_dir, tmp_path):
+    for extra in (["--storey", "Roof"], ["--executor", "slurm"]):
+        result = runner.invoke(app, ["survey", str(site_dir), "--out", str(tmp_path), *extra])
+        assert result.exit_code == 2
+        assert result.output.count("\n") <= 2 and "error" in result.output
