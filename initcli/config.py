@@ -6,6 +6,7 @@ YAML path and the problem (``camera.fx: expected a number, got "abc"``).
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import json
 import math
@@ -18,8 +19,10 @@ import yaml
 
 from bimtools.errors import InputError
 from bimtools.schemas import schema_path
+from initcli.core.verification import VerificationParams
 from initcli.core.wall_following import WallFollowParams
 from initcli.match.pipeline import MatchOptions
+from initcli.sim.as_built import AsBuiltParams
 
 SCHEMA_PATH = schema_path("site_config.schema.json")
 _MATCH = MatchOptions()  # the one default of every matching setting
@@ -156,9 +159,66 @@ class OdometryNoiseSection:
     alpha4: float = 0.0001
 
 
+_AS_BUILT = AsBuiltParams()  # the one default of every as-built deviation (all 0: the design)
+_CHECKS = VerificationParams()  # the one default of every verification threshold
+
+
+@dataclass
+class AsBuiltSection:
+    """How the simulated site deviates from its design model (initcli.sim.as_built)."""
+
+    missing_doors: float = _AS_BUILT.missing_doors  # share of doors not installed
+    door_shift: float = _AS_BUILT.door_shift  # m, sigma along the host wall
+    wall_offset: float = _AS_BUILT.wall_offset  # m, sigma per element
+    open_doors: float = _AS_BUILT.open_doors  # share of installed doors standing open
+    hoarding: float = _AS_BUILT.hoarding  # temporary walls per 100 m of corridor
+    extra_doors: float = _AS_BUILT.extra_doors  # doors the model lacks, per 100 m of corridor
+    clutter_in_corridor: float = _AS_BUILT.clutter_in_corridor  # share of stacks out in the corridor
+
+
+@dataclass
+class SimDetectorSection:
+    """What the simulated detector gets wrong persistently (beyond sim.miss_rate per image)."""
+
+    persistent_phantoms: float = _AS_BUILT.persistent_phantoms  # per 100 m: posters detected as doors
+    never_seen: float = _AS_BUILT.never_seen  # share of real features never detected
+
+
+@dataclass
+class SimOdometrySection:
+    """Systematic odometry errors (on top of sim.odometry_noise's random walk)."""
+
+    scale_error: float = 0.0  # share of distance counted too far (0.02: 2 % wheel-radius error)
+    slip: float = 0.0  # wheel-slip events per 100 m
+
+
+# Named realities (sim.reality): values for the keys above that the config does not set itself.
+REALITY_PROFILES: dict[str, dict[str, dict[str, float]]] = {
+    "ideal": {},
+    "construction": {
+        "as_built": {
+            "missing_doors": 0.2,
+            "door_shift": 0.3,
+            "wall_offset": 0.05,
+            "open_doors": 0.3,
+            "hoarding": 1.0,
+            "extra_doors": 0.5,
+            "clutter_in_corridor": 0.5,
+        },
+        "detector": {"persistent_phantoms": 1.0, "never_seen": 0.1},
+        "odometry": {"scale_error": 0.02, "slip": 1.0},
+    },
+}
+
+
 @dataclass
 class SimSection:
     start: Any = "random"  # "random" or [x, y, yaw_degrees] in the BIM frame
+    world: str = ""  # the building the robot drives in (IFC or bim-extract OUTDIR); "": site.path
+    reality: str = "ideal"  # a named profile of the keys below (REALITY_PROFILES)
+    as_built: AsBuiltSection = field(default_factory=AsBuiltSection)
+    detector: SimDetectorSection = field(default_factory=SimDetectorSection)
+    odometry: SimOdometrySection = field(default_factory=SimOdometrySection)
     odometry_noise: OdometryNoiseSection = field(default_factory=OdometryNoiseSection)
     clutter: float = 0.05  # material stacks per metre of corridor wall
     workers: int = 2
@@ -167,6 +227,23 @@ class SimSection:
     confusion_rate: float = 0.02  # chance a detection gets another class
     phantoms: int = 0  # persistent door-like things that are not in the BIM (posters, openings)
     seed: int = 1
+
+
+@dataclass
+class VerificationSection:
+    """Checks of a unique match before it is claimed (initcli.core.verification)."""
+
+    enabled: bool = _CHECKS.enabled
+    predict_range: float = _CHECKS.predict_range  # m
+    min_frames: int = _CHECKS.min_frames  # images in view before a miss counts
+    match_radius: float = _CHECKS.match_radius  # m
+    p_right: float = _CHECKS.p_right  # miss chance of a predicted feature at the right place
+    p_wrong: float = _CHECKS.p_wrong  # ... and at a wrong place
+    log_odds: float = _CHECKS.log_odds  # likelihood ratio (natural log) that rejects
+    min_scan_fit: float = _CHECKS.min_scan_fit  # share of beams on mapped walls
+    scan_tolerance: float = _CHECKS.scan_tolerance  # m
+    min_claim_inliers: int = _CHECKS.min_claim_inliers  # matched features before a claim
+    rival_outliers: int = _CHECKS.rival_outliers  # extra outliers the claim must stay unique under
 
 
 @dataclass
@@ -181,6 +258,7 @@ class SessionConfig:
     fine_tuning: FineTuningSection = field(default_factory=FineTuningSection)
     limits: LimitsSection = field(default_factory=LimitsSection)
     sim: SimSection = field(default_factory=SimSection)
+    verification: VerificationSection = field(default_factory=VerificationSection)
     source: Path | None = None  # the YAML file
 
     def site_path(self) -> Path:
@@ -290,6 +368,7 @@ def parse_config(doc: Any, source: Path | None = None) -> SessionConfig:
     if doc is None:
         doc = {}
     validate_document(doc, SCHEMA_PATH, where)
+    doc = with_reality(doc, (doc.get("sim") or {}).get("reality", "ideal"))
     config = _merge(SessionConfig(), doc)
     config.source = source
     start = config.sim.start
@@ -302,12 +381,39 @@ def parse_config(doc: Any, source: Path | None = None) -> SessionConfig:
     return config
 
 
-def load_config(path: Path) -> SessionConfig:
+def with_reality(doc: dict, reality: str) -> dict:
+    """``doc`` with ``sim.reality`` set and the profile's values under the keys ``doc`` leaves unset."""
+    doc = copy.deepcopy(doc)
+    sim = doc.setdefault("sim", {})
+    sim["reality"] = reality
+    for section, values in REALITY_PROFILES[reality].items():
+        given = sim.setdefault(section, {})
+        for key, value in values.items():
+            given.setdefault(key, value)
+    return doc
+
+
+def load_config(path: Path, reality: str | None = None) -> SessionConfig:
+    """The session config at ``path``; ``reality``: a named profile that replaces ``sim.reality``."""
     path = Path(path)
     doc = read_yaml(path, "config")
     if doc is not None and not isinstance(doc, dict):
         raise InputError(f"{path}: expected a mapping of sections (site, robot, camera, ...)")
+    if reality is not None:
+        doc = with_reality(doc or {}, reality)
     return parse_config(doc, path)
+
+
+def as_built_params(config: SessionConfig) -> AsBuiltParams:
+    """The simulated world's deviations from the design (sim.as_built + sim.detector)."""
+    a, d = config.sim.as_built, config.sim.detector
+    return AsBuiltParams(
+        **dataclasses.asdict(a), persistent_phantoms=d.persistent_phantoms, never_seen=d.never_seen
+    )
+
+
+def verification_params(config: SessionConfig) -> VerificationParams:
+    return dataclasses.replace(_CHECKS, **dataclasses.asdict(config.verification))
 
 
 def start_pose_degrees(config: SessionConfig) -> tuple[float, float, float] | None:

@@ -21,6 +21,7 @@ from rich.progress import (
 from rich.table import Table
 
 from bimtools.errors import EXIT_BAD_INPUT, InputError
+from initcli.config import REALITY_PROFILES
 from initcli.eval.campaign import default_workers, plan_jobs, prepare_sites, run_jobs
 from initcli.eval.config import load_eval_config, parse_methods
 from initcli.eval.executor import make_executor
@@ -88,6 +89,14 @@ def evaluate(
     sites: Annotated[
         str | None, typer.Option("--sites", metavar="NAME,...", help="Only these sites of the config.")
     ] = None,
+    reality: Annotated[
+        str | None,
+        typer.Option(
+            "--reality",
+            metavar="ideal|construction",
+            help="Run every site in this named reality (sim.reality; keys a site config sets win).",
+        ),
+    ] = None,
     executor: Annotated[
         str,
         typer.Option("--executor", metavar="local|ray", help="Where the trials run: local processes or Ray."),
@@ -106,6 +115,8 @@ def evaluate(
         eval_config = load_eval_config(config)
         chosen = parse_methods(methods) if methods else eval_config.methods
         the_sweep = parse_sweep(sweep) if sweep else None
+        if reality is not None and reality not in REALITY_PROFILES:
+            raise InputError(f"--reality: expected one of {', '.join(REALITY_PROFILES)}, got {reality!r}")
         only = sites.replace(",", " ").split() if sites else None
         if only:
             unknown = [s for s in only if s not in {x.name for x in eval_config.sites}]
@@ -122,7 +133,7 @@ def evaluate(
         raise typer.Exit(EXIT_BAD_INPUT) from None
     n_workers = runner.slots if executor != "local" else workers or default_workers()
     done = {r.key for r in previous}
-    jobs = plan_jobs(eval_config, prepared, chosen, starts, the_sweep, done)
+    jobs = plan_jobs(eval_config, prepared, chosen, starts, the_sweep, done, reality)
     total = sum(len(j.methods) for j in jobs)
     if previous:
         err.print(f"resuming: {len(previous)} trials in {results_path} kept, {total} to run")

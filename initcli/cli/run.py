@@ -21,7 +21,7 @@ from initcli.config import SessionConfig, config_to_dict, load_config
 from initcli.core.geometry import Pose2D
 from initcli.session.outputs import render_report, summary_document, write_summary
 from initcli.session.result import SessionResult
-from initcli.session.setup import prepare_site, sim_session
+from initcli.session.setup import prepare_site, prepare_world, sim_session
 
 EXIT_FAILED = 1
 
@@ -92,6 +92,7 @@ def run_session(
     """Run one session into ``out`` (staged: nothing half-written on failure). Returns the summary."""
     with staged_directory(out) as stage:
         site = prepare_site(config, stage)
+        world = prepare_world(config, stage)
         view = None if quiet else LiveView(console)
         built = sim_session(
             config,
@@ -101,6 +102,7 @@ def run_session(
             stage / "session.jsonl",
             observer=view,
             meta_source=f"bim-init run (sim, seed {seed})",
+            world=world,
         )
         session, setup = built.session, built.setup
         if view is not None:

@@ -21,8 +21,8 @@ from typing import Protocol
 import cv2
 import numpy as np
 
-from initcli.core.geometry import Pose2D
-from initcli.core.projection import R_BODY_OPTICAL, CameraIntrinsics, CameraMount
+from initcli.core.geometry import Pose2D, wrap_angle
+from initcli.core.projection import R_BODY_OPTICAL, CameraIntrinsics, CameraMount, odom_to_pixel
 
 
 class Tag(Protocol):
@@ -60,26 +60,51 @@ def robot_pose_from_marker(
     ``T_bim_base = T_bim_marker inv(T_optical_marker) inv(T_base_optical)``, projected on the floor
     (x, y, and the heading of the base's x axis).
 
-    Of IPPE's two solutions the one with the smaller reprojection error is kept (as ArUco's
-    ``estimatePoseSingleMarkers`` does; the other is the mirror solution a small, far tag often
-    prefers). OpenCV's IPPE is numerically degenerate for a *noise-free* image of a vertical tag
-    taken by a level camera (the simulator can produce one); a ``SOLVEPNP_ITERATIVE`` solution is
-    therefore also computed and kept when it reprojects better.
+    A small tag seen head-on from afar has two 6-DOF solutions that reproject almost equally well:
+    the true one and its mirror, tilted about the tag's plane; picking the lower reprojection error
+    (ArUco's ``estimatePoseSingleMarkers``) then often picks the mirror, a pose metres off. The robot
+    knows more: its base stands level on the floor with the camera at its known mount, and the tag
+    hangs vertically on a wall. So each 6-DOF candidate (IPPE's two, and ``SOLVEPNP_ITERATIVE``'s,
+    since IPPE is numerically degenerate for a noise-free image of a vertical tag from a level
+    camera) only seeds a 3-DOF fit: the planar pose (x, y, yaw) that minimises the corners'
+    reprojection error (inverse Eq. 1-2). The mirror has no level counterpart and falls away.
     """
+    from scipy.optimize import least_squares
+
     k = np.array([[intrinsics.fx, 0.0, intrinsics.cx], [0.0, intrinsics.fy, intrinsics.cy], [0.0, 0.0, 1.0]])
-    rvec, tvec = _solve_tag(marker.object_points(), np.asarray(corners_px, dtype=np.float64).reshape(4, 2), k)
-    t_opt_marker = _homogeneous(cv2.Rodrigues(rvec)[0], tvec.reshape(3))
+    pixels = np.asarray(corners_px, dtype=np.float64).reshape(4, 2)
+    corners = marker.object_points() @ marker.rotation().T + marker.centre  # (4, 3) in the BIM frame
     t_bim_marker = _homogeneous(marker.rotation(), marker.centre)
     t_base_opt = _homogeneous(mount.rotation() @ R_BODY_OPTICAL, mount.translation)
-    t_bim_base = t_bim_marker @ np.linalg.inv(t_opt_marker) @ np.linalg.inv(t_base_opt)
-    return Pose2D(
-        float(t_bim_base[0, 3]), float(t_bim_base[1, 3]), math.atan2(t_bim_base[1, 0], t_bim_base[0, 0])
-    )
+
+    def residuals(q: np.ndarray) -> np.ndarray:
+        u, v, depth = odom_to_pixel(corners, intrinsics, mount, Pose2D(float(q[0]), float(q[1]), float(q[2])))
+        if np.any(depth <= 0):
+            return np.full(8, 1e3)
+        return np.concatenate([u - pixels[:, 0], v - pixels[:, 1]])
+
+    best: tuple[float, np.ndarray] | None = None
+    solutions = _tag_solutions(marker.object_points(), pixels, k)
+    if not solutions:
+        raise ValueError("solvePnP found no pose for the tag")
+    for _, _, rvec, tvec in solutions:
+        t_opt_marker = _homogeneous(cv2.Rodrigues(rvec)[0], tvec.reshape(3))
+        t_bim_base = t_bim_marker @ np.linalg.inv(t_opt_marker) @ np.linalg.inv(t_base_opt)
+        seed = np.array([t_bim_base[0, 3], t_bim_base[1, 3], math.atan2(t_bim_base[1, 0], t_bim_base[0, 0])])
+        fit = least_squares(residuals, seed, method="lm")
+        cost = float(np.sum(fit.fun**2))
+        if best is None or cost < best[0]:
+            best = (cost, fit.x)
+    assert best is not None
+    x, y, yaw = best[1]
+    return Pose2D(float(x), float(y), float(wrap_angle(float(yaw))))
 
 
-def _solve_tag(objects: np.ndarray, pixels: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(rvec, tvec)`` of ``T_optical_marker``: the best reprojecting IPPE_SQUARE solution, or the
-    iterative one when it reprojects better (see :func:`robot_pose_from_marker`)."""
+def _tag_solutions(
+    objects: np.ndarray, pixels: np.ndarray, k: np.ndarray
+) -> list[tuple[float, int, np.ndarray, np.ndarray]]:
+    """``(reprojection error px^2, order, rvec, tvec)`` of every ``T_optical_marker`` candidate: IPPE
+    square's solutions and the iterative one (see :func:`robot_pose_from_marker`)."""
     objects = objects.astype(np.float64).reshape(4, 1, 3)
     pixels = pixels.reshape(4, 1, 2)
     solutions: list[tuple[np.ndarray, np.ndarray]] = []
@@ -88,15 +113,12 @@ def _solve_tag(objects: np.ndarray, pixels: np.ndarray, k: np.ndarray) -> tuple[
     ok, rvec, tvec = cv2.solvePnP(objects, pixels, k, None, flags=cv2.SOLVEPNP_ITERATIVE)
     if ok:
         solutions.append((rvec, tvec))
-    candidates = []
+    out = []
     for order, (rvec, tvec) in enumerate(solutions):
         projected, _ = cv2.projectPoints(objects, rvec, tvec, k, None)
         error = float(np.sum((projected.reshape(4, 2) - pixels.reshape(4, 2)) ** 2))
-        candidates.append((error, order, rvec, tvec))  # ties: IPPE's first solution
-    if not candidates:
-        raise ValueError("solvePnP found no pose for the tag")
-    _, _, rvec, tvec = min(candidates, key=lambda c: (c[0], c[1]))
-    return rvec, tvec
+        out.append((error, order, rvec, tvec))
+    return out
 
 
 def _homogeneous(rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:

@@ -50,6 +50,10 @@ class VerificationParams:
     scan_tolerance: float = 0.25  # m: a beam end point this close to an occupied cell fits
     scan_search_xy: float = 0.3  # m: the fit is the best over shifts of the pose up to this ...
     scan_search_yaw_deg: float = 3.0  # ... and turns up to this (a coarse pose is decimetres off)
+    min_claim_inliers: int = 4  # matched features a unique match needs before it is claimed
+    rival_outliers: int = 1  # a claim must stay unique with this many more outliers allowed ...
+    rival_distance: float = 2.0  # m: ... counting rivals this far from it (or turned rival_turn_deg)
+    rival_turn_deg: float = 30.0
     enabled: bool = True
 
 

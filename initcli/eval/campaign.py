@@ -13,13 +13,14 @@ from initcli.eval.executor import default_workers as default_workers
 from initcli.eval.records import TrialKey, TrialRecord
 from initcli.eval.sweep import Sweep, sweep_label
 from initcli.eval.trial import TrialJob, run_trial, trial_seed
-from initcli.session.setup import prepare_site
+from initcli.session.setup import prepare_site, prepare_world
 
 
 @dataclass(frozen=True)
 class PreparedSite:
     site: EvalSite
     site_dir: Path  # a bim-extract OUTDIR
+    world_dir: Path | None = None  # the sim.world model, when the robot does not live in the BIM
 
 
 def prepare_sites(config: EvalConfig, workdir: Path, only: Iterable[str] | None = None) -> list[PreparedSite]:
@@ -29,8 +30,10 @@ def prepare_sites(config: EvalConfig, workdir: Path, only: Iterable[str] | None 
     for site in config.sites:
         if wanted is not None and site.name not in wanted:
             continue
-        prepared = prepare_site(load_config(site.config), workdir / site.name)
-        out.append(PreparedSite(site, Path(prepared.root)))
+        config = load_config(site.config)
+        prepared = prepare_site(config, workdir / site.name)
+        world = prepare_world(config, workdir / site.name)
+        out.append(PreparedSite(site, Path(prepared.root), Path(world.root) if world is not None else None))
     return out
 
 
@@ -41,6 +44,7 @@ def plan_jobs(
     starts: int | None = None,
     sweep: Sweep | None = None,
     done: set[TrialKey] | None = None,
+    reality: str | None = None,
 ) -> list[TrialJob]:
     """One job per (sweep value, start, site) with the methods not finished yet.
 
@@ -73,6 +77,8 @@ def plan_jobs(
                         sweep_value=value,
                         amcl=tuple(sorted(config.amcl.items())),
                         markers=tuple(sorted(config.markers.items())),
+                        world_dir=str(p.world_dir) if p.world_dir is not None else "",
+                        reality=reality,
                     )
                 )
     return jobs

@@ -43,6 +43,8 @@ class TrialJob:
     sweep_value: float | None = None
     amcl: tuple[tuple[str, Any], ...] = ()
     markers: tuple[tuple[str, Any], ...] = ()
+    world_dir: str = ""  # the prepared sim.world model ("": the robot lives in the BIM)
+    reality: str | None = None  # a named reality replacing the site config's sim.reality
 
 
 @lru_cache(maxsize=8)
@@ -51,8 +53,12 @@ def _site(site_dir: str) -> Site:
 
 
 @lru_cache(maxsize=8)
-def _config(config_path: str) -> SessionConfig:
-    return load_config(Path(config_path))
+def _config(config_path: str, reality: str | None) -> SessionConfig:
+    return load_config(Path(config_path), reality)
+
+
+def _world(world_dir: str) -> Site | None:
+    return _site(world_dir) if world_dir else None
 
 
 def session_outcomes(result: SessionResult) -> dict[str, LocalisationOutcome]:
@@ -101,7 +107,7 @@ def session_outcomes(result: SessionResult) -> dict[str, LocalisationOutcome]:
 
 
 def _trial_config(job: TrialJob) -> SessionConfig:
-    config = _config(job.config_path)
+    config = _config(job.config_path, job.reality)
     if job.sweep is not None and job.sweep_value is not None:
         return apply_sweep(config, job.sweep, job.sweep_value)
     return config
@@ -119,7 +125,9 @@ def run_trial(job: TrialJob) -> list[TrialRecord]:
         """The same world, start and noise as the session's, without the feature detector."""
         nonlocal start_pose
         simulated, _ = choose_storey(config, site)
-        setup = build_sim(config, site, simulated, job.seed, start, detect_features=False)
+        setup = build_sim(
+            config, site, simulated, job.seed, start, detect_features=False, world_site=_world(job.world_dir)
+        )
         start_pose = setup.start.as_tuple()
         return setup
 
@@ -130,7 +138,7 @@ def run_trial(job: TrialJob) -> list[TrialRecord]:
             session_config = dataclasses.replace(
                 config, fine_tuning=dataclasses.replace(config.fine_tuning, enabled=False)
             )
-        built = sim_session(session_config, site, job.seed, start)
+        built = sim_session(session_config, site, job.seed, start, world=_world(job.world_dir))
         start_pose = built.setup.start.as_tuple()
         result = built.session.run()
         both = session_outcomes(result)

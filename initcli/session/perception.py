@@ -29,7 +29,7 @@ from initcli.io.detection_log import (
     Scan,
     Truth,
 )
-from initcli.match.pipeline import MatchOptions, MatchReport, match_log
+from initcli.match.pipeline import Hypothesis, MatchOptions, MatchReport, match_log
 from initcli.match.sightings import image_sightings
 from initcli.match.verify import PathEvidence
 
@@ -66,6 +66,31 @@ class Perception:
             self.log.lines.append(len(self.log.records) + 1)
         if self._writer is not None:
             self._writer.write(record)
+
+    def rivals(
+        self,
+        site: Site,
+        report: MatchReport,
+        hypothesis: Hypothesis,
+        extra: int,
+        apart_m: float,
+        apart_rad: float,
+    ) -> list[Hypothesis]:
+        """Pose-distinct hypotheses (``apart_m`` / ``apart_rad`` from ``hypothesis``) with at least
+        min_inliers matches that appear when ``extra`` more outliers are allowed than ``report`` had."""
+        if extra <= 0:
+            return []
+        opts = dataclasses.replace(report.options, max_outliers=report.options.max_outliers + extra)
+        wider = match_log(self.log, site, opts, self.cmap)
+        out = []
+        for h in wider.hypotheses:
+            inliers = sum(m is not None for m in h.matches)
+            far = (
+                h.pose.distance_to(hypothesis.pose) > apart_m or h.pose.yaw_error(hypothesis.pose) > apart_rad
+            )
+            if far and inliers >= self.options.min_inliers:
+                out.append(h)
+        return out
 
     def close(self) -> None:
         if self._writer is not None:

@@ -30,17 +30,18 @@ from initcli.config import (
     followed_side,
     match_options,
     turn_in_place_speed,
+    verification_params,
     wall_follow_params,
 )
 from initcli.core.bug_navigation import BugNavigator, BugParams
 from initcli.core.classes import ClassMap
 from initcli.core.confinement import ConfinementWatch
 from initcli.core.geometry import Pose2D, wrap_angle
-from initcli.core.verification import CameraView, Verification, VerificationParams
+from initcli.core.verification import CameraView, Verification
 from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
 from initcli.io.detection_log import Meta, State
-from initcli.match.pipeline import Hypothesis, MatchReport
+from initcli.match.pipeline import MatchReport
 from initcli.match.verify import StoreyEvidence, verify_transform
 from initcli.session.exploration import ActiveExploration
 from initcli.session.fine_tuning import FineLost, FineTuning, FineTuningHooks, matched_pairs
@@ -111,9 +112,10 @@ class Session:
         self.last_feature_t = 0.0  # s: when the last new feature was confirmed
         self.turned = 0.0  # rad turned since the look or recovery rotation began
         self.hypotheses = 0  # of the last match step
-        self.checks = VerificationParams()
+        self.checks = verification_params(config)
         self.view = CameraView(driver.camera, driver.mount, self.options.min_depth)
         self._evidence: dict[str, StoreyEvidence] = {}
+        self.cannot_leave: str | None = None  # set when the start is known to be closed in
         self._started = time.perf_counter()
 
     # -- records -------------------------------------------------------------------------------------
@@ -174,6 +176,9 @@ class Session:
         self.hypotheses = 0
         self.last_feature_t = frame.t
         self.turned = 0.0
+        if self.cannot_leave is not None:
+            self._fail(frame, self.cannot_leave)
+            return
         while True:
             v, w = self._command(frame)
             previous = frame.odom
@@ -270,7 +275,7 @@ class Session:
         report = self._match(frame.t)
         self.hypotheses = report.n_hypotheses
         if report.n_hypotheses == 1:
-            if self._verified(frame, report.hypotheses[0]):
+            if self._verified(frame, report):
                 self._coarse_done(frame, report)
                 return True
             if self.state != "explore":
@@ -315,11 +320,29 @@ class Session:
             frame.t, f"verification ({stage}): " + ("passed" if check.passed else "; ".join(check.reasons))
         )
 
-    def _verified(self, frame: SensorFrame, hypothesis: Hypothesis) -> bool:
-        """Check a unique match against negative evidence and the lidar before claiming it (beyond
-        the paper): a failed one is logged and exploration goes on."""
+    def _verified(self, frame: SensorFrame, report: MatchReport) -> bool:
+        """Check a unique match before claiming it (beyond the paper): enough matched features, no
+        rival with one more outlier allowed (an as-built site has doors the BIM lacks), negative
+        evidence and the lidar. A failed one is logged and exploration goes on."""
         if not self.checks.enabled:
             return True
+        hypothesis = report.hypotheses[0]
+        inliers = sum(m is not None for m in hypothesis.matches)
+        if inliers < self.checks.min_claim_inliers:
+            self._note(
+                frame.t, f"unique match on {inliers} features: waiting for {self.checks.min_claim_inliers}"
+            )
+            return False
+        c = self.checks
+        rivals = self.perception.rivals(
+            self.site, report, hypothesis, c.rival_outliers, c.rival_distance, math.radians(c.rival_turn_deg)
+        )
+        if rivals:
+            self._note(
+                frame.t,
+                f"unique match has {len(rivals)} rival(s) with {c.rival_outliers} more outlier(s) allowed",
+            )
+            return False
         pose = hypothesis.rectified_pose or hypothesis.pose
         check = self._verify(hypothesis.storey, pose * frame.odom.inverse())
         self._record_check(frame, "coarse", hypothesis.storey, pose, check)

@@ -11,14 +11,16 @@ from pathlib import Path
 import numpy as np
 
 from bimtools.errors import InputError
-from bimtools.site.load import Site, load_site
-from initcli.config import SessionConfig, start_pose_degrees
+from bimtools.site.load import Site, StoreyModel, load_site
+from bimtools.site.records import FREE
+from initcli.config import SessionConfig, as_built_params, start_pose_degrees
 from initcli.core.classes import ClassMap
 from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.drivers.sim import LidarSpec, SimDriver
 from initcli.io.detection_log import DetectedObject
 from initcli.session.runner import Observer, Session
+from initcli.sim.as_built import HOARDING_CLASS, LEAF_CLASS, AsBuiltWorld, derive_as_built, stand_out
 from initcli.sim.camera import CameraNoise, SimulatedDetector
 from initcli.sim.robot import DiffDriveRobot, OdometryNoise
 from initcli.sim.scenario import Circulation, place_clutter, place_workers, random_start
@@ -30,15 +32,25 @@ SESSION_RNG_OFFSET = 7919  # the session's own generator (particle filter) is se
 
 def prepare_site(config: SessionConfig, workdir: Path) -> Site:
     """Load the site: a bim-extract OUTDIR as is, an IFC file extracted into ``workdir/site``."""
-    path = config.site_path()
-    where = f"{config.source}: site.path" if config.source else "site.path"
+    return _prepare(config.site_path(), "site.path", config, workdir / "site")
+
+
+def prepare_world(config: SessionConfig, workdir: Path) -> Site | None:
+    """The building the simulated robot lives in (``sim.world``), or None: the BIM itself."""
+    if not config.sim.world:
+        return None
+    base = config.source.parent if config.source else Path.cwd()
+    return _prepare((base / config.sim.world).resolve(), "sim.world", config, workdir / "world")
+
+
+def _prepare(path: Path, key: str, config: SessionConfig, target: Path) -> Site:
+    where = f"{config.source}: {key}" if config.source else key
     if not path.exists():
         raise InputError(f"{where}: {path} does not exist")
     if path.is_file() and path.suffix.lower() == ".ifc":
         from bimtools.extract.output import write_site
         from bimtools.extract.pipeline import extract_site
 
-        target = workdir / "site"
         write_site(target, extract_site(path), preview=False)
         path = target
     site = load_site(path)
@@ -71,6 +83,21 @@ class SimSetup:
     start: Pose2D
     world: SimWorld
     storey: str
+    as_built: AsBuiltWorld | None = None  # what differs from the design (None: the ideal world)
+    enclosed: bool = False  # the start lies in a room closed off by doors
+
+
+def world_storey(site: Site, world: Site | None, storey: str) -> StoreyModel:
+    """The storey the robot lives in: ``storey`` of ``world`` (same name, else the nearest elevation)."""
+    if world is None:
+        return site.storeys[storey]
+    if storey in world.storeys:
+        return world.storeys[storey]
+    elevation = site.storeys[storey].elevation
+    return min(world.storeys.values(), key=lambda s: abs(s.elevation - elevation))
+
+
+AS_BUILT_SEED = 104729  # the as-built world draws from its own generator: the same starts at every value
 
 
 def build_sim(
@@ -80,34 +107,55 @@ def build_sim(
     seed: int,
     start: Pose2D | None = None,
     detect_features: bool = True,
+    world_site: Site | None = None,
 ) -> SimSetup:
     """The simulated robot in the storey's world. ``detect_features=False`` leaves the feature
     detector out (methods that do not use it: the world, start and noise are the same)."""
     rng = np.random.default_rng(seed)
-    model = site.storeys[storey]
+    model = world_storey(site, world_site, storey)
     circulation = Circulation.of(model)
+    cmap = ClassMap(config.detector.classes)
+    design = sim_features_from_bim(model.features, cmap)
+    doors = frozenset(f.id for f in model.features if f.ifc_class == "IfcDoor")
+    built = derive_as_built(
+        model.obstacles,
+        model.walls,
+        design,
+        circulation,
+        as_built_params(config),
+        np.random.default_rng([seed, AS_BUILT_SEED]),
+        doors,
+    )
     clutter = place_clutter(model, circulation, config.sim.clutter, rng)
-    static = SimWorld.from_obstacles(model.obstacles, clutter)
+    clutter = stand_out(
+        clutter, config.sim.as_built.clutter_in_corridor, np.random.default_rng([seed, AS_BUILT_SEED, 1])
+    )
+    static = SimWorld.from_obstacles(built.obstacles, clutter)
     workers = place_workers(model, circulation, static.static, int(config.sim.workers), rng)
-    world = SimWorld.from_obstacles(model.obstacles, clutter, workers)
+    world = SimWorld.from_obstacles(built.obstacles, clutter, workers)
+    # Starts lie where a robot can be: the free space connected to the corridors with the doors as
+    # the simulated world has them (closed leaves, hoardings).
+    closed = [o for o in built.obstacles if o.ifc_class in (LEAF_CLASS, HOARDING_CLASS)]
+    reachable = Circulation.of(model, closed=closed)
     if start is None:
         explicit = start_pose_degrees(config)
         start = Pose2D(*explicit) if explicit is not None else None
+    enclosed = False
     if start is None:
         for _ in range(200):
-            start = random_start(circulation, rng, clearance=config.robot.radius + 0.3)
+            start = random_start(reachable, rng, clearance=config.robot.radius + 0.3)
             if world.clearance(start.x, start.y, 0.0, 1.0) > config.robot.radius + 0.2:
                 break
-    elif world.clearance(start.x, start.y, 0.0, 1.0) < config.robot.radius:
-        raise InputError(f"sim.start: ({start.x:.2f}, {start.y:.2f}) is inside or against an obstacle")
+    else:
+        check_start(start, model, world, config.robot.radius)
+        enclosed = not reachable.contains(start.x, start.y)
     assert start is not None
     n = config.sim.odometry_noise
-    robot = DiffDriveRobot(
-        start, config.robot.radius, OdometryNoise(n.alpha1, n.alpha2, n.alpha3, n.alpha4), rng
-    )
+    o = config.sim.odometry
+    noise_model = OdometryNoise(n.alpha1, n.alpha2, n.alpha3, n.alpha4, o.scale_error, o.slip)
+    robot = DiffDriveRobot(start, config.robot.radius, noise_model, rng)
     camera, mount = camera_of(config)
-    cmap = ClassMap(config.detector.classes)
-    features = sim_features_from_bim(model.features, cmap)
+    features = built.features
     phantoms = _phantoms(model, circulation, int(config.sim.phantoms), rng)
     noise = CameraNoise(
         miss_rate=config.sim.miss_rate,
@@ -143,7 +191,20 @@ def build_sim(
         rng,
         depth_window=int(config.camera.depth_window),
     )
-    return SimSetup(driver, start, world, storey)
+    ideal = built.changes == {}
+    return SimSetup(driver, start, world, storey, None if ideal else built, enclosed)
+
+
+def check_start(start: Pose2D, model: StoreyModel, world: SimWorld, radius: float) -> None:
+    """A start outside the storey's map or inside or against an obstacle is bad input."""
+    where = f"sim.start ({start.x:.2f}, {start.y:.2f})"
+    grid = model.grid
+    if grid is not None and grid.value_at(start.x, start.y) != FREE:
+        raise InputError(
+            f"{where}: not in the free space of storey {model.name!r} (outside the building or in a wall)"
+        )
+    if world.clearance(start.x, start.y, 0.0, 1.0) < radius:
+        raise InputError(f"{where}: inside or against an obstacle")
 
 
 @dataclass
@@ -163,13 +224,20 @@ def sim_session(
     log_path: Path | None = None,
     observer: Observer | None = None,
     meta_source: str = "bim-init run",
+    world: Site | None = None,
 ) -> SimSession:
     """The session of ``config`` on the simulated robot of ``seed`` (``start`` None: the config's
-    start, else a random one), logging to ``log_path`` (None: no log file)."""
+    start, else a random one), logging to ``log_path`` (None: no log file); ``world``: the building
+    the robot lives in when it is not the BIM (``sim.world``)."""
     simulated, matched = choose_storey(config, site)
-    setup = build_sim(config, site, simulated, seed, start)
+    setup = build_sim(config, site, simulated, seed, start, world_site=world)
     rng = np.random.default_rng(seed + SESSION_RNG_OFFSET)
     session = Session(config, site, matched, setup.driver, log_path, rng, observer, meta_source)
+    if setup.enclosed:
+        session.cannot_leave = (
+            "cannot leave: the start is in a room closed off by doors (no way to the corridors, "
+            "where the features face)"
+        )
     return SimSession(session, setup, simulated)
 
 

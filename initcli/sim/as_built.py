@@ -45,6 +45,7 @@ CORRIDOR_WIDTH = 2.0  # m: circulation area / this = corridor length for the per
 HOARDING_THICKNESS = 0.1  # m
 LEAF_THICKNESS = 0.04  # m: a closed door leaf
 LEAF_CLASS = "DoorLeaf"
+HOARDING_CLASS = "Hoarding"
 DOOR_CLASSES = ("door",)  # canonical feature classes that can be missing, shifted or open
 
 
@@ -235,7 +236,7 @@ def derive_as_built(
         if ring is not None:
             hoardings.append(ring)
     for k, ring in enumerate(hoardings):
-        kept.append(Obstacle("", f"hoarding-{k}", "Hoarding", tuple(map(tuple, ring[:-1].tolist()))))
+        kept.append(Obstacle("", f"hoarding-{k}", HOARDING_CLASS, tuple(map(tuple, ring[:-1].tolist()))))
     occupied = np.array([[f.x, f.y] for f in features]).reshape(-1, 2)
     extra = _wall_features(corridor_walls, _count(p.extra_doors, length, rng), "extra", rng, occupied)
     occupied = np.vstack([occupied, [[f.x, f.y] for f in extra]]) if extra else occupied
