@@ -74,14 +74,36 @@ def _enclosure_space(categories: CategorySet, name: str) -> bool:
     return any(c.kind in ("lift", "stairs") and c.is_space(name) for c in categories.categories)
 
 
-def decide_sides(ctx: StoreyContext, doors: list[DoorCandidate]) -> None:
-    """Probe both sides of every door, count doors per free region, then pick circulation sides."""
+def _mark_vertical(ctx: StoreyContext, side: SideProbe) -> None:
+    if side.label:
+        ctx.regions.vertical[side.label] = True
+    if side.space_index >= 0:
+        ctx.spaces.vertical[side.space_index] = True
+
+
+def decide_sides(
+    ctx: StoreyContext, doors: list[DoorCandidate], bodies: list[BodyCandidate] | None = None
+) -> None:
+    """Probe both sides of every door, count doors per free region and space, find the places
+    that lead to a staircase or lift, then pick circulation sides."""
     for door in doors:
         o = door.opening
         door.plus = probe_side(ctx.regions, ctx.spaces, *o.face(+1), o.across)
         door.minus = probe_side(ctx.regions, ctx.spaces, *o.face(-1), -o.across)
         for label in {door.plus.label, door.minus.label} - {0}:
             ctx.regions.doors[label] += 1
+        for index in {door.plus.space_index, door.minus.space_index} - {-1}:
+            ctx.spaces.doors[index] += 1
+    # A place holding a stair or lift, or linked to one by a door, leads to another storey.
+    body_labels: set[int] = set()
+    for body in bodies or []:
+        body_labels |= ctx.regions.labels_at(body.points)
+    for label in body_labels:
+        ctx.regions.vertical[label] = True
+    for door in doors:
+        for this, other in ((door.plus, door.minus), (door.minus, door.plus)):
+            if this.label in body_labels or _enclosure_space(ctx.categories, this.space):
+                _mark_vertical(ctx, other)
     for door in doors:
         door.side, door.rule = choose_side(
             door.plus,
@@ -89,6 +111,7 @@ def decide_sides(ctx: StoreyContext, doors: list[DoorCandidate]) -> None:
             ctx.regions,
             ctx.categories.is_circulation,
             lambda name: _enclosure_space(ctx.categories, name),
+            ctx.spaces,
         )
 
 
@@ -123,10 +146,22 @@ def _body_regions(ctx: StoreyContext, body: BodyCandidate, category: Category) -
     return {lab for lab in labels if ctx.regions.areas[lab] <= category.enclosure_max_area}
 
 
+def is_shaft_space(category: Category, area: float) -> bool:
+    """A lift space is a shaft only when small: a big space named "Elevator (N.I.C.)" or "Aufzug
+    lobby" is a lobby or a placeholder, and its doors are not lift doors."""
+    return category.kind != "lift" or area <= category.enclosure_max_area
+
+
 def _is_entrance(ctx: StoreyContext, door: DoorCandidate, category: Category, enclosures: set[int]) -> bool:
     if category.is_door(door.entity):
         return True
-    if category.is_space(door.room.space) and not ctx.categories.is_circulation(door.room.space):
+    if not door.room.reachable:
+        return False  # an exterior door leads out of the building, not into a shaft or stairwell
+    if (
+        category.is_space(door.room.space)
+        and not ctx.categories.is_circulation(door.room.space)
+        and is_shaft_space(category, door.room.space_area)
+    ):
         return True
     return (
         door.room.label != 0 and door.room.label in enclosures and door.room.label != door.circulation.label
@@ -140,7 +175,7 @@ def _best_front(ctx: StoreyContext, footprint: BaseGeometry, exclude: set[int]) 
         probe = probe_side(ctx.regions, ctx.spaces, *front.point, front.normal)
         circulation = ctx.categories.is_circulation(probe.space)
         label_score = ctx.regions.score(probe.label) if probe.label not in exclude else (-1, 0.0)
-        key = (circulation, label_score, front.width)
+        key = (probe.reachable, circulation, label_score, front.width)
         if best is None or key > best[0]:
             best = (key, front)
     return best[1] if best else None
@@ -149,7 +184,7 @@ def _best_front(ctx: StoreyContext, footprint: BaseGeometry, exclude: set[int]) 
 def storey_features(
     ctx: StoreyContext, doors: list[DoorCandidate], bodies: list[BodyCandidate]
 ) -> list[Feature]:
-    decide_sides(ctx, doors)
+    decide_sides(ctx, doors, bodies)
     features: list[Feature] = []
     claimed: set[str] = set()
     for category in ctx.categories.categories:
