@@ -228,7 +228,13 @@ def _body_front(ctx: StoreyContext, body: BodyCandidate, category: Category) -> 
     if category.kind == "stairs":
         if not body.starts_here:
             return None
-        return stair_foot(body.parts)
+        foot = stair_foot(body.parts)
+        if foot is None:
+            return None
+        # A stair whose foot is seen only from outside the building (an exterior stair) is not a
+        # feature a robot inside can reach.
+        ahead = probe_side(ctx.regions, ctx.spaces, *foot.point, foot.normal)
+        return foot if ahead.reachable else None
     front = _best_front(ctx, body.footprint, set())
     if front is None:
         return None
