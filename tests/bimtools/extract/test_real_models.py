@@ -62,12 +62,37 @@ def test_no_two_features_at_the_same_place(shared_ifc_dir, name):
                 assert d >= MERGE_DISTANCE, f"{result.storey.name}: {a.name!r} and {b.name!r} {d:.2f} m apart"
 
 
+@functools.cache
+def lift_spaces(path: Path) -> list:
+    """Plan footprints (convex hulls) of the IfcSpaces named like a lift."""
+    import ifcopenshell
+    import ifcopenshell.geom
+    import shapely
+
+    model = ifcopenshell.open(str(path))
+    settings = ifcopenshell.geom.settings()
+    settings.set("use-world-coords", True)
+    hulls = []
+    for space in model.by_type("IfcSpace"):
+        if LIFT_WORDS.search(f"{space.Name or ''} {space.LongName or ''}"):
+            verts = np.asarray(ifcopenshell.geom.create_shape(settings, space).geometry.verts).reshape(-1, 3)
+            hulls.append(shapely.convex_hull(shapely.multipoints(verts[:, :2])))
+    return hulls
+
+
 @pytest.mark.parametrize("name", NAMES)
 def test_no_lift_without_lift_evidence(shared_ifc_dir, name):
-    # Lifts in these files are IfcFlowTerminal elevator doors or shaft spaces named Aufzug.
+    # Evidence: a lift-named element (elevator door, shaft space) or a door whose back opens into
+    # a lift-named space (the extraction also requires that space to be shaft-sized).
+    import shapely
+
     for f in _site(shared_ifc_dir, name).features:
-        if f.category == "Lift":
-            assert LIFT_WORDS.search(f.name), f"{f.storey}: Lift {f.name!r} ({f.ifc_class}) without evidence"
+        if f.category != "Lift" or LIFT_WORDS.search(f.name):
+            continue
+        behind = shapely.Point(f.x - 0.6 * f.norm_x, f.y - 0.6 * f.norm_y)
+        assert any(h.buffer(0.3).contains(behind) for h in lift_spaces(shared_ifc_dir / name)), (
+            f"{f.storey}: Lift {f.name!r} ({f.ifc_class}) without lift evidence"
+        )
 
 
 @pytest.mark.parametrize("name", NAMES)
