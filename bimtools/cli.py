@@ -108,16 +108,26 @@ def extract(
         progress.close()
         target = outdir if outdir is not None else Path.cwd() / f"{model.stem}_site"
         manifest = write_site(target, site)
+        for warning in site.warnings:
+            print(f"bim-extract: warning: {warning}", file=sys.stderr)
     except InputError as exc:
         progress.close()
         print(f"bim-extract: error: {exc}", file=sys.stderr)
         raise typer.Exit(EXIT_BAD_INPUT) from None
     if as_json:
+        for note in site.notes:
+            print(f"bim-extract: note: {note}", file=sys.stderr)
         print(json.dumps(manifest.to_dict(), indent=2))
     else:
         out.print(summary_table(manifest))
+        for note in site.notes:
+            out.print(f"note: {note}", highlight=False)
         out.print(f"wrote {len(manifest.files)} files to {target}")
 
 
 def main() -> None:
     app()
+
+
+if __name__ == "__main__":
+    main()

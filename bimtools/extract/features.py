@@ -11,7 +11,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import ifcopenshell
 import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
@@ -32,25 +31,19 @@ class DoorCandidate:
     ifc_class: str
     name: str
     opening: Opening
-    entity: ifcopenshell.entity_instance  # for category rules
-    plus: SideProbe | None = None  # set by decide_sides
+    entity: object  # ifcopenshell entity, for category rules
+    plus: SideProbe | None = None
     minus: SideProbe | None = None
     side: int = 1
     rule: str = ""
 
-    def _probe(self, side: int) -> SideProbe:
-        probe = self.plus if side > 0 else self.minus
-        if probe is None:
-            raise RuntimeError(f"door {self.guid}: sides not probed yet (decide_sides)")
-        return probe
-
     @property
     def circulation(self) -> SideProbe:
-        return self._probe(self.side)
+        return self.plus if self.side > 0 else self.minus  # type: ignore[return-value]
 
     @property
     def room(self) -> SideProbe:
-        return self._probe(-self.side)
+        return self.minus if self.side > 0 else self.plus  # type: ignore[return-value]
 
 
 @dataclass
@@ -81,24 +74,44 @@ def _enclosure_space(categories: CategorySet, name: str) -> bool:
     return any(c.kind in ("lift", "stairs") and c.is_space(name) for c in categories.categories)
 
 
-def decide_sides(ctx: StoreyContext, doors: list[DoorCandidate]) -> None:
-    """Probe both sides of every door, count doors per free region, then pick circulation sides."""
-    probes: list[tuple[SideProbe, SideProbe]] = []
+def _mark_vertical(ctx: StoreyContext, side: SideProbe) -> None:
+    if side.label:
+        ctx.regions.vertical[side.label] = True
+    if side.space_index >= 0:
+        ctx.spaces.vertical[side.space_index] = True
+
+
+def decide_sides(
+    ctx: StoreyContext, doors: list[DoorCandidate], bodies: list[BodyCandidate] | None = None
+) -> None:
+    """Probe both sides of every door, count doors per free region and space, find the places
+    that lead to a staircase or lift, then pick circulation sides."""
     for door in doors:
         o = door.opening
-        plus = probe_side(ctx.regions, ctx.spaces, o.face(+1), o.across)
-        minus = probe_side(ctx.regions, ctx.spaces, o.face(-1), -o.across)
-        door.plus, door.minus = plus, minus
-        probes.append((plus, minus))
-        for label in {plus.label, minus.label} - {0}:
+        door.plus = probe_side(ctx.regions, ctx.spaces, *o.face(+1), o.across)
+        door.minus = probe_side(ctx.regions, ctx.spaces, *o.face(-1), -o.across)
+        for label in {door.plus.label, door.minus.label} - {0}:
             ctx.regions.doors[label] += 1
-    for door, (plus, minus) in zip(doors, probes, strict=True):
+        for index in {door.plus.space_index, door.minus.space_index} - {-1}:
+            ctx.spaces.doors[index] += 1
+    # A place holding a stair or lift, or linked to one by a door, leads to another storey.
+    body_labels: set[int] = set()
+    for body in bodies or []:
+        body_labels |= ctx.regions.labels_at(body.points)
+    for label in body_labels:
+        ctx.regions.vertical[label] = True
+    for door in doors:
+        for this, other in ((door.plus, door.minus), (door.minus, door.plus)):
+            if this.label in body_labels or _enclosure_space(ctx.categories, this.space):
+                _mark_vertical(ctx, other)
+    for door in doors:
         door.side, door.rule = choose_side(
-            plus,
-            minus,
+            door.plus,
+            door.minus,
             ctx.regions,
             ctx.categories.is_circulation,
             lambda name: _enclosure_space(ctx.categories, name),
+            ctx.spaces,
         )
 
 
@@ -133,10 +146,22 @@ def _body_regions(ctx: StoreyContext, body: BodyCandidate, category: Category) -
     return {lab for lab in labels if ctx.regions.areas[lab] <= category.enclosure_max_area}
 
 
+def is_shaft_space(category: Category, area: float) -> bool:
+    """A lift space is a shaft only when small: a big space named "Elevator (N.I.C.)" or "Aufzug
+    lobby" is a lobby or a placeholder, and its doors are not lift doors."""
+    return category.kind != "lift" or area <= category.enclosure_max_area
+
+
 def _is_entrance(ctx: StoreyContext, door: DoorCandidate, category: Category, enclosures: set[int]) -> bool:
     if category.is_door(door.entity):
         return True
-    if category.is_space(door.room.space) and not ctx.categories.is_circulation(door.room.space):
+    if not door.room.reachable:
+        return False  # an exterior door leads out of the building, not into a shaft or stairwell
+    if (
+        category.is_space(door.room.space)
+        and not ctx.categories.is_circulation(door.room.space)
+        and is_shaft_space(category, door.room.space_area)
+    ):
         return True
     return (
         door.room.label != 0 and door.room.label in enclosures and door.room.label != door.circulation.label
@@ -147,10 +172,10 @@ def _best_front(ctx: StoreyContext, footprint: BaseGeometry, exclude: set[int]) 
     """The side of a shaft footprint that faces the circulation area."""
     best: tuple[tuple, Front] | None = None
     for front in rectangle_fronts(footprint):
-        probe = probe_side(ctx.regions, ctx.spaces, front.point, front.normal)
+        probe = probe_side(ctx.regions, ctx.spaces, *front.point, front.normal)
         circulation = ctx.categories.is_circulation(probe.space)
         label_score = ctx.regions.score(probe.label) if probe.label not in exclude else (-1, 0.0)
-        key = (circulation, label_score, front.width)
+        key = (probe.reachable, circulation, label_score, front.width)
         if best is None or key > best[0]:
             best = (key, front)
     return best[1] if best else None
@@ -159,7 +184,7 @@ def _best_front(ctx: StoreyContext, footprint: BaseGeometry, exclude: set[int]) 
 def storey_features(
     ctx: StoreyContext, doors: list[DoorCandidate], bodies: list[BodyCandidate]
 ) -> list[Feature]:
-    decide_sides(ctx, doors)
+    decide_sides(ctx, doors, bodies)
     features: list[Feature] = []
     claimed: set[str] = set()
     for category in ctx.categories.categories:
@@ -203,7 +228,13 @@ def _body_front(ctx: StoreyContext, body: BodyCandidate, category: Category) -> 
     if category.kind == "stairs":
         if not body.starts_here:
             return None
-        return stair_foot(body.parts)
+        foot = stair_foot(body.parts)
+        if foot is None:
+            return None
+        # A stair whose foot is seen only from outside the building (an exterior stair) is not a
+        # feature a robot inside can reach.
+        ahead = probe_side(ctx.regions, ctx.spaces, *foot.point, foot.normal)
+        return foot if ahead.reachable else None
     front = _best_front(ctx, body.footprint, set())
     if front is None:
         return None

@@ -29,6 +29,7 @@ class ObstacleShape:
     element: str
     ifc_class: str
     area: BaseGeometry
+    glass: bool = False
 
 
 @dataclass
@@ -55,6 +56,7 @@ class FloorPlan:
                         shape.ifc_class,
                         tuple(poly.exterior.coords),
                         tuple(tuple(r.coords) for r in poly.interiors),
+                        shape.glass,
                     )
                 )
         return records
@@ -119,7 +121,15 @@ def _merge_edges(
         first, last = merged[0], merged[-1]
         if first.element == last.element and _same_direction(last, first):
             merged[0] = WallSegment(
-                storey, first.element, first.ifc_class, last.x1, last.y1, first.x2, first.y2, first.normal
+                storey,
+                first.element,
+                first.ifc_class,
+                last.x1,
+                last.y1,
+                first.x2,
+                first.y2,
+                first.normal,
+                first.glass,
             )
             merged.pop()
     return [m for m in merged if m.length > 1e-3]
@@ -150,6 +160,7 @@ def _segment(storey: str, start: np.ndarray, end: np.ndarray, owner: ObstacleSha
         float(end[0]),
         float(end[1]),
         normal,
+        owner.glass,
     )
 
 

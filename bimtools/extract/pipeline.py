@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -14,11 +15,17 @@ from shapely.geometry.base import BaseGeometry
 
 from bimtools.errors import InputError
 from bimtools.extract.circulation import FreeRegions, SpaceIndex
-from bimtools.extract.features import BodyCandidate, DoorCandidate, StoreyContext, storey_features
+from bimtools.extract.features import (
+    BodyCandidate,
+    DoorCandidate,
+    StoreyContext,
+    is_shaft_space,
+    storey_features,
+)
 from bimtools.extract.floorplan import FloorPlan, ObstacleShape, build_floorplan
 from bimtools.extract.occupancy import rasterise
 from bimtools.extract.placement import opening_in_plan
-from bimtools.extract.section import polygons_of, section_polygon
+from bimtools.extract.section import polygons_of, projected_footprint, section_polygon
 from bimtools.ifc.categories import CategorySet, load_categories
 from bimtools.ifc.geometry import Mesh, ProgressCallback, iterate_meshes
 from bimtools.ifc.model import ModelInfo, describe_model, open_model
@@ -28,10 +35,14 @@ from bimtools.site.records import Feature, OccupancyGrid
 
 OBSTACLE_CLASSES = ("IfcWall", "IfcColumn", "IfcCurtainWall", "IfcDoor", "IfcWindow")
 CURTAIN_PART_CLASSES = ("IfcPlate", "IfcMember")
+# Glazing: an obstacle over its whole plan footprint (a section at the cut meets only frame pieces).
+GLASS_CLASSES = ("IfcWindow", "IfcCurtainWall", "IfcPlate")
+GLASS_BAND = (-0.1, 2.5)  # metres around a storey's elevation whose vertices give a glass footprint
 DEFAULT_SECTION_HEIGHT = 1.0
 DEFAULT_RESOLUTION = 0.05
 BODY_BAND = (-0.2, 2.2)  # metres around a storey's elevation where a lift/stair is "on" it
 LIFT_MIN_SPAN = 1.8  # metres a lift body must reach above a storey's floor to serve it
+MERGE_DISTANCE = 0.3  # metres: features closer than this are one element exported twice
 
 
 @dataclass
@@ -40,6 +51,8 @@ class StoreyResult:
     features: list[Feature]
     plan: FloorPlan
     grid: OccupancyGrid
+    warnings: list[str] = field(default_factory=list)  # what the user should know (stderr)
+    notes: list[str] = field(default_factory=list)  # what the extraction changed (summary)
 
 
 @dataclass
@@ -50,9 +63,15 @@ class ExtractedSite:
     storeys: list[StoreyResult] = field(default_factory=list)
     all_storeys: list[str] = field(default_factory=list)
 
+    warnings: list[str] = field(default_factory=list)
+
     @property
     def features(self) -> list[Feature]:
         return [f for s in self.storeys for f in s.features]
+
+    @property
+    def notes(self) -> list[str]:
+        return [n for s in self.storeys for n in s.notes]
 
 
 def _is_curtain_part(element: ifcopenshell.entity_instance) -> bool:
@@ -74,10 +93,12 @@ class Candidates:
     bodies: list[ifcopenshell.entity_instance]
     body_category: dict[int, str]  # entity id -> category name
     spaces: list[ifcopenshell.entity_instance]
+    # door GlobalId -> the opening it fills, for doors without a body (placed from the opening)
+    openings: dict[str, ifcopenshell.entity_instance] = field(default_factory=dict)
 
     def all(self) -> list[ifcopenshell.entity_instance]:
         unique: dict[int, ifcopenshell.entity_instance] = {}
-        for element in [*self.obstacles, *self.doors, *self.spaces, *self.bodies]:
+        for element in [*self.obstacles, *self.doors, *self.spaces, *self.bodies, *self.openings.values()]:
             unique.setdefault(element.id(), element)
         return list(unique.values())
 
@@ -105,7 +126,42 @@ def collect_candidates(model: ifcopenshell.file, categories: CategorySet) -> Can
                     body_category[element.id()] = cat.name
                     bodies.append(element)
     unique_doors = list({d.id(): d for d in doors}.values())
-    return Candidates(obstacles, unique_doors, bodies, body_category, list(model.by_type("IfcSpace")))
+    openings: dict[str, ifcopenshell.entity_instance] = {}
+    for door in unique_doors:
+        if getattr(door, "Representation", None) is None:
+            for rel in getattr(door, "FillsVoids", None) or ():
+                openings[door.GlobalId] = rel.RelatingOpeningElement
+    return Candidates(
+        obstacles, unique_doors, bodies, body_category, list(model.by_type("IfcSpace")), openings
+    )
+
+
+def _placement_box(element: ifcopenshell.entity_instance, width: float, height: float) -> np.ndarray:
+    """Corner points of a door's opening from its placement alone: the IFC convention puts the
+    origin at the lining's corner at floor level, with the door running +X for its width."""
+    matrix = np.asarray(ifcopenshell.util.placement.get_local_placement(element.ObjectPlacement))
+    origin, x_axis, z_axis = matrix[:3, 3], matrix[:3, 0], matrix[:3, 2]
+    return np.array([origin + x_axis * u + z_axis * v for u in (0.0, width) for v in (0.0, height)])
+
+
+def _door_without_body(
+    element: ifcopenshell.entity_instance,
+    candidates: Candidates,
+    meshes: dict[str, Mesh],
+    scale: float,
+) -> np.ndarray | None:
+    """Plan points of a door that has no body: the opening it fills, else its placement and
+    OverallWidth/OverallHeight; None when neither is known."""
+    opening = candidates.openings.get(element.GlobalId)
+    if opening is not None and opening.GlobalId in meshes:
+        return meshes[opening.GlobalId].verts
+    width = getattr(element, "OverallWidth", None)
+    height = getattr(element, "OverallHeight", None)
+    if not width or getattr(element, "ObjectPlacement", None) is None:
+        return None
+    # Placement is in project units; meshes are in metres.
+    box = _placement_box(element, float(width), float(height or 2.1 / scale))
+    return box * scale
 
 
 class ElementStoreys:
@@ -201,6 +257,7 @@ def extract_site(
         storey_result = _extract_storey(
             s, storeys, candidates, meshes, where, categories, section_height, resolution, info.unit_scale
         )
+        result.warnings += storey_result.warnings
         if storey_result.features or storey is not None:
             result.storeys.append(storey_result)
     if not result.features:
@@ -220,14 +277,8 @@ def _extract_storey(
     scale: float,
 ) -> StoreyResult:
     cut = s.elevation + section_height
-    obstacles: list[ObstacleShape] = []
-    for element in candidates.obstacles:
-        mesh = meshes.get(element.GlobalId)
-        if mesh is None or not (mesh.zmin < cut < mesh.zmax):
-            continue
-        area = section_polygon(mesh.verts, mesh.faces, cut)
-        if area is not None and area.area > 1e-6:
-            obstacles.append(ObstacleShape(element.GlobalId, element.is_a(), area))
+    warnings: list[str] = []
+    obstacles = _obstacles_at(s, cut, candidates, meshes)
 
     space_names: list[str] = []
     space_areas: list[BaseGeometry] = []
@@ -251,21 +302,40 @@ def _extract_storey(
 
     doors: list[DoorCandidate] = []
     for element in candidates.doors:
-        mesh = meshes.get(element.GlobalId)
-        if mesh is None or where.of(element) is not s:
+        if where.of(element) is not s:
             continue
+        mesh = meshes.get(element.GlobalId)
+        verts = mesh.verts if mesh is not None else _door_without_body(element, candidates, meshes, scale)
+        if verts is None:
+            warnings.append(f"storey {s.name!r}: door {element_name(element)!r} has no geometry, skipped")
+            continue
+        if mesh is None:
+            warnings.append(
+                f"storey {s.name!r}: door {element_name(element)!r} ({element.GlobalId}) has no body; "
+                + (
+                    "placed from the opening it fills"
+                    if element.GlobalId in candidates.openings
+                    and candidates.openings[element.GlobalId].GlobalId in meshes
+                    else "placed from its placement and OverallWidth"
+                )
+            )
         x_axis, y_axis = _placement_axes(element)
         width = getattr(element, "OverallWidth", None)
         height = getattr(element, "OverallHeight", None)
         opening = opening_in_plan(
-            mesh.verts, x_axis, y_axis, width * scale if width else None, height * scale if height else None
+            verts, x_axis, y_axis, width * scale if width else None, height * scale if height else None
         )
         doors.append(DoorCandidate(element.GlobalId, element.is_a(), element_name(element), opening, element))
 
     bodies = _bodies_on_storey(s, storeys, candidates, meshes, where, categories)
     for entity, name, area in zip(space_entities, space_names, space_areas, strict=True):
         for cat in categories.categories:
-            if cat.kind in ("lift", "stairs") and cat.is_space(name) and not categories.is_circulation(name):
+            if (
+                cat.kind in ("lift", "stairs")
+                and cat.is_space(name)
+                and not categories.is_circulation(name)
+                and is_shaft_space(cat, float(area.area))
+            ):
                 bodies.append(
                     BodyCandidate(
                         entity.GlobalId,
@@ -281,7 +351,48 @@ def _extract_storey(
     features = storey_features(ctx, doors, bodies)
     order = {c.name: i for i, c in enumerate(categories.categories)}
     features.sort(key=lambda f: (order.get(f.category, 99), round(f.x, 3), round(f.y, 3), f.id))
-    return StoreyResult(s, features, plan, grid)
+    features, notes = merge_duplicates(features)
+    return StoreyResult(s, features, plan, grid, warnings, notes)
+
+
+def merge_duplicates(features: list[Feature]) -> tuple[list[Feature], list[str]]:
+    """One feature per place: of features closer than MERGE_DISTANCE (an element exported twice,
+    e.g. a storefront door again as a curtain-wall door) the first is kept (``features`` is in
+    category order, so a Lift or Stairs entrance wins over a Door); a note says what went."""
+    kept: list[Feature] = []
+    notes: list[str] = []
+    for f in features:
+        twin = next((k for k in kept if math.hypot(k.x - f.x, k.y - f.y) < MERGE_DISTANCE), None)
+        if twin is None:
+            kept.append(f)
+            continue
+        notes.append(
+            f"storey {f.storey!r}: {f.category} {f.name!r} ({f.id}) is "
+            f"{math.hypot(twin.x - f.x, twin.y - f.y):.2f} m from {twin.category} {twin.name!r} "
+            f"({twin.id}): merged into it"
+        )
+    return kept, notes
+
+
+def _obstacles_at(
+    s: Storey, cut: float, candidates: Candidates, meshes: dict[str, Mesh]
+) -> list[ObstacleShape]:
+    """Footprints at the cut: sections of solids; glazing projected whole (see GLASS_CLASSES)."""
+    obstacles: list[ObstacleShape] = []
+    for element in candidates.obstacles:
+        mesh = meshes.get(element.GlobalId)
+        if mesh is None or not (mesh.zmin < cut < mesh.zmax):
+            continue
+        glass = any(element.is_a(c) for c in GLASS_CLASSES)
+        area = None
+        if glass:
+            lo, hi = s.elevation + GLASS_BAND[0], s.elevation + GLASS_BAND[1]
+            area = projected_footprint(mesh.verts, lo, hi)
+        if area is None:
+            area = section_polygon(mesh.verts, mesh.faces, cut)
+        if area is not None and area.area > 1e-6:
+            obstacles.append(ObstacleShape(element.GlobalId, element.is_a(), area, glass))
+    return obstacles
 
 
 def _bodies_on_storey(

@@ -75,3 +75,35 @@ def polygons_of(geometry: BaseGeometry | None) -> list[Polygon]:
     if isinstance(geometry, MultiPolygon):
         return list(geometry.geoms)
     return [g for g in shapely.get_parts(geometry) if isinstance(g, Polygon)]
+
+
+GLASS_MAX_DEPTH = 0.6  # metres: a glazed element thicker than this in plan is not projected whole
+_PANE = 0.01  # metres: half the thickness given to a glass pane modelled as a bare surface
+
+
+def projected_footprint(
+    verts: np.ndarray, z_lo: float, z_hi: float, max_depth: float = GLASS_MAX_DEPTH
+) -> BaseGeometry | None:
+    """The plan footprint of a thin element (window, glass panel) over a height band.
+
+    A section through a window or curtain-wall panel at the cut height often meets only a few
+    frame pieces (the glass is thin or left out of the body), which leaves the facade open. The
+    element's whole body projected to the plan closes it: the convex hull of its vertices within
+    ``[z_lo, z_hi]`` (all vertices when fewer than three lie there). Returns None when that hull
+    is more than ``max_depth`` across (a curved or deep element: not thin, so not projected).
+    """
+    band = verts[(verts[:, 2] >= z_lo) & (verts[:, 2] <= z_hi)]
+    points = band[:, :2] if len(band) >= 3 else verts[:, :2]
+    if len(points) < 2:
+        return None
+    hull = shapely.convex_hull(shapely.multipoints(points))
+    if hull.geom_type == "LineString":
+        return hull.buffer(_PANE, cap_style="flat") if hull.length > 1e-3 else None
+    if hull.geom_type != "Polygon" or hull.area < 1e-8:
+        return None
+    rect = shapely.minimum_rotated_rectangle(hull)
+    edges = np.diff(np.asarray(rect.exterior.coords)[:, :2], axis=0)
+    lengths = np.hypot(edges[:, 0], edges[:, 1])
+    if float(lengths.min()) > max_depth:
+        return None
+    return hull

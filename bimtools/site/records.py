@@ -57,6 +57,7 @@ class WallSegment:
     x2: float
     y2: float
     normal: tuple[float, float]
+    glass: bool = False  # the surface of a glazed element (window, curtain wall, panel)
 
     @property
     def length(self) -> float:
@@ -72,6 +73,7 @@ class Obstacle:
     ifc_class: str
     exterior: tuple[tuple[float, float], ...]
     holes: tuple[tuple[tuple[float, float], ...], ...] = ()
+    glass: bool = False  # a glazed element: blocks motion, mostly transparent to a lidar
 
 
 @dataclass

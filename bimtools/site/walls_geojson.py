@@ -1,7 +1,9 @@
 """``walls.geojson``: wall surfaces (LineStrings with a free-space normal) and obstacle footprints.
 
 Every feature carries ``storey``, ``element`` (GlobalId) and ``ifc_class``; LineStrings also a
-``normal`` [nx, ny] pointing into free space, Polygons ``kind: "obstacle"``.
+``normal`` [nx, ny] pointing into free space, Polygons ``kind: "obstacle"``. ``glass`` is true
+for glazed elements (windows, curtain walls and their panels): they block motion but a lidar
+mostly sees through them.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ def walls_to_geojson(walls: Iterable[WallSegment], obstacles: Iterable[Obstacle]
                     "element": w.element,
                     "ifc_class": w.ifc_class,
                     "normal": [round(w.normal[0], 6), round(w.normal[1], 6)],
+                    "glass": w.glass,
                 },
             }
         )
@@ -49,6 +52,7 @@ def walls_to_geojson(walls: Iterable[WallSegment], obstacles: Iterable[Obstacle]
                     "storey": o.storey,
                     "element": o.element,
                     "ifc_class": o.ifc_class,
+                    "glass": o.glass,
                 },
             }
         )
@@ -88,6 +92,7 @@ def read_walls(path: Path, storey: str | None = None) -> tuple[list[WallSegment]
                         float(x2),
                         float(y2),
                         (float(nx), float(ny)),
+                        bool(props.get("glass", False)),
                     )
                 )
             elif geom["type"] == "Polygon":
@@ -99,6 +104,7 @@ def read_walls(path: Path, storey: str | None = None) -> tuple[list[WallSegment]
                         props.get("ifc_class", ""),
                         rings[0],
                         tuple(rings[1:]),
+                        bool(props.get("glass", False)),
                     )
                 )
         except (KeyError, TypeError, ValueError) as exc:
