@@ -30,9 +30,9 @@ def prepare_sites(config: EvalConfig, workdir: Path, only: Iterable[str] | None 
     for site in config.sites:
         if wanted is not None and site.name not in wanted:
             continue
-        config = load_config(site.config)
-        prepared = prepare_site(config, workdir / site.name)
-        world = prepare_world(config, workdir / site.name)
+        site_config = load_config(site.config)
+        prepared = prepare_site(site_config, workdir / site.name)
+        world = prepare_world(site_config, workdir / site.name)
         out.append(PreparedSite(site, Path(prepared.root), Path(world.root) if world is not None else None))
     return out
 

@@ -16,7 +16,7 @@ import pytest
 
 from bimtools.extract.pipeline import MERGE_DISTANCE, ExtractedSite, extract_site
 from bimtools.site.records import FREE, OCCUPIED
-from tests.conftest import shared_ifc_files
+from tests.helpers import shared_ifc_files
 
 NAMES = [p.name for p in shared_ifc_files()] or ["(none)"]
 PROBES = (0.35, 0.6, 0.9, 1.3)  # metres along a feature's normal

@@ -13,7 +13,7 @@ import initcli.session.setup as setup
 from bimtools.site.load import load_site
 from initcli.cli.main import app
 from initcli.io.detection_log import read_log
-from tests.conftest import SAMPLES
+from tests.helpers import SAMPLES
 
 
 def test_detector_class_mapping_of_site_yaml_reaches_matching(tmp_path: Path, monkeypatch) -> None:
