@@ -24,16 +24,23 @@ class PreparedSite:
 
 
 def prepare_sites(config: EvalConfig, workdir: Path, only: Iterable[str] | None = None) -> list[PreparedSite]:
-    """Load every site config and extract its IFC model once (into ``workdir/<site>``)."""
+    """Load every site config and extract its IFC model once (into ``workdir/<site>``; sites on the
+    same model, e.g. one per storey, share one extraction)."""
     wanted = set(only) if only is not None else None
     out = []
+    extracted: dict[tuple[Path, str], Path] = {}
+    worlds: dict[tuple[Path, str], Path | None] = {}
     for site in config.sites:
         if wanted is not None and site.name not in wanted:
             continue
         site_config = load_config(site.config)
-        prepared = prepare_site(site_config, workdir / site.name)
-        world = prepare_world(site_config, workdir / site.name)
-        out.append(PreparedSite(site, Path(prepared.root), Path(world.root) if world is not None else None))
+        key = (site_config.site_path(), site_config.sim.world)
+        if key not in extracted:
+            prepared = prepare_site(site_config, workdir / site.name)
+            world = prepare_world(site_config, workdir / site.name)
+            extracted[key] = Path(prepared.root)
+            worlds[key] = Path(world.root) if world is not None else None
+        out.append(PreparedSite(site, extracted[key], worlds[key]))
     return out
 
 
