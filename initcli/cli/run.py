@@ -130,6 +130,66 @@ def run_session(
     return doc
 
 
+def run_live_session(config: SessionConfig, out: Path, seed: int, quiet: bool, console: Console) -> dict:
+    """``robot.driver: rosbridge``: the session on the real robot behind a rosbridge server; its state
+    goes to ``/bim_init/state`` while it runs and the result to ``/initialpose`` (Nav2)."""
+    import numpy as np
+
+    from initcli.ros.nav2 import session_initial_pose
+    from initcli.ros.rosbridge import RosbridgeLink
+    from initcli.ros.rosbridge_driver import RosbridgeDriver
+    from initcli.session.runner import Session
+    from initcli.session.setup import SESSION_RNG_OFFSET, camera_of, choose_storey
+
+    r = config.robot
+    with staged_directory(out) as stage:
+        site = prepare_site(config, stage)
+        _, matched = choose_storey(config, site)
+        link = RosbridgeLink(r.rosbridge.host, r.rosbridge.port)
+        camera, mount = camera_of(config)
+        driver = RosbridgeDriver(
+            link,
+            camera,
+            mount,
+            r.rosbridge,
+            drive=r.drive,
+            depth_window=int(config.camera.depth_window),
+            max_linear=r.max_linear,
+            max_angular=r.max_angular,
+        )
+        view = None if quiet else LiveView(console)
+        last_state: list[str] = []
+
+        def observe(update: dict) -> None:
+            if view is not None:
+                view(update)
+            if not last_state or update["state"] != last_state[-1]:
+                last_state.append(update["state"])
+                driver.publish_state(str(update["state"]))
+
+        session = Session(
+            config,
+            site,
+            matched,
+            driver,
+            stage / "session.jsonl",
+            np.random.default_rng(seed + SESSION_RNG_OFFSET),
+            observe,
+            meta_source=f"bim-init run (rosbridge ws://{r.rosbridge.host}:{r.rosbridge.port})",
+        )
+        try:
+            result = session.run()
+        finally:
+            driver.stop()
+        doc = summary_document(result, simulated=False, extra={"config": config_to_dict(config)})
+        write_summary(stage / "summary.json", doc)
+        if result.success:
+            driver.publish_initial_pose(session_initial_pose(doc, stage / "session.jsonl"))
+            driver.publish_state("initialised")
+        driver.close()
+    return doc
+
+
 def run(
     config: Annotated[
         Path,
@@ -162,7 +222,12 @@ def run(
         start_pose = parse_start(start) if start else None
         the_seed = int(cfg.sim.seed if seed is None else seed)
         target = out or Path("runs") / datetime.now().strftime("%Y%m%d-%H%M%S")
-        doc = run_session(cfg, target, the_seed, start_pose, quiet or as_json, console)
+        if cfg.robot.driver == "rosbridge":
+            if start_pose is not None:
+                raise InputError("--start: only for the simulated robot (robot.driver: sim)")
+            doc = run_live_session(cfg, target, the_seed, quiet or as_json, console)
+        else:
+            doc = run_session(cfg, target, the_seed, start_pose, quiet or as_json, console)
         if record is not None:
             from initcli.ros.bag_writer import record_session
 
