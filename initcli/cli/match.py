@@ -23,6 +23,17 @@ from initcli.io.match_result import report_to_dict
 from initcli.match.pipeline import EXIT_BAD_INPUT, MatchOptions, MatchReport, run_match
 
 
+def _verifications(log_path: Path, site_path: Path, report: MatchReport, skip_bad: bool) -> list | None:
+    """Negative evidence and scan fit of each hypothesis (initcli.match.verify), for --json."""
+    from bimtools.site.load import load_site
+    from initcli.io.detection_log import read_log
+    from initcli.match.pipeline import site_class_map
+    from initcli.match.verify import verify_report
+
+    site = load_site(site_path)
+    return verify_report(read_log(log_path, skip_bad=skip_bad), site, report, site_class_map(site))
+
+
 def _fail(message: str) -> typer.Exit:
     typer.echo(f"bim-init: error: {' '.join(str(message).split())}", err=True)
     return typer.Exit(EXIT_BAD_INPUT)
@@ -212,16 +223,19 @@ def match(
         drift_window=drift_window,
         skip_bad=skip_bad,
     )
+    checks = None
     try:
         with log_or_bag(log) as log_path:  # a ROS bag is converted first (bim-init bag2log)
             report = run_match(log_path, site, options)
+            if json_out and site.is_dir():
+                checks = _verifications(log_path, site, report, options.skip_bad)
     except InputError as exc:
         raise _fail(str(exc)) from None
 
     for warning in report.warnings:
         typer.echo(f"bim-init: warning: {warning}", err=True)
     if json_out:
-        typer.echo(json.dumps(report_to_dict(report), indent=2))
+        typer.echo(json.dumps(report_to_dict(report, checks), indent=2))
     else:
         console = Console(width=None if sys.stdout.isatty() else 200, soft_wrap=False)
         print_report(report, console)

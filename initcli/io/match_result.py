@@ -25,9 +25,10 @@ def _pose(p: Pose2D | None) -> dict[str, float] | None:
     }
 
 
-def report_to_dict(report: MatchReport) -> dict[str, Any]:
-    """The ``--json`` document."""
+def report_to_dict(report: MatchReport, verifications: list[Any] | None = None) -> dict[str, Any]:
+    """The ``--json`` document; ``verifications``: one check per hypothesis (or None) to include."""
     o = report.options
+    checks = verifications if verifications is not None else [None] * len(report.hypotheses)
     return {
         "format": RESULT_FORMAT,
         "verdict": report.verdict,
@@ -64,8 +65,9 @@ def report_to_dict(report: MatchReport) -> dict[str, Any]:
                 "rectified": h.rectified,
                 "confidence": round(h.confidence, 6),
                 "support": h.support,
+                "verification": check.as_dict() if check is not None else None,
             }
-            for h in report.hypotheses
+            for h, check in zip(report.hypotheses, checks, strict=True)
         ],
         "parameters": {
             "alpha": o.alpha,

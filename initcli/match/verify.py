@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bimtools.site.load import StoreyModel
+from bimtools.site.load import Site, StoreyModel
 from initcli.core.classes import ClassMap
 from initcli.core.detection_filter import Sighting
 from initcli.core.geometry import Pose2D
@@ -27,6 +27,8 @@ from initcli.core.verification import (
     verify_hypothesis,
 )
 from initcli.io.detection_log import DetectionLog, Detections, Odom, Scan
+from initcli.match.pipeline import MatchReport
+from initcli.match.sightings import sightings_from_log
 
 SCAN_BEAM_STEP = 3  # every third beam is enough for a fit share
 RECENT_SCANS_M = 8.0  # m of the latest travel whose scans are fitted (older ones carry odometry drift)
@@ -146,3 +148,36 @@ def verify_transform(
         storey.field_,
         params,
     )
+
+
+def verify_report(
+    log: DetectionLog,
+    site: Site,
+    report: MatchReport,
+    cmap: ClassMap,
+    params: VerificationParams | None = None,
+) -> list[Verification | None]:
+    """The checks for each hypothesis of ``report`` (a ``bim-init match`` of ``log``), at the log's
+    last odom pose; None for a hypothesis whose storey has no map or features."""
+    params = params or VerificationParams()
+    if report.odom_pose is None:
+        return [None for _ in report.hypotheses]
+    path = PathEvidence.of_log(log)
+    sightings = sightings_from_log(log, cmap, report.options.edge_margin)
+    view = CameraView(log.meta.camera, log.meta.camera_pose, report.options.min_depth)
+    storeys: dict[str, StoreyEvidence] = {}
+    out: list[Verification | None] = []
+    for h in report.hypotheses:
+        model = site.storeys.get(h.storey)
+        if model is None or not model.features:
+            out.append(None)
+            continue
+        if h.storey not in storeys:
+            storeys[h.storey] = StoreyEvidence.of(model, cmap)
+        pose = h.rectified_pose or h.pose
+        out.append(
+            verify_transform(
+                pose * report.odom_pose.inverse(), storeys[h.storey], path, sightings, view, params
+            )
+        )
+    return out
