@@ -367,14 +367,19 @@ def model_from_checkpoint(ckpt: dict) -> Detector:
     return net.eval()
 
 
-def resolve_init(init: str) -> Path:
-    """``--init``: 'default' is the checkpoint shipped beside the default ONNX model."""
+def load_init(init: str) -> dict:
+    """``--init``: 'default' (the shipped ONNX model, rebuilt as a checkpoint), a ``.onnx`` export of ours
+    or a ``.pt`` checkpoint."""
+    from initcli.detector.export import checkpoint_from_onnx
+
     if init == "default":
-        path = Path(__file__).parent / "models" / "default.pt"
+        return checkpoint_from_onnx(Path(__file__).parent / "models" / "default.onnx")
+    path = Path(init)
+    if path.suffix.lower() == ".onnx":
         if not path.exists():
-            raise InputError(f"--init default: {path} is not installed with this package")
-        return path
-    return Path(init)
+            raise InputError(f"{path}: no such model")
+        return checkpoint_from_onnx(path)
+    return load_checkpoint(path)
 
 
 def frozen_modules(net: Detector, whole_backbone: bool) -> list[torch.nn.Module]:
@@ -392,11 +397,17 @@ def freeze(modules: list[torch.nn.Module]) -> None:
             p.requires_grad_(False)
 
 
-def set_train_mode(net: Detector, frozen: list[torch.nn.Module]) -> None:
-    """Train mode, except the frozen modules: their batch-norm statistics stay those of the initial model."""
+def set_train_mode(net: Detector, frozen: list[torch.nn.Module], frozen_bn: bool) -> None:
+    """Train mode, except the frozen modules and, with ``frozen_bn`` (fine-tuning from ``--init``),
+    every batch norm: their statistics stay those of the initial model (small fine-tuning batches
+    would only add noise to them, and a model rebuilt from ONNX has them folded into its convolutions)."""
     net.train()
     for m in frozen:
         m.eval()
+    if frozen_bn:
+        for m in net.modules():
+            if isinstance(m, torch.nn.BatchNorm2d):
+                m.eval()
 
 
 Callback = Callable[[str, dict], None]
@@ -418,10 +429,9 @@ def train(opts: TrainOptions, on_event: Callback | None = None) -> dict:
     arch = Arch(nc=nc, widths=tuple(opts.widths), neck=opts.neck, backbone=opts.backbone)
     init = None
     if opts.init is not None:  # fine-tune: start from another checkpoint's (EMA) weights
-        init_path = resolve_init(opts.init)
-        init = load_checkpoint(init_path)
+        init = load_init(opts.init)
         if [str(n) for n in init["names"]] != ds.names:
-            raise InputError(f"{init_path}: trained on classes {init['names']}, the dataset has {ds.names}")
+            raise InputError(f"--init {opts.init}: trained on classes {init['names']}, the dataset has {ds.names}")
         arch = Arch.from_dict(init["arch"])
     net = Detector(arch, pretrained=init is None and not opts.resume).to(device)
     if init is not None:
@@ -510,7 +520,7 @@ def train(opts: TrainOptions, on_event: Callback | None = None) -> dict:
             generator=gen,
             persistent_workers=False,
         )
-        set_train_mode(net, frozen)
+        set_train_mode(net, frozen, frozen_bn=init is not None)
         t0 = time.time()
         sums = np.zeros(3)
         n = 0
