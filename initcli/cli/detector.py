@@ -215,7 +215,7 @@ def train(
         typer.Option(
             "--backbone",
             metavar="efficientnet_lite0|residual",
-            help="A new model's backbone (ImageNet-pretrained lite0, or the small residual one from scratch).",
+            help="A new model's backbone: ImageNet-pretrained lite0, or the small residual one (scratch).",
         ),
     ] = "efficientnet_lite0",
 ) -> None:

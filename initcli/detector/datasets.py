@@ -247,7 +247,7 @@ PARTS = ("train", "holdout", "all")
 
 
 def holdout_fraction(name: str) -> float:
-    """A stable number in [0, 1) from a file name (sha1), independent of the folder and of Python's hash seed."""
+    """A stable number in [0, 1) from a file name (sha1): independent of the folder and of hash seeds."""
     digest = hashlib.sha1(Path(name).name.encode("utf-8")).digest()
     return int.from_bytes(digest[:8], "big") / 2.0**64
 
@@ -302,7 +302,9 @@ def load_doordetect(root: Path, holdout: float = 0.2, part: str = "train") -> Da
     return ds
 
 
-def _remapped_entry(entry: dict, root: Path, yaml_dir: Path, names: list[str], where: Path) -> list[DatasetItem]:
+def _remapped_entry(
+    entry: dict, root: Path, yaml_dir: Path, names: list[str], where: Path
+) -> list[DatasetItem]:
     if "path" not in entry:
         raise InputError(f"{where}: a mapping entry needs 'path' (and optionally classes, holdout, part)")
     source = _resolve(str(entry["path"]), root, yaml_dir)

@@ -178,7 +178,9 @@ def checkpoint_from_onnx(path: Path) -> dict:
         raise InputError(f"{path}: not an ONNX model ({type(exc).__name__})") from None
     meta = {p.key: p.value for p in model.metadata_props}
     if meta.get("author") != "bim-init":
-        raise InputError(f"{path}: --init needs a bim-init export (this one was made by {meta.get('author')})")
+        raise InputError(
+            f"{path}: --init needs a bim-init export (this one was made by {meta.get('author')})"
+        )
     training = json.loads(meta.get("bim_init.training") or "{}")
     names_map = ast.literal_eval(meta["names"])
     names = [str(names_map[i]) for i in sorted(names_map)]
@@ -219,7 +221,9 @@ def checkpoint_from_onnx(path: Path) -> dict:
             elif conv.bias is not None:
                 conv.bias.copy_(torch.from_numpy(b.copy()))
             elif np.abs(b).max() > 0:
-                raise InputError(f"{path}: convolution {node.name} has a bias the architecture has no place for")
+                raise InputError(
+                    f"{path}: convolution {node.name} has a bias the architecture has no place for"
+                )
     state = {k: v.detach().clone() for k, v in net.state_dict().items()}
     return {
         "format": "bim-init.detector/1",

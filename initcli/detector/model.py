@@ -113,14 +113,16 @@ class Lite0Backbone(nn.Module):
             from efficientnet_lite_pytorch import EfficientNet
         except ImportError:
             raise InputError(
-                "the efficientnet_lite0 backbone needs the [train] extra: pip install efficientnet-lite-pytorch"
+                "the efficientnet_lite0 backbone needs efficientnet-lite-pytorch (the [train] extra)"
             ) from None
         net = EfficientNet.from_name("efficientnet-lite0", image_size=320)
         if pretrained:
             state = torch.load(lite0_weights_path(), map_location="cpu", weights_only=True)
             missing, unexpected = net.load_state_dict(state, strict=False)
             if missing or unexpected:
-                raise InputError(f"efficientnet-lite0 weights do not fit: missing {missing}, unexpected {unexpected}")
+                raise InputError(
+                    f"efficientnet-lite0 weights do not fit: missing {missing}, unexpected {unexpected}"
+                )
         self.conv_stem, self.bn0, self.act = net._conv_stem, net._bn0, net._swish
         self.blocks = nn.ModuleList(net._blocks[: LITE0_TAPS[-1] + 1])
         self.channels = LITE0_CHANNELS

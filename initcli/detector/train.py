@@ -121,7 +121,13 @@ def random_letterbox(
         dst = src + rng.uniform(-perspective, perspective, (4, 2)).astype(np.float32) * size
         a = np.deg2rad(rng.uniform(-5, 5))
         c, s_ = np.cos(a), np.sin(a)
-        rot = np.array([[c, -s_, (1 - c) * size / 2 + s_ * size / 2], [s_, c, (1 - c) * size / 2 - s_ * size / 2], [0, 0, 1]])
+        rot = np.array(
+            [
+                [c, -s_, (1 - c) * size / 2 + s_ * size / 2],
+                [s_, c, (1 - c) * size / 2 - s_ * size / 2],
+                [0, 0, 1],
+            ]
+        )
         m = rot @ cv2.getPerspectiveTransform(src, dst).astype(np.float64) @ m
     out = cv2.warpPerspective(
         img,
@@ -132,9 +138,7 @@ def random_letterbox(
         borderValue=(PAD_VALUE, PAD_VALUE, PAD_VALUE),
     )
     px = boxes.reshape(-1, 4) * np.array([w, h, w, h])
-    corners = np.stack(
-        [px[:, [0, 1]], px[:, [2, 1]], px[:, [2, 3]], px[:, [0, 3]]], axis=1
-    )  # (n, 4, 2)
+    corners = np.stack([px[:, [0, 1]], px[:, [2, 1]], px[:, [2, 3]], px[:, [0, 3]]], axis=1)  # (n, 4, 2)
     hom = np.concatenate([corners, np.ones(corners.shape[:2] + (1,))], axis=2) @ m.T
     xy = hom[..., :2] / hom[..., 2:3]
     b = np.column_stack([xy[..., 0].min(1), xy[..., 1].min(1), xy[..., 0].max(1), xy[..., 1].max(1)])
@@ -431,7 +435,9 @@ def train(opts: TrainOptions, on_event: Callback | None = None) -> dict:
     if opts.init is not None:  # fine-tune: start from another checkpoint's (EMA) weights
         init = load_init(opts.init)
         if [str(n) for n in init["names"]] != ds.names:
-            raise InputError(f"--init {opts.init}: trained on classes {init['names']}, the dataset has {ds.names}")
+            raise InputError(
+                f"--init {opts.init}: trained on classes {init['names']}, the dataset has {ds.names}"
+            )
         arch = Arch.from_dict(init["arch"])
     net = Detector(arch, pretrained=init is None and not opts.resume).to(device)
     if init is not None:

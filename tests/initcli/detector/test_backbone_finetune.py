@@ -49,7 +49,9 @@ def tiny_photos(tmp_path_factory) -> Path:
         cx, cy, w, h = (x1 + 9) / 64, 32 / 64, 18 / 64, 48 / 64
         (root / "labels" / split / f"p{k}.txt").write_text(f"0 {cx} {cy} {w} {h}\n")
     (root / "data.yaml").write_text(
-        yaml.safe_dump({"path": ".", "train": "images/train", "val": "images/val", "names": ["door", "lift", "stairs"]})
+        yaml.safe_dump(
+            {"path": ".", "train": "images/train", "val": "images/val", "names": ["door", "lift", "stairs"]}
+        )
     )
     return root / "data.yaml"
 
@@ -103,7 +105,9 @@ def test_init_default_with_frozen_backbone_changes_only_the_head(tiny_photos, tm
 def test_new_lite0_model_trains_later_stages_only(tiny_photos, tmp_path):
     ref = Lite0Backbone(pretrained=True).state_dict()
     ckpt = train(
-        TrainOptions(data=tiny_photos, imgsz=64, batch=3, lr=1e-2, max_steps=1, val_max=1, out=tmp_path / "m.pt")
+        TrainOptions(
+            data=tiny_photos, imgsz=64, batch=3, lr=1e-2, max_steps=1, val_max=1, out=tmp_path / "m.pt"
+        )
     )
     assert ckpt["arch"]["backbone"] == "efficientnet_lite0"
     raw = {k.removeprefix("backbone."): v for k, v in ckpt["raw"].items() if k.startswith("backbone.")}

@@ -16,7 +16,7 @@ NAMES = ["door", "lift", "stairs"]
 
 
 def make_doordetect(root: Path, n: int = 40) -> dict[str, list[int]]:
-    """n tiny JPEGs; image k has a door (class 0) when k % 3 == 0 and always a handle (1) and a cabinet door (2)."""
+    """n tiny JPEGs; a door (class 0) in every third, a handle (1) and a cabinet door (2) in all."""
     (root / "images").mkdir(parents=True)
     (root / "labels").mkdir()
     truth = {}
@@ -101,5 +101,8 @@ def test_shared_doordetect_split_sizes():
     assert len(held) + len(train) == len(list((SHARED / "images").iterdir()))
     assert 0.15 < len(held) / (len(held) + len(train)) < 0.25
     assert sum(len(i.classes) for i in held + train) == sum(
-        line.split()[0] == "0" for p in (SHARED / "labels").glob("*.txt") for line in p.read_text().splitlines() if line.strip()
+        line.split()[0] == "0"
+        for p in (SHARED / "labels").glob("*.txt")
+        for line in p.read_text().splitlines()
+        if line.strip()
     )
