@@ -115,3 +115,17 @@ def test_new_lite0_model_trains_later_stages_only(tiny_photos, tmp_path):
     assert early and all(torch.equal(raw[k], ref[k]) for k in early)
     late = [k for k in raw if k.startswith("blocks.15.") and k.endswith("weight")]
     assert any(not torch.equal(raw[k], ref[k]) for k in late)
+
+
+def test_cli_init_bad_checkpoint_is_one_line_exit_2(tiny_photos, tmp_path):
+    from typer.testing import CliRunner
+
+    from initcli.cli.detector import detector_app
+
+    bad = tmp_path / "not_a_model.pt"
+    bad.write_bytes(b"garbage")
+    for init in (str(tmp_path / "missing.pt"), str(bad)):
+        args = ["train", "--data", str(tiny_photos), "--init", init, "--out", str(tmp_path / "o.pt")]
+        result = CliRunner().invoke(detector_app, args)
+        assert result.exit_code == 2, result.output
+        assert "bim-init: error:" in result.output and init in result.output
