@@ -142,7 +142,13 @@ def synth(
             transient=True,
         ) as bar:
             task = bar.add_task("rendering", total=images)
-            doc = write_dataset(site, out, opts, progress=lambda n: bar.advance(task, n))
+            doc = write_dataset(
+                site,
+                out,
+                opts,
+                progress=lambda n: bar.advance(task, n),
+                warn=lambda m: typer.echo(f"bim-init: warning: {m}", err=True),
+            )
         if preview is not None:
             dataset_preview(out, preview)
     except InputError as exc:
@@ -193,12 +199,27 @@ def train(
         int, typer.Option("--val-max", metavar="N", help="Validate on at most N images.")
     ] = 500,
     seed: Annotated[int, typer.Option("--seed", metavar="S")] = 0,
-    weights: Annotated[
-        Path | None,
-        typer.Option("--weights", metavar="model.pt", help="Start from this checkpoint (fine-tuning)."),
+    init: Annotated[
+        str | None,
+        typer.Option(
+            "--init",
+            metavar="default|model.pt",
+            help="Fine-tune: start from the shipped model ('default') or this checkpoint.",
+        ),
     ] = None,
+    freeze_backbone: Annotated[
+        bool, typer.Option("--freeze-backbone", help="Train only the neck and heads (small datasets).")
+    ] = False,
+    backbone: Annotated[
+        str,
+        typer.Option(
+            "--backbone",
+            metavar="efficientnet_lite0|residual",
+            help="A new model's backbone: ImageNet-pretrained lite0, or the small residual one (scratch).",
+        ),
+    ] = "efficientnet_lite0",
 ) -> None:
-    """Train the compact detector; validates precision, recall and AP@0.5 per class each epoch."""
+    """Train the detector; validates precision, recall and AP@0.5 per class each epoch."""
     try:
         _require_torch("train")
     except InputError as exc:
@@ -222,7 +243,9 @@ def train(
         time_limit=time_limit,
         val_max=val_max,
         seed=seed,
-        weights=weights,
+        init=init,
+        freeze_backbone=freeze_backbone,
+        backbone=backbone,
     )
     progress = Progress(
         TextColumn("[progress.description]{task.description}"),

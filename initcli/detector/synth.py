@@ -89,6 +89,10 @@ class Sample:
     site: str
 
 
+class NoCirculation(InputError):
+    """A storey with no closed free space in front of its features (open to the outside, or too narrow)."""
+
+
 @dataclass
 class Placement:
     """Where a camera may stand in one scene: the corridor cells, away from walls."""
@@ -131,28 +135,45 @@ def placement_for(scene: Scene, site: str, clearance: float = 0.35) -> Placement
             keep.add(int(labels[q[1], q[0]]))
     keep -= border
     if not keep:
-        raise InputError(f"{site}: storey {scene.name!r}: no free space in front of any feature")
+        raise NoCirculation(
+            f"{site}: storey {scene.name!r}: no enclosed free space in front of any feature "
+            "(its space is open to the outside)"
+        )
     region = np.isin(labels, sorted(keep))
     dist = ndimage.distance_transform_edt(region) * CELL
     rows, cols = np.nonzero(region & (dist >= clearance))
     if len(rows) == 0:
-        raise InputError(
+        raise NoCirculation(
             f"{site}: storey {scene.name!r}: the circulation area is narrower than {2 * clearance:.2f} m"
         )
     cells = np.column_stack([lo[0] + cols * CELL, lo[1] + rows * CELL])
     return Placement(scene, cells, site)
 
 
-def load_placements(sites: Sequence[str | Path], clearance: float = 0.35) -> list[Placement]:
+def load_placements(
+    sites: Sequence[str | Path], clearance: float = 0.35, warn: Callable[[str], None] | None = None
+) -> list[Placement]:
+    """The camera placements of every storey with features; storeys without a closed circulation area
+    (open to the outside) are skipped with a ``warn`` message. Fails when no storey is left."""
     out = []
+    skipped: list[str] = []
     for s in sites:
         site = load_site(Path(s), with_maps=False)
         for storey in site.storeys.values():
             scene = Scene.from_storey(storey, decorate=False)
-            if scene.features:
+            if not scene.features:
+                continue
+            try:
                 out.append(placement_for(scene, str(s), clearance))
+            except NoCirculation as exc:
+                skipped.append(str(exc))
+                if warn is not None:
+                    warn(f"skipped {exc}")
     if not out:
-        raise InputError(f"{', '.join(map(str, sites))}: no storey with doors, lifts or stairs to render")
+        reasons = f" ({'; '.join(skipped)})" if skipped else ""
+        raise InputError(
+            f"{', '.join(map(str, sites))}: no storey with doors, lifts or stairs to render{reasons}"
+        )
     return out
 
 
@@ -403,7 +424,11 @@ def _write_range(args: tuple[Path, list[tuple[int, str]]]) -> list[tuple[int, st
 
 
 def write_dataset(
-    sites: Sequence[str | Path], out: Path, opts: SynthOptions, progress: Callable[[int], None] | None = None
+    sites: Sequence[str | Path],
+    out: Path,
+    opts: SynthOptions,
+    progress: Callable[[int], None] | None = None,
+    warn: Callable[[str], None] | None = None,
 ) -> dict:
     """Render ``opts.images`` images into a YOLO dataset at ``out``; returns the synth.json document."""
     if opts.images < 1:
@@ -413,7 +438,7 @@ def write_dataset(
     if not 0.0 <= opts.shuffle_classes <= 1.0:
         raise InputError(f"--shuffle-classes: expected a number in [0, 1], got {opts.shuffle_classes}")
     sites = [str(s) for s in sites]
-    load_placements(sites, opts.clearance)  # fail early, in this process, on a bad site
+    load_placements(sites, opts.clearance, warn)  # fail early, in this process, on a bad site
     out = Path(out)
     for split in ("train", "val"):
         for sub in ("images", "labels") + (("depth",) if opts.depth else ()):

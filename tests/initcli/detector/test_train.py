@@ -65,6 +65,9 @@ def test_training_reduces_loss_and_exports(tiny_dataset, tmp_path):
         val_max=8,
         widths=(8, 16, 24, 32, 48),
         neck=24,
+        backbone="residual",
+        balance=False,  # the plain training machinery: no resampling, no camera degradations
+        camera_aug=0.0,
     )
     ckpt = train(opts, on_event)
     assert len(losses) == 24  # 24 train images, batch 8, 8 epochs
@@ -77,10 +80,10 @@ def test_training_reduces_loss_and_exports(tiny_dataset, tmp_path):
     # --resume continues from the checkpoint's epoch
     more = train(TrainOptions(**{**opts.__dict__, "epochs": 9, "resume": True}), None)
     assert more["epoch"] == 9 and len(more["history"]) == 9
-    # --weights starts a new run (epoch 1) from the trained weights
+    # --init starts a new run (epoch 1) from the trained weights
     tuned = tmp_path / "tuned.pt"
     fine = train(
-        TrainOptions(**{**opts.__dict__, "epochs": 1, "out": tuned, "weights": out, "max_steps": 1}), None
+        TrainOptions(**{**opts.__dict__, "epochs": 1, "out": tuned, "init": str(out), "max_steps": 1}), None
     )
     assert fine["epoch"] == 1 and fine["arch"] == ckpt["arch"]
 

@@ -1,0 +1,108 @@
+"""DoorDetect-style sources: class remapping (hard negatives kept as background) and the hash hold-out."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+import yaml
+
+from bimtools.errors import InputError
+from initcli.detector.datasets import holdout_fraction, load_dataset, load_doordetect, load_remapped
+
+NAMES = ["door", "lift", "stairs"]
+
+
+def make_doordetect(root: Path, n: int = 40) -> dict[str, list[int]]:
+    """n tiny JPEGs; a door (class 0) in every third, a handle (1) and a cabinet door (2) in all."""
+    (root / "images").mkdir(parents=True)
+    (root / "labels").mkdir()
+    truth = {}
+    for k in range(n):
+        name = f"{k:04x}beef{k}"
+        cv2.imwrite(str(root / "images" / f"{name}.jpg"), np.full((24, 32, 3), k * 5 % 255, np.uint8))
+        rows = ["1 0.5 0.5 0.05 0.05", "2 0.3 0.3 0.2 0.2"]
+        classes = [1, 2]
+        if k % 3 == 0:
+            rows.insert(0, "0 0.5 0.5 0.4 0.8")
+            classes.insert(0, 0)
+        if k % 7 == 0:
+            rows.append("3 0.7 0.6 0.2 0.6")
+            classes.append(3)
+        (root / "labels" / f"{name}.txt").write_text("\n".join(rows) + "\n")
+        truth[f"{name}.jpg"] = classes
+    return truth
+
+
+def test_doordetect_keeps_doors_drops_hard_negatives(tmp_path):
+    truth = make_doordetect(tmp_path / "dd")
+    train = load_doordetect(tmp_path / "dd", holdout=0.25, part="train").train
+    held = load_doordetect(tmp_path / "dd", holdout=0.25, part="holdout").val
+    items = train + held
+    assert len(items) == len(truth)  # every image kept, negatives included
+    for item in items:
+        n_doors = truth[item.image.name].count(0)
+        assert list(item.classes) == [0] * n_doors  # only doors, as our class 0
+        if n_doors:
+            assert np.allclose(item.boxes[0], [0.3, 0.1, 0.7, 0.9])
+    assert sum(len(i.classes) == 0 for i in items) == sum(0 not in c for c in truth.values())
+
+
+def test_hash_split_is_stable_and_disjoint(tmp_path):
+    truth = make_doordetect(tmp_path / "dd")
+    first = {i.image.name for i in load_doordetect(tmp_path / "dd", 0.25, "holdout").val}
+    again = {i.image.name for i in load_doordetect(tmp_path / "dd", 0.25, "holdout").val}
+    rest = {i.image.name for i in load_doordetect(tmp_path / "dd", 0.25, "train").train}
+    assert first == again and not first & rest and first | rest == set(truth)
+    assert first == {n for n in truth if holdout_fraction(n) < 0.25}
+    assert 0 < len(first) < len(truth) // 2
+    # the split depends on the file name only, not on the folder it lies in
+    assert holdout_fraction("/a/b/x.jpg") == holdout_fraction("x.jpg")
+    # a larger hold-out contains the smaller one (images never move from hold-out to train)
+    bigger = {i.image.name for i in load_doordetect(tmp_path / "dd", 0.5, "holdout").val}
+    assert first <= bigger
+
+
+def test_mapping_entries_in_data_yaml(tmp_path):
+    make_doordetect(tmp_path / "dd")
+    entry = {"path": str(tmp_path / "dd"), "classes": {0: "door"}, "holdout": 0.25, "domain": "photos"}
+    doc = {
+        "names": NAMES,
+        "train": [{**entry, "part": "train"}],
+        "val": [{**entry, "part": "holdout"}],
+    }
+    (tmp_path / "data.yaml").write_text(yaml.safe_dump(doc))
+    ds = load_dataset(tmp_path / "data.yaml")
+    assert len(ds.train) + len(ds.val) == 40 and ds.val and ds.train
+    assert {i.domain for i in ds.train} == {"photos"}
+    assert ds.instance_counts("train")[1:] == [0, 0]
+
+
+def test_bad_mapping_is_input_error(tmp_path):
+    make_doordetect(tmp_path / "dd")
+    with pytest.raises(InputError, match="not one of the dataset's names"):
+        load_remapped(tmp_path / "dd", NAMES, {0: "window"})
+    with pytest.raises(InputError, match="part"):
+        load_remapped(tmp_path / "dd", NAMES, {0: "door"}, part="test")
+    (tmp_path / "data.yaml").write_text(yaml.safe_dump({"names": NAMES, "train": [{"classes": {0: "door"}}]}))
+    with pytest.raises(InputError, match="needs 'path'"):
+        load_dataset(tmp_path / "data.yaml")
+
+
+SHARED = Path("/work/shared/datasets/doordetect_train")
+
+
+@pytest.mark.skipif(not SHARED.is_dir(), reason="/work/shared/datasets/doordetect_train is not here")
+def test_shared_doordetect_split_sizes():
+    held = load_doordetect(SHARED, 0.2, "holdout").val
+    train = load_doordetect(SHARED, 0.2, "train").train
+    assert len(held) + len(train) == len(list((SHARED / "images").iterdir()))
+    assert 0.15 < len(held) / (len(held) + len(train)) < 0.25
+    assert sum(len(i.classes) for i in held + train) == sum(
+        line.split()[0] == "0"
+        for p in (SHARED / "labels").glob("*.txt")
+        for line in p.read_text().splitlines()
+        if line.strip()
+    )
