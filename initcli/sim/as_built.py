@@ -185,32 +185,32 @@ def derive_as_built(
     closed: list[Obstacle] = []
     changes = {"missing_doors": 0, "shifted_doors": 0, "open_doors": 0, "never_seen": 0}
     by_element: dict[str, list[int]] = {}
-    for i, o in enumerate(obstacles):
-        by_element.setdefault(o.element, []).append(i)
+    for k, design_piece in enumerate(obstacles):
+        by_element.setdefault(design_piece.element, []).append(k)
     out_obstacles: list[Obstacle | None] = list(obstacles)
     moved_obstacles: set[int] = set()
     out_features: list[SimFeature] = []
     for f in features:
-        leaves = by_element.get(f.id, [])
+        pieces = by_element.get(f.id, [])  # indices of the door's own obstacles
         if f.cls in DOOR_CLASSES:
             if f.id in doors and p.missing_doors > 0 and rng.random() < p.missing_doors:
-                for i in leaves:
-                    out_obstacles[i] = None
+                for k in pieces:
+                    out_obstacles[k] = None
                 changes["missing_doors"] += 1
                 continue
             if p.door_shift > 0:
                 s = float(rng.normal(0.0, p.door_shift))
                 dx, dy = -f.norm_y * s, f.norm_x * s  # along the host wall
                 f = replace(f, x=f.x + dx, y=f.y + dy)
-                for i in leaves:
-                    o = out_obstacles[i]
-                    if o is not None:
-                        out_obstacles[i] = _shift(o, dx, dy)
-                        moved_obstacles.add(i)
+                for k in pieces:
+                    piece = out_obstacles[k]
+                    if piece is not None:
+                        out_obstacles[k] = _shift(piece, dx, dy)
+                        moved_obstacles.add(k)
                 changes["shifted_doors"] += 1
             if p.open_doors > 0 and rng.random() < p.open_doors:
-                for i in leaves:
-                    out_obstacles[i] = None
+                for k in pieces:
+                    out_obstacles[k] = None
                 changes["open_doors"] += 1
             elif f.id in doors:
                 closed.append(door_leaf(f))
@@ -219,11 +219,11 @@ def derive_as_built(
             continue
         out_features.append(f)
     if p.wall_offset > 0:
-        for i, o in enumerate(out_obstacles):
-            if o is None or i in moved_obstacles:
+        for k, element in enumerate(out_obstacles):
+            if element is None or k in moved_obstacles:
                 continue
             dx, dy = rng.normal(0.0, p.wall_offset, 2)
-            out_obstacles[i] = _shift(o, float(dx), float(dy))
+            out_obstacles[k] = _shift(element, float(dx), float(dy))
     kept = [o for o in out_obstacles if o is not None] + closed
     length = corridor_length(circulation)
     corridor_walls = _corridor_walls(walls, circulation, 2.0)
