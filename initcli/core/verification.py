@@ -39,7 +39,7 @@ class VerificationParams:
     """Thresholds of the two checks (units in the comments)."""
 
     predict_range: float = 4.5  # m: a BIM feature farther than this is not predicted to be seen
-    predict_view_angle_deg: float = 60.0  # degrees from the feature's normal
+    predict_view_angle_deg: float = 70.0  # degrees from the feature's normal (the detector: 75)
     image_margin: float = 0.1  # share of the image width/height kept clear at the borders
     min_frames: int = 4  # images a feature must be predicted in view before a miss counts
     match_radius: float = 1.5  # m: a same-category sighting this close (BIM frame) explains a feature
