@@ -1,0 +1,69 @@
+"""Sessions in a site built unlike its model (issue 11): the session may fail, it may never claim a
+wrong pose. Each case is a world a real site produces: every door shifted, a hoarding across the
+corridor, a poster detected as a door right beside a real door."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+
+from bimtools.site.load import Site
+from initcli.config import SessionConfig, load_config
+from initcli.core.geometry import Pose2D
+from initcli.session.setup import prepare_site, sim_session
+from initcli.sim.synthetic_log import SimFeature
+from tests.helpers import SAMPLES
+
+WRONG_M = 2.0  # a claimed pose this far from the truth is a confident wrong result
+
+
+@pytest.fixture(scope="module")
+def block_a(tmp_path_factory: pytest.TempPathFactory) -> tuple[SessionConfig, Site]:
+    config = load_config(SAMPLES / "block_a.site.yaml")
+    return config, prepare_site(config, tmp_path_factory.mktemp("block_a"))
+
+
+def with_sim(config: SessionConfig, **as_built: float) -> SessionConfig:
+    sim = dataclasses.replace(config.sim, as_built=dataclasses.replace(config.sim.as_built, **as_built))
+    return dataclasses.replace(config, sim=sim)
+
+
+def assert_never_wrong(result) -> None:
+    if result.success:
+        assert result.pose is not None and result.truth_pose is not None
+        assert result.pose.distance_to(result.truth_pose) < WRONG_M, result.reason
+    else:
+        assert result.reason  # an honest failure says why
+
+
+@pytest.mark.parametrize("seed", [2, 5])
+def test_every_door_shifted_half_a_metre(block_a, seed: int) -> None:
+    config, site = block_a
+    built = sim_session(with_sim(config, door_shift=0.5), site, seed)
+    assert built.setup.as_built is not None and built.setup.as_built.changes["shifted_doors"] > 5
+    assert_never_wrong(built.session.run())
+
+
+def test_hoardings_across_the_corridors(block_a) -> None:
+    config, site = block_a
+    built = sim_session(with_sim(config, hoarding=6.0), site, 3)
+    assert built.setup.as_built is not None and built.setup.as_built.hoardings
+    assert_never_wrong(built.session.run())
+
+
+def test_a_poster_seen_as_a_door_right_beside_a_real_door(block_a) -> None:
+    config, site = block_a
+    start = Pose2D(10.0, 11.0, 0.0)
+    built = sim_session(config, site, 3, start)
+    detector = built.setup.driver.detector.__self__  # the simulated detector's features
+    doors = [f for f in detector.features if f.cls == "door"]
+    near = min(doors, key=lambda f: (f.x - start.x) ** 2 + (f.y - start.y) ** 2)
+    along = (-near.norm_y, near.norm_x)
+    detector.features.append(
+        SimFeature(
+            "poster", "door", near.x + 1.2 * along[0], near.y + 1.2 * along[1], near.norm_x, near.norm_y
+        )
+    )
+    result = built.session.run()
+    assert_never_wrong(result)
