@@ -10,6 +10,7 @@ a stair enclosure becomes a Lift / Stairs feature and not also a Door.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import shapely
@@ -19,6 +20,9 @@ from bimtools.extract.circulation import FreeRegions, SideProbe, SpaceIndex, cho
 from bimtools.extract.placement import Front, Opening, rectangle_fronts, stair_foot
 from bimtools.ifc.categories import Category, CategorySet
 from bimtools.site.records import Feature
+
+if TYPE_CHECKING:
+    import ifcopenshell
 
 ENTRANCE_RADIUS = 2.5  # metres: a door this close to a lift/stair body is its entrance
 
@@ -31,11 +35,16 @@ class DoorCandidate:
     ifc_class: str
     name: str
     opening: Opening
-    entity: object  # ifcopenshell entity, for category rules
+    entity: ifcopenshell.entity_instance  # for category rules
     plus: SideProbe | None = None
     minus: SideProbe | None = None
     side: int = 1
     rule: str = ""
+
+    def probes(self) -> tuple[SideProbe, SideProbe]:
+        """The (plus, minus) sides, once :func:`decide_sides` has probed them."""
+        assert self.plus is not None and self.minus is not None, "decide_sides probes the sides first"
+        return self.plus, self.minus
 
     @property
     def circulation(self) -> SideProbe:
@@ -81,6 +90,11 @@ def _mark_vertical(ctx: StoreyContext, side: SideProbe) -> None:
         ctx.spaces.vertical[side.space_index] = True
 
 
+def _probe(ctx: StoreyContext, point: np.ndarray, direction: np.ndarray) -> SideProbe:
+    """What lies from plan ``point`` towards ``direction`` on this storey."""
+    return probe_side(ctx.regions, ctx.spaces, point[0], point[1], direction)
+
+
 def decide_sides(
     ctx: StoreyContext, doors: list[DoorCandidate], bodies: list[BodyCandidate] | None = None
 ) -> None:
@@ -88,11 +102,11 @@ def decide_sides(
     that lead to a staircase or lift, then pick circulation sides."""
     for door in doors:
         o = door.opening
-        door.plus = probe_side(ctx.regions, ctx.spaces, *o.face(+1), o.across)
-        door.minus = probe_side(ctx.regions, ctx.spaces, *o.face(-1), -o.across)
-        for label in {door.plus.label, door.minus.label} - {0}:
+        plus = door.plus = _probe(ctx, o.face(+1), o.across)
+        minus = door.minus = _probe(ctx, o.face(-1), -o.across)
+        for label in {plus.label, minus.label} - {0}:
             ctx.regions.doors[label] += 1
-        for index in {door.plus.space_index, door.minus.space_index} - {-1}:
+        for index in {plus.space_index, minus.space_index} - {-1}:
             ctx.spaces.doors[index] += 1
     # A place holding a stair or lift, or linked to one by a door, leads to another storey.
     body_labels: set[int] = set()
@@ -100,14 +114,15 @@ def decide_sides(
         body_labels |= ctx.regions.labels_at(body.points)
     for label in body_labels:
         ctx.regions.vertical[label] = True
-    for door in doors:
-        for this, other in ((door.plus, door.minus), (door.minus, door.plus)):
+    probed = [(door, *door.probes()) for door in doors]
+    for _, plus, minus in probed:
+        for this, other in ((plus, minus), (minus, plus)):
             if this.label in body_labels or _enclosure_space(ctx.categories, this.space):
                 _mark_vertical(ctx, other)
-    for door in doors:
+    for door, plus, minus in probed:
         door.side, door.rule = choose_side(
-            door.plus,
-            door.minus,
+            plus,
+            minus,
             ctx.regions,
             ctx.categories.is_circulation,
             lambda name: _enclosure_space(ctx.categories, name),
@@ -172,7 +187,7 @@ def _best_front(ctx: StoreyContext, footprint: BaseGeometry, exclude: set[int]) 
     """The side of a shaft footprint that faces the circulation area."""
     best: tuple[tuple, Front] | None = None
     for front in rectangle_fronts(footprint):
-        probe = probe_side(ctx.regions, ctx.spaces, *front.point, front.normal)
+        probe = _probe(ctx, front.point, front.normal)
         circulation = ctx.categories.is_circulation(probe.space)
         label_score = ctx.regions.score(probe.label) if probe.label not in exclude else (-1, 0.0)
         key = (probe.reachable, circulation, label_score, front.width)
@@ -233,7 +248,7 @@ def _body_front(ctx: StoreyContext, body: BodyCandidate, category: Category) -> 
             return None
         # A stair whose foot is seen only from outside the building (an exterior stair) is not a
         # feature a robot inside can reach.
-        ahead = probe_side(ctx.regions, ctx.spaces, *foot.point, foot.normal)
+        ahead = _probe(ctx, foot.point, foot.normal)
         return foot if ahead.reachable else None
     front = _best_front(ctx, body.footprint, set())
     if front is None:

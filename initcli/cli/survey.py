@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import sys
+from functools import partial
 from pathlib import Path
 from typing import Annotated
 
@@ -20,6 +21,8 @@ from initcli.eval.executor import make_executor
 from initcli.match.pipeline import site_class_map
 from initcli.session.setup import camera_of
 from initcli.survey.survey import (
+    Landmark,
+    StoreySurvey,
     SurveyParams,
     plan_storey,
     suggest_landmarks,
@@ -99,11 +102,12 @@ def survey(
         print(f"bim-init: error: {' '.join(str(exc).split())}", file=sys.stderr)
         raise typer.Exit(EXIT_BAD_INPUT) from None
     cmap = site_class_map(model)
+    storeys: list[dict[str, object]] = []
     report: dict[str, object] = {
         "version": SURVEY_VERSION,
         "site": str(site),
         "limit_m": params.limit_m,
-        "storeys": [],
+        "storeys": storeys,
     }
     table = Table(title="Survey: distance to a unique match", title_justify="left")
     for column in (
@@ -135,14 +139,15 @@ def survey(
                     err.print(f"storey {name}: skipped ({exc})")
                     continue
                 task = progress.add_task("starts", total=len(plan.starts), storey=name)
-                result, views = survey_storey(plan, params, runner, lambda n, t=task: progress.advance(t, n))
+                result, views = survey_storey(plan, params, runner, partial(progress.advance, task))
                 entry = summarise(result)
-                chosen, improved = [], None
+                chosen: list[Landmark] = []
+                improved: StoreySurvey | None = None
                 if landmarks:
                     n_cand = landmarks * params.landmark_candidates
                     task_l = progress.add_task("landmarks", total=n_cand, storey=f"{name} landmarks")
                     chosen, improved = suggest_landmarks(
-                        result, views, landmarks, runner, lambda n, t=task_l: progress.advance(t, n)
+                        result, views, landmarks, runner, partial(progress.advance, task_l)
                     )
                     progress.update(task_l, completed=n_cand)
                     entry["landmarks"] = [
@@ -161,7 +166,7 @@ def survey(
                 out.mkdir(parents=True, exist_ok=True)
                 survey_png(out / f"survey_{stem}.png", result, improved, chosen)
                 entry["map"] = f"survey_{stem}.png"
-                report["storeys"].append(entry)  # type: ignore[union-attr]
+                storeys.append(entry)
                 shares = entry["unique_within"]
                 median = entry["median_distance_m"]
                 table.add_row(

@@ -158,6 +158,12 @@ def verify_export(head: ExportHead, path: Path, size: int, trials: int = 3) -> f
 # --- back from ONNX: the starting point of `train --init default` -----------------------------------
 
 
+def _batch_norm_after(calls: list[torch.nn.Module], k: int) -> torch.nn.BatchNorm2d | None:
+    """The batch norm the forward pass calls right after ``calls[k]``, if it does."""
+    following = calls[k + 1] if k + 1 < len(calls) else None
+    return following if isinstance(following, torch.nn.BatchNorm2d) else None
+
+
 def checkpoint_from_onnx(path: Path) -> dict:
     """A training checkpoint rebuilt from one of our ONNX exports (``train --init default``).
 
@@ -198,9 +204,7 @@ def checkpoint_from_onnx(path: Path) -> dict:
     for h in hooks:
         h.remove()
     pairs = [  # each convolution with the batch norm called right after it (folded into it on export)
-        (m, calls[k + 1] if k + 1 < len(calls) and isinstance(calls[k + 1], torch.nn.BatchNorm2d) else None)
-        for k, m in enumerate(calls)
-        if isinstance(m, torch.nn.Conv2d)
+        (m, _batch_norm_after(calls, k)) for k, m in enumerate(calls) if isinstance(m, torch.nn.Conv2d)
     ]
     inits = {i.name: numpy_helper.to_array(i) for i in model.graph.initializer}
     convs = [n for n in model.graph.node if n.op_type == "Conv"]
@@ -214,6 +218,7 @@ def checkpoint_from_onnx(path: Path) -> dict:
             conv.weight.copy_(torch.from_numpy(w.copy()))
             b = inits[node.input[2]] if len(node.input) > 2 else np.zeros(w.shape[0], np.float32)
             if bn is not None:
+                assert bn.running_mean is not None and bn.running_var is not None  # Detector tracks stats
                 bn.weight.fill_(1.0)
                 bn.bias.copy_(torch.from_numpy(b.copy()))
                 bn.running_mean.zero_()

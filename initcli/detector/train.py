@@ -152,7 +152,7 @@ def random_letterbox(
 def camera_degrade(img: np.ndarray, p: float, rng: np.random.Generator) -> np.ndarray:
     """What real cameras do to an image, each with chance ``p``: gamma / contrast, colour cast,
     Gaussian or motion blur, sensor noise, JPEG compression."""
-    out = img.astype(np.float32)
+    out: np.ndarray = img.astype(np.float32)
     if rng.random() < p:  # exposure curve and contrast
         out = 255.0 * (out / 255.0) ** rng.uniform(0.6, 1.6)
         out = (out - 128.0) * rng.uniform(0.7, 1.3) + 128.0
@@ -164,18 +164,19 @@ def camera_degrade(img: np.ndarray, p: float, rng: np.random.Generator) -> np.nd
             out = cv2.GaussianBlur(out, (0, 0), rng.uniform(0.5, 1.8))
         else:  # motion blur of a moving robot
             k = int(rng.integers(3, 9))
-            kernel = np.zeros((k, k), np.float32)
+            kernel: np.ndarray = np.zeros((k, k), np.float32)
             kernel[k // 2, :] = 1.0 / k
             rot = cv2.getRotationMatrix2D((k / 2 - 0.5, k / 2 - 0.5), rng.uniform(0, 180), 1.0)
             kernel = cv2.warpAffine(kernel, rot, (k, k))
-            out = cv2.filter2D(out, -1, kernel / max(float(kernel.sum()), 1e-6))
+            out = cv2.filter2D(out, -1, (kernel / max(float(kernel.sum()), 1e-6)).astype(np.float32))
     if rng.random() < p * 0.6:
         noise = rng.normal(0.0, rng.uniform(2.0, 12.0), out.shape)
         out = np.clip(out.astype(np.float32) + noise, 0, 255).astype(np.uint8)
     if rng.random() < p * 0.5:
         ok, buf = cv2.imencode(".jpg", out, [cv2.IMWRITE_JPEG_QUALITY, int(rng.integers(35, 90))])
-        if ok:
-            out = cv2.imdecode(buf, cv2.IMREAD_UNCHANGED)
+        decoded = cv2.imdecode(buf, cv2.IMREAD_UNCHANGED) if ok else None
+        if decoded is not None:
+            out = decoded
     return out
 
 

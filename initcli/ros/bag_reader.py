@@ -251,8 +251,8 @@ def stamp_seconds(msg: Any, bag_ns: int) -> float:
     header = getattr(msg, "header", None)
     if header is not None:
         st = header.stamp
-        sec = getattr(st, "sec", None)
-        nsec = getattr(st, "nanosec", None)
+        sec: Any = getattr(st, "sec", None)  # the message types are not typed
+        nsec: Any = getattr(st, "nanosec", None)
         if sec is None:  # ROS 1 spelling
             sec, nsec = getattr(st, "secs", 0), getattr(st, "nsecs", 0)
         if sec or nsec:
@@ -550,7 +550,7 @@ def bag_to_records(
         trajectory = _Trajectory.of(odom_samples)
         origin = Pose2D(float(trajectory.x[0]), float(trajectory.y[0]), float(trajectory.yaw[0])).inverse()
 
-        records: list[Record] = []
+        records: list[Odom | Scan | Detections] = []  # each with a time stamp t
         for i in range(len(trajectory.t)):
             p = origin * Pose2D(float(trajectory.x[i]), float(trajectory.y[i]), float(trajectory.yaw[i]))
             records.append(Odom(float(trajectory.t[i]), p.x, p.y, float(wrap_angle(p.yaw))))
@@ -626,7 +626,7 @@ def bag_to_records(
         stats.warnings.append(f"{stats.without_depth} image(s) without an aligned depth image skipped")
     if stats.outside_odometry:
         stats.warnings.append(f"{stats.outside_odometry} image(s) outside the odometry's time span skipped")
-    records.sort(key=lambda r: r.t)  # type: ignore[union-attr]
+    records.sort(key=lambda r: r.t)
     meta = Meta(
         camera=camera,
         camera_pose=mount,

@@ -4,12 +4,20 @@ from __future__ import annotations
 
 import io
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from bimtools.site.atomic import write_bytes_atomic
 from initcli.survey.survey import Landmark, StoreySurvey
 
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.collections import PathCollection
+    from matplotlib.colors import Normalize
 
-def _panel(ax, result: StoreySurvey, title: str, landmarks: list[Landmark], norm) -> object:
+
+def _panel(
+    ax: Axes, result: StoreySurvey, title: str, landmarks: list[Landmark], norm: Normalize
+) -> PathCollection:
     plan = result.plan
     for x1, y1, x2, y2 in plan.occluders:
         ax.plot([x1, x2], [y1, y2], color="0.35", lw=0.6, zorder=1)
@@ -70,15 +78,18 @@ def survey_png(
     import matplotlib.pyplot as plt
     from matplotlib.colors import Normalize
 
-    panels = [(result, "distance to a unique match", [])]
+    panels: list[tuple[StoreySurvey, str, list[Landmark]]] = [(result, "distance to a unique match", [])]
     if with_landmarks is not None:
         panels.append((with_landmarks, f"with {len(landmarks or [])} suggested landmark(s)", landmarks or []))
     norm = Normalize(0.0, max(20.0, float(result.position_distance.max(initial=0.0))))
     fig, axes = plt.subplots(1, len(panels), figsize=(7.5 * len(panels), 6.5), squeeze=False)
-    sc = None
-    for ax, (res, title, lms) in zip(axes[0], panels, strict=True):
-        sc = _panel(ax, res, f"{res.plan.name}: {title}", lms, norm)
-    fig.colorbar(sc, ax=list(axes[0]), label="m driven to a unique match (mean over headings)", shrink=0.8)
+    scatters = [
+        _panel(ax, res, f"{res.plan.name}: {title}", lms, norm)
+        for ax, (res, title, lms) in zip(axes[0], panels, strict=True)
+    ]
+    fig.colorbar(
+        scatters[-1], ax=list(axes[0]), label="m driven to a unique match (mean over headings)", shrink=0.8
+    )
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
     plt.close(fig)

@@ -11,7 +11,7 @@ the numbers of ``survey.json`` and :func:`suggest_landmarks` the greedy landmark
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -187,7 +187,7 @@ def with_feature(
 
 
 def sequences(
-    plan: StoreyPlan, views: SampleViews, params: SurveyParams, which: Sequence[int] | None = None
+    plan: StoreyPlan, views: SampleViews, params: SurveyParams, which: Iterable[int] | None = None
 ) -> tuple[list[tuple[int, ...]], list[np.ndarray]]:
     """Per start (of ``which``, default all): the feature indices in the order they are confirmed,
     and the distance (m) driven when each is (features confirmed beyond ``limit_m`` are left out)."""
@@ -200,7 +200,7 @@ def sequences(
         order = np.full(n_f, np.inf)
         counts = np.cumsum(views.look[i], axis=0)
         hit = counts >= need0
-        got = hit.any(axis=0)
+        got = np.asarray(hit.any(axis=0))  # an array (numpy's stubs say: or a scalar)
         when[got] = 0.0
         order[got] = hit.argmax(axis=0)[got]
         seen = counts[-1] if len(counts) else np.zeros(n_f, dtype=int)
