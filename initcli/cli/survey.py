@@ -17,6 +17,7 @@ from bimtools.errors import EXIT_BAD_INPUT, InputError
 from bimtools.site.atomic import write_text_atomic
 from bimtools.site.load import load_site
 from initcli.config import SessionConfig, followed_side, load_config
+from initcli.core.visibility import CameraModel
 from initcli.eval.executor import make_executor
 from initcli.match.pipeline import site_class_map
 from initcli.session.setup import camera_of
@@ -30,7 +31,6 @@ from initcli.survey.survey import (
     survey_storey,
 )
 from initcli.survey.uniqueness import UniquenessParams
-from initcli.survey.visibility import CameraModel
 
 EXIT_INTERRUPTED = 130
 SURVEY_VERSION = 1

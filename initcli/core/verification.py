@@ -30,8 +30,8 @@ import numpy as np
 
 from initcli.core.geometry import Pose2D
 from initcli.core.particle_filter import LikelihoodField, scan_fit
-from initcli.core.projection import CameraIntrinsics, CameraMount, odom_to_pixel
-from initcli.core.raycast import sight_blocked
+from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.core.visibility import CameraModel, FeatureArrays, visible
 
 
 @dataclass(frozen=True)
@@ -98,38 +98,28 @@ def frames_in_view(
     params: VerificationParams,
 ) -> np.ndarray:
     """Per BIM feature (F,), the number of ``robot_poses`` (BIM frame) whose image shows it (the
-    inverse of Eq. 1-2 for the box centre, plus range, view angle and line of sight)."""
+    camera model of :mod:`initcli.core.visibility` with the prediction's tighter limits)."""
     xy = np.asarray(feature_xy, dtype=float).reshape(-1, 2)
-    normals = np.asarray(feature_normals, dtype=float).reshape(-1, 2)
-    counts = np.zeros(len(xy), dtype=int)
-    if len(xy) == 0:
-        return counts
-    points = np.column_stack([xy, 0.5 * np.asarray(feature_heights, dtype=float)])
-    cam = view.camera
-    mu, mv = params.image_margin * cam.width, params.image_margin * cam.height
-    cos_max = math.cos(math.radians(params.predict_view_angle_deg))
-    for pose in robot_poses:
-        u, v, depth = odom_to_pixel(points, cam, view.mount, pose)
-        eye = pose.apply(np.array([view.mount.x, view.mount.y]))
-        to_eye = eye - xy
-        dist = np.hypot(to_eye[:, 0], to_eye[:, 1])
-        cos_view = np.einsum("ij,ij->i", normals, to_eye) / np.maximum(dist, 1e-12)
-        seen = (
-            (depth >= view.min_depth)
-            & (dist <= params.predict_range)
-            & (u >= mu)
-            & (u <= cam.width - mu)
-            & (v >= mv)
-            & (v <= cam.height - mv)
-            & (cos_view >= cos_max)
-        )
-        if seen.any():
-            idx = np.flatnonzero(seen)
-            targets = xy[idx] + 0.1 * normals[idx]  # just in front of the host wall's surface
-            blocked = sight_blocked(eye, targets, np.asarray(walls, dtype=float).reshape(-1, 4))
-            seen[idx[blocked]] = False
-        counts += seen
-    return counts
+    if len(xy) == 0 or not robot_poses:
+        return np.zeros(len(xy), dtype=int)
+    model = CameraModel(
+        view.camera,
+        view.mount,
+        min_range=view.min_depth,
+        max_range=params.predict_range,
+        max_view_angle_deg=params.predict_view_angle_deg,
+        margin=params.image_margin,
+    )
+    features = FeatureArrays(
+        xy,
+        np.asarray(feature_normals, dtype=float).reshape(-1, 2),
+        np.asarray(feature_heights, dtype=float),
+        (),
+    )
+    poses = np.array([p.as_tuple() for p in robot_poses], dtype=float)
+    return np.asarray(
+        visible(poses, features, np.asarray(walls, dtype=float).reshape(-1, 4), model).sum(axis=0)
+    )
 
 
 def explained(

@@ -18,12 +18,12 @@ import numpy as np
 
 from bimtools.site.load import StoreyModel
 from initcli.core.classes import ClassMap
+from initcli.core.visibility import CameraModel, FeatureArrays, visible
 from initcli.eval.executor import Executor, LocalExecutor, map_unordered
 from initcli.sim.scenario import Circulation
 from initcli.sim.world import polygon_edges
 from initcli.survey.exploration import Entry, Loop, follow_loops, join_loop, look_round
 from initcli.survey.uniqueness import UniquenessParams, first_unique
-from initcli.survey.visibility import CameraModel, FeatureArrays, visible
 
 LANDMARK_CLASS = "landmark"  # each suggested landmark gets its own category: landmark_1, landmark_2
 LANDMARK_HEIGHT = 2.0  # m: a sign whose centre is at the camera's height

@@ -10,10 +10,10 @@ import pytest
 
 from bimtools.site.records import FREE, OCCUPIED, OccupancyGrid
 from initcli.core.geometry import Pose2D
-from initcli.sim.synthetic_log import SimFeature, SyntheticParams, render_image
+from initcli.core.visibility import CameraModel, FeatureArrays, visible
+from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT, SimFeature, SyntheticParams, render_image
 from initcli.survey.exploration import follow_loops, join_loop, look_round
 from initcli.survey.uniqueness import UniquenessParams, first_unique
-from initcli.survey.visibility import CameraModel, FeatureArrays, visible
 
 
 def test_visibility_is_the_simulators_render_image():
@@ -25,7 +25,7 @@ def test_visibility_is_the_simulators_render_image():
     height = rng.uniform(1.0, 2.5, n)
     features = FeatureArrays(xy, normal, height, tuple("door" for _ in range(n)))
     walls = np.array([[4.0, 0.0, 4.0, 8.0], [0.0, 9.0, 10.0, 9.0]])
-    model = CameraModel()
+    model = CameraModel(DEFAULT_CAMERA, DEFAULT_MOUNT)
     sim = [SimFeature(str(i), "door", *xy[i], *normal[i], 1.0, height[i]) for i in range(n)]
     params = SyntheticParams(
         min_range=model.min_range,

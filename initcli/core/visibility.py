@@ -1,10 +1,12 @@
 """Which BIM features a camera sees from many robot poses at once: the simulator's model, no noise.
 
-The same tests as :func:`initcli.sim.synthetic_log.render_image` (and the simulated detector built on
-it): the feature's box centre at ``centre_height`` of its height projected with the inverse of
-Eq. 1-2 must fall in the image, its optical depth within ``[min_range, max_range]``, the line of sight
-within ``max_view_angle`` of its normal, and the segment from the camera to a point just in front of
-the host wall must cross no wall or obstacle edge.
+Used by ``bim-init survey`` (what the camera would see while exploring) and by the verification of a
+hypothesis (which BIM features it says were in view). The same tests as
+:func:`initcli.sim.synthetic_log.render_image` (and the simulated detector built on it): the
+feature's box centre at ``centre_height`` of its height projected with the inverse of Eq. 1-2 must
+fall in the image (less ``margin`` at the borders), its optical depth within ``[min_range,
+max_range]``, the line of sight within ``max_view_angle`` of its normal, and the segment from the
+camera to a point just in front of the host wall must cross no wall or obstacle edge.
 """
 
 from __future__ import annotations
@@ -17,7 +19,6 @@ import numpy as np
 from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount, odom_to_pixel
 from initcli.core.raycast import sight_blocked
-from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
 
 PAIR_CHUNK = 20_000  # (pose, feature) pairs tested against the walls at once
 
@@ -26,12 +27,13 @@ PAIR_CHUNK = 20_000  # (pose, feature) pairs tested against the walls at once
 class CameraModel:
     """The camera and the detector's visibility limits (the simulator's defaults)."""
 
-    camera: CameraIntrinsics = DEFAULT_CAMERA
-    mount: CameraMount = DEFAULT_MOUNT
+    camera: CameraIntrinsics
+    mount: CameraMount
     min_range: float = 0.5  # m of optical depth
     max_range: float = 6.0  # m
     max_view_angle_deg: float = 75.0  # from the element's normal
     centre_height: float = 0.5  # box centre at this fraction of the element's height
+    margin: float = 0.0  # share of the image width and height at each border that does not count
 
 
 @dataclass(frozen=True)
@@ -80,14 +82,15 @@ def visible(poses: np.ndarray, features: FeatureArrays, walls: np.ndarray, model
     dist = np.hypot(to_eye[..., 0], to_eye[..., 1])
     cos_view = np.einsum("pfk,fk->pf", to_eye, features.normal) / np.maximum(dist, 1e-12)
     cam = model.camera
+    mu, mv = model.margin * cam.width, model.margin * cam.height
     with np.errstate(invalid="ignore"):
         ok = (
             (depth >= model.min_range)
             & (depth <= model.max_range)
-            & (u >= 0)
-            & (u <= cam.width)
-            & (v >= 0)
-            & (v <= cam.height)
+            & (u >= mu)
+            & (u <= cam.width - mu)
+            & (v >= mv)
+            & (v <= cam.height - mv)
         ).reshape(n_p, n_f) & (cos_view >= math.cos(math.radians(model.max_view_angle_deg)))
     pp, ff = np.nonzero(ok)
     if len(pp) and len(walls):
