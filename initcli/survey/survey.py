@@ -21,6 +21,7 @@ from initcli.core.classes import ClassMap
 from initcli.core.visibility import CameraModel, FeatureArrays, visible
 from initcli.eval.executor import Executor, LocalExecutor, map_unordered
 from initcli.sim.scenario import Circulation
+from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
 from initcli.sim.world import polygon_edges
 from initcli.survey.exploration import Entry, Loop, follow_loops, join_loop, look_round
 from initcli.survey.uniqueness import UniquenessParams, first_unique
@@ -44,7 +45,7 @@ class SurveyParams:
     side: int = 1  # +1 left wall, -1 right wall
     start_clearance: float = 0.6  # m from the nearest obstacle for a start (as random starts)
     min_sightings: int = 3  # images before a feature is confirmed (detection filter)
-    camera: CameraModel = field(default_factory=CameraModel)
+    camera: CameraModel = field(default_factory=lambda: CameraModel(DEFAULT_CAMERA, DEFAULT_MOUNT))
     matching: UniquenessParams = field(default_factory=UniquenessParams)
     landmark_spacing: float = 4.0  # m between candidate landmark positions along a corridor wall
     landmark_candidates: int = 30  # candidates tried at most per landmark
