@@ -33,9 +33,10 @@ from initcli.config import (
     verification_params,
     wall_follow_params,
 )
-from initcli.core.bug_navigation import BugNavigator, BugParams
+from initcli.core.bug_navigation import BugNavigator, BugParams, RouteNavigator
 from initcli.core.classes import ClassMap
 from initcli.core.confinement import ConfinementWatch
+from initcli.core.frontier import LocalMap
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.verification import CameraView, Verification
 from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
@@ -61,6 +62,8 @@ BLIND_REACH = 2.0  # m straight ahead when there is no scan to pick a free beam 
 SHUTTLE_WINDOW_S = 150.0  # s of path checked for shuttling
 SHUTTLE_LENGTH = 45.0  # m driven in that window ...
 SHUTTLE_RADIUS = 8.0  # m ... without leaving a circle this size: follow the other wall
+FRONTIER_SCAN_EVERY = 10  # control steps between scans written into the local frontier map (1 Hz) ...
+FRONTIER_BEAM_STEP = 2  # ... every second beam of them
 AGREE_M = 2.0  # m: a fine pose farther than this from the odometry-carried coarse pose disagrees ...
 AGREE_DEG = 30.0  # ... or turned more than this
 
@@ -107,7 +110,8 @@ class Session:
         # Back and forth over the same few metres for minutes (a dead end behind a material stack
         # the followed wall leads around, targets that keep failing): a longer, wider loop.
         self.shuttles = ConfinementWatch(SHUTTLE_WINDOW_S, SHUTTLE_LENGTH, SHUTTLE_RADIUS)
-        self.escape: BugNavigator | None = None  # driving out of a loop
+        self.escape: BugNavigator | RouteNavigator | None = None  # driving out of a loop
+        self.local_map = LocalMap()  # what the lidar has seen, for frontier-guided loop escapes
         self.loop_escape_until = -1.0  # s
         self.last_feature_t = 0.0  # s: when the last new feature was confirmed
         self.turned = 0.0  # rad turned since the look or recovery rotation began
@@ -134,6 +138,10 @@ class Session:
 
     def _record_frame(self, frame: SensorFrame, step: int) -> None:
         self.perception.record_frame(frame, step)
+        if frame.scan is not None and step % FRONTIER_SCAN_EVERY == 0:
+            s = frame.scan
+            k = FRONTIER_BEAM_STEP
+            self.local_map.integrate(frame.odom, s.angles[::k], s.ranges[::k], s.range_max)
         if frame.truth is not None:
             self.result.true_path.append(frame.truth.as_tuple())
         self.result.odom_path.append(frame.odom.as_tuple())
@@ -221,8 +229,14 @@ class Session:
         else:
             v, w = wall_follow(scan, self.side, self.follow)
         if self._looping(frame):
-            # Circling between obstacles: drive out along the most open direction, then resume.
-            self.escape = BugNavigator(self._open_point(frame, scan), BugParams(follow=self.follow))
+            # Circling (between obstacles, in an open hall with no wall in reach, round a room): drive
+            # to the nearest unexplored opening the lidar has seen (a frontier), else out along the
+            # most open direction; then resume.
+            route = self.local_map.plan(frame.odom)
+            if route:
+                self.escape = RouteNavigator(route, BugParams(follow=self.follow))
+            else:
+                self.escape = BugNavigator(self._open_point(frame, scan), BugParams(follow=self.follow))
             self.loop_escape_until = frame.t + LOOP_ESCAPE_S
             self.result.loop_escapes += 1
             self._note(frame.t, "loop escape")
