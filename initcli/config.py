@@ -19,6 +19,7 @@ from bimtools import checks
 from bimtools.checks import check_finite_tree, range_problem
 from bimtools.errors import InputError
 from bimtools.schemas import schema_path
+from initcli.core.particle_filter import LaserModel
 from initcli.core.wall_following import WallFollowParams
 from initcli.match.pipeline import MatchOptions
 
@@ -295,7 +296,29 @@ def parse_config(doc: Any, source: Path | None = None) -> SessionConfig:
         )
     if not config.site.path:
         raise InputError(f"{where}: site.path: required (an IFC file or a bim-extract output folder)")
+    check_resources(config, where)
     return config
+
+
+MAX_FILTER_BYTES = 2**30  # the fine-tuning filter's working arrays: particles x beams
+MAX_IMAGE_PIXELS = 4096 * 4096  # the camera image the detector renders
+
+
+def check_resources(config: SessionConfig, where: str) -> None:
+    """Memory the session will need, checked before it starts (not met as a MemoryError later)."""
+    beams = min(config.lidar.beams, LaserModel().beams)  # the likelihood field uses at most these
+    need = config.fine_tuning.particles * beams * 8 * 8  # ~8 float64 arrays of particles x beams
+    if config.fine_tuning.enabled and need > MAX_FILTER_BYTES:
+        raise InputError(
+            f"{where}: fine_tuning.particles: {config.fine_tuning.particles} particles x {beams} beams need "
+            f"~{need / 2**30:.1f} GiB (at most {MAX_FILTER_BYTES / 2**30:.0f} GiB); use fewer particles"
+        )
+    pixels = config.camera.width * config.camera.height
+    if pixels > MAX_IMAGE_PIXELS:
+        raise InputError(
+            f"{where}: camera.width x camera.height: {config.camera.width} x {config.camera.height} = "
+            f"{pixels} pixels is above the maximum {MAX_IMAGE_PIXELS} (4096 x 4096)"
+        )
 
 
 def load_config(path: Path) -> SessionConfig:
