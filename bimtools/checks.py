@@ -165,7 +165,7 @@ def check_output_dir(path: Path, option: str, markers: Iterable[str], force: boo
     for parent in [path, *path.parents]:
         if parent.exists() and not parent.is_dir():
             what = "is a file" if parent == path else f"{parent} is a file"
-            raise InputError(f"{option} {path}: {what}, expected a folder (give a new or an output folder)")
+            raise InputError(f"{option} {path}: {what}, expected a folder")
         if parent.exists():
             break
     if not path.is_dir() or force:
