@@ -89,7 +89,7 @@ def rasterise(plan: FloorPlan, resolution: float) -> tuple[OccupancyGrid, GridFr
     frame = GridFrame(extent.bounds if not extent.is_empty else (0.0, 0.0, 1.0, 1.0), resolution)
     if frame.rows * frame.cols > MAX_GRID_PIXELS:
         raise InputError(
-            f"storey {plan.storey.name!r}: the map would be {frame.cols} x {frame.rows} pixels at "
+            f"storey {plan.storey!r}: the map would be {frame.cols} x {frame.rows} pixels at "
             f"--resolution {resolution:g} (at most {MAX_GRID_PIXELS}); use a coarser --resolution"
         )
     cells = frame.blank(UNKNOWN)

@@ -327,7 +327,8 @@ EVAL = [
             "--out",
             _results(
                 w,
-                b'{"site": "s", "start": 0, "method": "bim", "success": true, "reason": "x", "distance_m": NaN}\n',
+                b'{"site": "s", "start": 0, "method": "bim", "success": true, "reason": "x", '
+                b'"distance_m": NaN}\n',
             ),
             "--resume",
         ],
