@@ -99,7 +99,7 @@ def read_text(path: Path, what: str, encoding: str = "utf-8") -> str:
     try:
         data = path.read_bytes()
     except FileNotFoundError:
-        raise InputError(f"{path}: no such file ({what} expected)") from None
+        raise InputError(f"{path}: cannot read {what}: No such file") from None
     except IsADirectoryError:
         raise InputError(f"{path}: is a folder, expected {what}") from None
     except OSError as exc:

@@ -12,6 +12,8 @@ from bimtools.errors import InputError
 
 def read_json(path: Path) -> Any:
     path = Path(path)
+    if not path.exists():
+        raise InputError(f"{path}: cannot read: No such file")
     text = read_text(path, "a JSON file")
     try:
         doc = json.loads(text)

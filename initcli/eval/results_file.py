@@ -90,7 +90,7 @@ def parse_record(doc: object, where: str) -> TrialRecord:
 def read_results(path: Path) -> list[TrialRecord]:
     """The records of ``results.jsonl``. A last line cut short (an interrupted run) is dropped."""
     path = Path(path)
-    text = read_text(path, "an eval results file (JSON Lines)")
+    text = read_text(path, "results")
     lines = text.split("\n")
     out = []
     for number, line in enumerate(lines, start=1):

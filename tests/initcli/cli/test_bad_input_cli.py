@@ -529,7 +529,7 @@ OTHER = [
     ("publish-pose NaN pose", lambda w, s: ["publish-pose", _summary(w, "NaN"), "--dry-run"], "nan"),
     ("publish-pose huge pose", lambda w, s: ["publish-pose", _summary(w, "1e300"), "--dry-run"], "pose.x"),
     ("publish-pose --port 0", lambda w, s: ["publish-pose", "x.json", "--port", "0"], "--port"),
-    ("publish-pose missing", lambda w, s: ["publish-pose", "missing.json", "--dry-run"], "no such file"),
+    ("publish-pose missing", lambda w, s: ["publish-pose", "missing.json", "--dry-run"], "No such file"),
     ("survey --spacing nan", lambda w, s: ["survey", str(s), "--spacing", "nan"], "--spacing"),
     ("survey --spacing 0", lambda w, s: ["survey", str(s), "--spacing", "0"], "--spacing"),
     ("survey --headings 0", lambda w, s: ["survey", str(s), "--headings", "0"], "--headings"),
