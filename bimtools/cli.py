@@ -14,7 +14,17 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TaskID, TextC
 from rich.table import Table
 
 from bimtools import __version__
+from bimtools.checks import check_output_dir, number_option
 from bimtools.errors import EXIT_BAD_INPUT, InputError
+from bimtools.extract.settings import (
+    DEFAULT_RESOLUTION,
+    DEFAULT_SECTION_HEIGHT,
+    RESOLUTION_RANGE,
+    SECTION_HEIGHT_RANGE,
+)
+
+PROG = "bim-extract"
+SITE_MARKERS = ("site.json",)  # an output folder holding one was written by bim-extract
 
 app = typer.Typer(add_completion=False, pretty_exceptions_enable=False, rich_markup_mode=None)
 err = Console(stderr=True)
@@ -86,8 +96,23 @@ def extract(
     categories: Annotated[
         Path | None, typer.Option(help="categories YAML overriding the shipped default")
     ] = None,
-    section_height: Annotated[float, typer.Option(help="cut height above each storey's elevation (m)")] = 1.0,
-    resolution: Annotated[float, typer.Option(help="occupancy grid resolution (m/pixel)")] = 0.05,
+    section_height: Annotated[
+        float,
+        typer.Option(
+            help="cut height above each storey's elevation (m, (0, 10])",
+            callback=number_option(PROG, **SECTION_HEIGHT_RANGE),
+        ),
+    ] = DEFAULT_SECTION_HEIGHT,
+    resolution: Annotated[
+        float,
+        typer.Option(
+            help="occupancy grid resolution (m/pixel, [0.005, 1])",
+            callback=number_option(PROG, **RESOLUTION_RANGE),
+        ),
+    ] = DEFAULT_RESOLUTION,
+    force: Annotated[
+        bool, typer.Option("--force", help="replace an output folder that holds other files than a site's")
+    ] = False,
     as_json: Annotated[
         bool, typer.Option("--json", help="print the manifest (site.json) instead of a table")
     ] = False,
@@ -103,16 +128,17 @@ def extract(
         return
     progress = LazyProgress("geometry")
     try:
+        target = outdir if outdir is not None else Path.cwd() / f"{model.stem}_site"
+        check_output_dir(target, "-o/--outdir", SITE_MARKERS, force)
         category_set = load_categories(categories) if categories is not None else load_categories()
         site = extract_site(model, category_set, storey, section_height, resolution, progress=progress)
         progress.close()
-        target = outdir if outdir is not None else Path.cwd() / f"{model.stem}_site"
         manifest = write_site(target, site)
         for warning in site.warnings:
             print(f"bim-extract: warning: {warning}", file=sys.stderr)
     except InputError as exc:
         progress.close()
-        print(f"bim-extract: error: {exc}", file=sys.stderr)
+        print(f"{PROG}: error: {' '.join(str(exc).split())}", file=sys.stderr)
         raise typer.Exit(EXIT_BAD_INPUT) from None
     if as_json:
         for note in site.notes:

@@ -15,10 +15,12 @@ from pathlib import Path
 from typing import Any
 
 import jsonschema
-import yaml
 
+from bimtools import checks
+from bimtools.checks import check_finite_tree, range_problem
 from bimtools.errors import InputError
 from bimtools.schemas import schema_path
+from initcli.core.particle_filter import LaserModel
 from initcli.core.verification import VerificationParams
 from initcli.core.wall_following import WallFollowParams
 from initcli.match.pipeline import MatchOptions
@@ -304,8 +306,8 @@ def _message(error: jsonschema.ValidationError) -> tuple[str, str]:
             f"expected one of {', '.join(map(str, error.validator_value))}, got {_describe(error.instance)}",
         )
     if v in ("minimum", "exclusiveMinimum", "maximum", "exclusiveMaximum"):
-        words = {"minimum": ">=", "exclusiveMinimum": ">", "maximum": "<=", "exclusiveMaximum": "<"}[v]
-        return path, f"expected a number {words} {error.validator_value}, got {_describe(error.instance)}"
+        bound = {"minimum": "minimum", "exclusiveMinimum": "above", "maximum": "maximum"}.get(v, "below")
+        return path, range_problem(error.instance, **{bound: error.validator_value}) or error.message
     if v == "additionalProperties":
         extra = sorted(set(error.instance) - set(error.schema.get("properties", {})))
         where = f"{path}." if path else ""
@@ -331,12 +333,16 @@ def _merge(instance: Any, doc: dict) -> Any:
         if dataclasses.is_dataclass(current) and isinstance(value, dict):
             _merge(current, value)
         else:
+            if isinstance(current, int) and not isinstance(current, bool) and isinstance(value, float):
+                value = int(value)  # 2e3 particles (YAML 1.2 numbers); the schema checked it is whole
             setattr(instance, f.name, value)
     return instance
 
 
 def validate_document(doc: Any, schema_path: Path, where: str) -> None:
-    """Raise :class:`InputError` naming the YAML path of the deepest schema violation."""
+    """Raise :class:`InputError` naming the YAML path of the deepest schema violation (NaN and
+    infinity first: JSON Schema's ``number`` accepts them)."""
+    check_finite_tree(doc, where)
     schema = json.loads(schema_path.read_text(encoding="utf-8"))
     validator = jsonschema.Draft202012Validator(schema)
     errors = sorted(
@@ -349,18 +355,9 @@ def validate_document(doc: Any, schema_path: Path, where: str) -> None:
 
 
 def read_yaml(path: Path, what: str) -> Any:
-    """The YAML document at ``path``; unreadable files and syntax errors raise :class:`InputError`."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read {what}: {exc.strerror or exc}") from None
-    try:
-        return yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        line = f":{mark.line + 1}" if mark is not None else ""
-        raise InputError(f"{path}{line}: invalid YAML ({getattr(exc, 'problem', exc)})") from None
+    """The YAML document at ``path``; unreadable or binary files, syntax errors and numbers that are
+    not finite raise :class:`InputError` (:func:`bimtools.checks.read_yaml`)."""
+    return checks.read_yaml(path, what)
 
 
 def parse_config(doc: Any, source: Path | None = None) -> SessionConfig:
@@ -378,7 +375,29 @@ def parse_config(doc: Any, source: Path | None = None) -> SessionConfig:
         )
     if not config.site.path:
         raise InputError(f"{where}: site.path: required (an IFC file or a bim-extract output folder)")
+    check_resources(config, where)
     return config
+
+
+MAX_FILTER_BYTES = 2**30  # the fine-tuning filter's working arrays: particles x beams
+MAX_IMAGE_PIXELS = 4096 * 4096  # the camera image the detector renders
+
+
+def check_resources(config: SessionConfig, where: str) -> None:
+    """Memory the session will need, checked before it starts (not met as a MemoryError later)."""
+    beams = min(config.lidar.beams, LaserModel().beams)  # the likelihood field uses at most these
+    need = config.fine_tuning.particles * beams * 8 * 8  # ~8 float64 arrays of particles x beams
+    if config.fine_tuning.enabled and need > MAX_FILTER_BYTES:
+        raise InputError(
+            f"{where}: fine_tuning.particles: {config.fine_tuning.particles} particles x {beams} beams need "
+            f"~{need / 2**30:.1f} GiB (at most {MAX_FILTER_BYTES / 2**30:.0f} GiB); use fewer particles"
+        )
+    pixels = config.camera.width * config.camera.height
+    if pixels > MAX_IMAGE_PIXELS:
+        raise InputError(
+            f"{where}: camera.width x camera.height: {config.camera.width} x {config.camera.height} = "
+            f"{pixels} pixels is above the maximum {MAX_IMAGE_PIXELS} (4096 x 4096)"
+        )
 
 
 def with_reality(doc: dict, reality: str) -> dict:

@@ -13,9 +13,12 @@ import cv2
 import numpy as np
 from shapely.geometry.base import BaseGeometry
 
+from bimtools.errors import InputError
 from bimtools.extract.floorplan import FloorPlan
 from bimtools.extract.section import polygons_of
 from bimtools.site.records import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
+
+MAX_GRID_PIXELS = 10_000 * 10_000  # one storey's occupancy map (100 MB of uint8)
 
 _SHIFT = 4  # sub-pixel bits for cv2 drawing
 _MARGIN = 1.0  # metres of unknown around the outline
@@ -84,6 +87,11 @@ def outline(cells: np.ndarray, geometry: BaseGeometry, frame: GridFrame, value: 
 def rasterise(plan: FloorPlan, resolution: float) -> tuple[OccupancyGrid, GridFrame]:
     extent = plan.outline if not plan.outline.is_empty else plan.solid
     frame = GridFrame(extent.bounds if not extent.is_empty else (0.0, 0.0, 1.0, 1.0), resolution)
+    if frame.rows * frame.cols > MAX_GRID_PIXELS:
+        raise InputError(
+            f"storey {plan.storey!r}: the map would be {frame.cols} x {frame.rows} pixels at "
+            f"--resolution {resolution:g} (at most {MAX_GRID_PIXELS}); use a coarser --resolution"
+        )
     cells = frame.blank(UNKNOWN)
     fill(cells, plan.outline, frame, FREE)
     fill(cells, plan.solid, frame, UNKNOWN)

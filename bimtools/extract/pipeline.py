@@ -13,6 +13,7 @@ import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
+from bimtools.checks import check_number
 from bimtools.errors import InputError
 from bimtools.extract.circulation import FreeRegions, SpaceIndex
 from bimtools.extract.features import (
@@ -26,6 +27,12 @@ from bimtools.extract.floorplan import FloorPlan, ObstacleShape, build_floorplan
 from bimtools.extract.occupancy import rasterise
 from bimtools.extract.placement import opening_in_plan
 from bimtools.extract.section import polygons_of, projected_footprint, section_polygon
+from bimtools.extract.settings import (
+    DEFAULT_RESOLUTION,
+    DEFAULT_SECTION_HEIGHT,
+    RESOLUTION_RANGE,
+    SECTION_HEIGHT_RANGE,
+)
 from bimtools.ifc.categories import CategorySet, load_categories
 from bimtools.ifc.geometry import Mesh, ProgressCallback, iterate_meshes
 from bimtools.ifc.model import ModelInfo, describe_model, open_model
@@ -38,8 +45,6 @@ CURTAIN_PART_CLASSES = ("IfcPlate", "IfcMember")
 # Glazing: an obstacle over its whole plan footprint (a section at the cut meets only frame pieces).
 GLASS_CLASSES = ("IfcWindow", "IfcCurtainWall", "IfcPlate")
 GLASS_BAND = (-0.1, 2.5)  # metres around a storey's elevation whose vertices give a glass footprint
-DEFAULT_SECTION_HEIGHT = 1.0
-DEFAULT_RESOLUTION = 0.05
 BODY_BAND = (-0.2, 2.2)  # metres around a storey's elevation where a lift/stair is "on" it
 LIFT_MIN_SPAN = 1.8  # metres a lift body must reach above a storey's floor to serve it
 MERGE_DISTANCE = 0.3  # metres: features closer than this are one element exported twice
@@ -233,10 +238,8 @@ def extract_site(
 
     ``storey``: None = every storey that has features, ``"all"`` = every storey, else a name.
     """
-    if section_height <= 0:
-        raise InputError(f"--section-height must be positive, got {section_height}")
-    if resolution <= 0 or resolution > 1.0:
-        raise InputError(f"--resolution must be in (0, 1] metres, got {resolution}")
+    check_number(section_height, "--section-height", **SECTION_HEIGHT_RANGE)
+    check_number(resolution, "--resolution", **RESOLUTION_RANGE)
     categories = categories or load_categories()
     model = open_model(path)
     info = describe_model(path, model)

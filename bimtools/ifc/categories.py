@@ -11,8 +11,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import ifcopenshell
-import yaml
 
+from bimtools.checks import range_problem, read_yaml
 from bimtools.errors import InputError
 from bimtools.ifc.text import element_text, predefined_type
 
@@ -142,8 +142,9 @@ def parse_categories(doc: object, source: str) -> CategorySet:
             if item.get(key) is not None and not isinstance(item.get(key), list):
                 raise InputError(f"{where}.{key}: expected a list of rules")
         area = item.get("enclosure_max_area", 30.0)
-        if not isinstance(area, int | float) or area <= 0:
-            raise InputError(f"{where}.enclosure_max_area: expected a positive number, got {area!r}")
+        problem = range_problem(area, above=0, maximum=1e6)
+        if problem is not None:
+            raise InputError(f"{where}.enclosure_max_area: {problem} (m^2, (0, 1000000])")
         category = Category(
             name=name,
             kind=kind,
@@ -169,14 +170,5 @@ def parse_categories(doc: object, source: str) -> CategorySet:
 def load_categories(path: Path | None = None) -> CategorySet:
     """Read a categories YAML (the shipped default when ``path`` is None)."""
     path = Path(path) if path is not None else DEFAULT_CATEGORIES
-    try:
-        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read categories file: {exc.strerror or exc}") from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        line = f":{mark.line + 1}" if mark is not None else ""
-        raise InputError(
-            f"{path}{line}: invalid YAML in categories file ({getattr(exc, 'problem', exc)})"
-        ) from None
+    doc = read_yaml(path, "categories file")
     return parse_categories(doc, str(path))

@@ -12,26 +12,41 @@ from pathlib import Path
 
 @contextmanager
 def staged_directory(target: Path) -> Iterator[Path]:
-    """Yield a fresh temporary folder beside ``target``; on success it replaces ``target``.
+    """Yield a fresh hidden folder beside ``target``; on success it replaces ``target`` whole.
 
-    Files already in ``target`` that the new run does not write are kept; files it writes are
-    replaced. On an exception the temporary folder is removed and ``target`` is untouched.
+    The replacement is two renames (the old folder aside, the new one in place), so ``target`` is
+    always either the old folder or the new one. On any exit other than success -- an exception,
+    Ctrl-C (KeyboardInterrupt), a failing rename -- the staging folder is removed and ``target`` is
+    as it was. Callers check ``target`` first (:func:`bimtools.checks.check_output_dir`): a file,
+    or a folder some other tool wrote, is refused before any work starts.
     """
     target = Path(target)
     target.parent.mkdir(parents=True, exist_ok=True)
     stage = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
     try:
         yield stage
-    except BaseException:
+        replace_directory(stage, target)
+    finally:
         shutil.rmtree(stage, ignore_errors=True)
+
+
+def replace_directory(stage: Path, target: Path) -> None:
+    """Put the folder ``stage`` in the place of ``target`` (absent, or a folder); on a failure
+    ``target`` is restored and the error raised."""
+    if not target.exists():
+        os.replace(stage, target)
+        return
+    if not target.is_dir() or target.is_symlink():
+        raise NotADirectoryError(f"{target} is not a folder")
+    old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old.", dir=target.parent))
+    old.rmdir()
+    os.replace(target, old)
+    try:
+        os.replace(stage, target)
+    except BaseException:
+        os.replace(old, target)
         raise
-    target.mkdir(exist_ok=True)
-    for item in stage.iterdir():
-        destination = target / item.name
-        if destination.is_dir() and not destination.is_symlink():
-            shutil.rmtree(destination)
-        os.replace(item, destination)
-    shutil.rmtree(stage, ignore_errors=True)
+    shutil.rmtree(old, ignore_errors=True)
 
 
 def write_text_atomic(path: Path, text: str) -> None:

@@ -11,6 +11,7 @@ import math
 from collections.abc import Iterable
 from pathlib import Path
 
+from bimtools.checks import read_text
 from bimtools.errors import InputError
 from bimtools.site.records import EXTRA_COLUMNS, FEATURE_COLUMNS, TABLE1_COLUMNS, Feature
 
@@ -44,6 +45,9 @@ def write_features(path: Path, features: Iterable[Feature]) -> None:
     Path(path).write_text(format_features(features), encoding="utf-8")
 
 
+MAX_COORDINATE = 1e6  # m: positions, sizes and elevations of a building's features
+
+
 def _number(path: Path, line: int, column: str, text: str) -> float:
     try:
         value = float(text)
@@ -51,16 +55,15 @@ def _number(path: Path, line: int, column: str, text: str) -> float:
         raise InputError(f"{path}:{line}: column {column}: expected a number, got {text!r}") from None
     if not math.isfinite(value):
         raise InputError(f"{path}:{line}: column {column}: expected a finite number, got {text!r}")
+    if abs(value) > MAX_COORDINATE:
+        raise InputError(f"{path}:{line}: column {column}: {text} is outside +-{MAX_COORDINATE:g} m")
     return value
 
 
 def read_features(path: Path) -> list[Feature]:
     """Read a features.csv; raise :class:`InputError` naming ``file:line`` on a bad row."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    text = read_text(path, "a feature table (features.csv)", encoding="utf-8-sig")
     reader = csv.DictReader(io.StringIO(text))
     header = [h.strip() for h in (reader.fieldnames or [])]
     missing = [c for c in TABLE1_COLUMNS if c not in header]

@@ -6,14 +6,20 @@ import json
 from pathlib import Path
 from typing import Any
 
+from bimtools.checks import check_finite_tree, read_text
 from bimtools.errors import InputError
 
 
 def read_json(path: Path) -> Any:
     path = Path(path)
+    if not path.exists():
+        raise InputError(f"{path}: cannot read: No such file")
+    text = read_text(path, "a JSON file")
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read: {exc.strerror or exc}") from None
+        doc = json.loads(text)
+    except RecursionError:
+        raise InputError(f"{path}: JSON nested too deeply") from None
     except json.JSONDecodeError as exc:
         raise InputError(f"{path}:{exc.lineno}: not valid JSON: {exc.msg}") from None
+    check_finite_tree(doc, str(path))
+    return doc

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from bimtools.checks import read_yaml
 from bimtools.errors import InputError
 from bimtools.site.records import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
 
@@ -69,12 +70,7 @@ def _read_pgm(path: Path) -> np.ndarray:
 
 def read_map(yaml_path: Path) -> OccupancyGrid:
     yaml_path = Path(yaml_path)
-    try:
-        meta = yaml.safe_load(yaml_path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise InputError(f"{yaml_path}: cannot read: {exc.strerror or exc}") from None
-    except yaml.YAMLError as exc:
-        raise InputError(f"{yaml_path}: not valid YAML ({exc})") from None
+    meta = read_yaml(yaml_path, "a map YAML (ROS map_server)")
     for key in ("image", "resolution", "origin"):
         if not isinstance(meta, dict) or key not in meta:
             raise InputError(f"{yaml_path}: missing key {key!r}")

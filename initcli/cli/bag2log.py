@@ -14,6 +14,7 @@ from typing import Annotated
 
 import typer
 
+from bimtools.checks import check_output_file, number_option
 from bimtools.errors import EXIT_BAD_INPUT, InputError
 from initcli.io.detection_log import Record, write_log
 from initcli.ros.records import Bag2LogOptions, Bag2LogStats
@@ -89,7 +90,13 @@ def bag2log(
         str, typer.Option("--model", metavar="default|M.onnx", help="ONNX detector for colour images.")
     ] = "default",
     rate: Annotated[
-        float | None, typer.Option("--rate", metavar="HZ", help="Use at most this many images per second.")
+        float | None,
+        typer.Option(
+            "--rate",
+            metavar="HZ",
+            help="Use at most this many images per second, (0, 1000].",
+            callback=number_option("bim-init", above=0, maximum=1000),
+        ),
     ] = None,
     class_names: Annotated[
         str | None,
@@ -104,6 +111,7 @@ def bag2log(
     from initcli.ros.bag_reader import parse_class_names
 
     try:
+        check_output_file(out, "-o/--out")
         options = Bag2LogOptions(
             image_topic=image_topic,
             detections_topic=detections_topic,

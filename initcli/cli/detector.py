@@ -16,7 +16,10 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from bimtools.checks import check_output_dir, number_option
 from bimtools.errors import EXIT_BAD_INPUT, InputError
+
+PROG = "bim-init"
 
 if TYPE_CHECKING:
     from initcli.detector.metrics import Metrics
@@ -88,20 +91,46 @@ def synth(
         typer.Option("--site", metavar="SITE", help="bim-extract OUTDIR (repeat for several sites)."),
     ],
     out: Annotated[Path, typer.Option("--out", metavar="DATASET", help="Dataset folder to write.")],
-    images: Annotated[int, typer.Option("--images", metavar="N", help="Images to render.")] = 500,
+    images: Annotated[
+        int,
+        typer.Option(
+            "--images",
+            callback=number_option(PROG, minimum=1, maximum=1_000_000),
+            metavar="N",
+            help="Images to render.",
+        ),
+    ] = 500,
     size: Annotated[str, typer.Option("--size", metavar="WxH", help="Image size in pixels.")] = "320x240",
     seed: Annotated[
-        int, typer.Option("--seed", metavar="S", help="Random seed (image i depends on S, i).")
+        int,
+        typer.Option(
+            "--seed",
+            callback=number_option(PROG, minimum=0, maximum=2**32 - 1),
+            metavar="S",
+            help="Random seed (image i depends on S, i).",
+        ),
     ] = 0,
     val_fraction: Annotated[
-        float, typer.Option("--val-fraction", metavar="F", help="Share of images in the val split.")
+        float,
+        typer.Option(
+            "--val-fraction",
+            callback=number_option(PROG, minimum=0, below=1),
+            metavar="F",
+            help="Share of images in the val split.",
+        ),
     ] = 0.1,
     preview: Annotated[
         Path | None,
         typer.Option("--preview", metavar="FILE.png", help="Write a contact sheet of labelled images."),
     ] = None,
     workers: Annotated[
-        int, typer.Option("--workers", metavar="N", help="Processes; 0 = one per core (max 2).")
+        int,
+        typer.Option(
+            "--workers",
+            callback=number_option(PROG, minimum=0, maximum=64),
+            metavar="N",
+            help="Processes; 0 = one per core (max 2).",
+        ),
     ] = 0,
     depth: Annotated[
         bool, typer.Option("--depth/--no-depth", help="Also write 16-bit depth PNGs (mm).")
@@ -110,6 +139,7 @@ def synth(
         float,
         typer.Option(
             "--shuffle-classes",
+            callback=number_option(PROG, minimum=0, maximum=1),
             metavar="P",
             help="Draw each feature as a random class with this chance (training data; 0 for test sets).",
         ),
@@ -121,6 +151,7 @@ def synth(
     from initcli.detector.synth import SynthOptions, dataset_preview, write_dataset
 
     try:
+        check_output_dir(out, "--out", (), force=True)  # never over a file
         w, h = _parse_size(size)
         opts = SynthOptions(
             images=images,
@@ -173,21 +204,45 @@ def train(
     data: Annotated[
         Path, typer.Option("--data", metavar="data.yaml|COCO.json", help="YOLO data.yaml or COCO json.")
     ],
-    epochs: Annotated[int, typer.Option("--epochs", metavar="N")] = 30,
+    epochs: Annotated[
+        int, typer.Option("--epochs", callback=number_option(PROG, minimum=1, maximum=10_000), metavar="N")
+    ] = 30,
     imgsz: Annotated[
-        int, typer.Option("--imgsz", metavar="PX", help="Square input size, a multiple of 32.")
+        int,
+        typer.Option(
+            "--imgsz",
+            callback=number_option(PROG, minimum=32, maximum=2048),
+            metavar="PX",
+            help="Square input size, a multiple of 32.",
+        ),
     ] = 320,
     out: Annotated[
         Path, typer.Option("--out", metavar="model.pt", help="Checkpoint written after every epoch.")
     ] = Path("model.pt"),
     resume: Annotated[bool, typer.Option("--resume", help="Continue the checkpoint at --out.")] = False,
-    batch: Annotated[int, typer.Option("--batch", metavar="N")] = 16,
-    lr: Annotated[float, typer.Option("--lr", metavar="LR", help="AdamW learning rate.")] = 2e-3,
+    batch: Annotated[
+        int, typer.Option("--batch", callback=number_option(PROG, minimum=1, maximum=1024), metavar="N")
+    ] = 16,
+    lr: Annotated[
+        float,
+        typer.Option(
+            "--lr",
+            callback=number_option(PROG, above=0, maximum=1),
+            metavar="LR",
+            help="AdamW learning rate.",
+        ),
+    ] = 2e-3,
     device: Annotated[
         str, typer.Option("--device", metavar="auto|cpu|cuda", help="auto: a GPU when present.")
     ] = "auto",
     workers: Annotated[
-        int, typer.Option("--workers", metavar="N", help="Data loader processes; -1: auto.")
+        int,
+        typer.Option(
+            "--workers",
+            callback=number_option(PROG, minimum=-1, maximum=64),
+            metavar="N",
+            help="Data loader processes; -1: auto.",
+        ),
     ] = -1,
     time_limit: Annotated[
         float,
@@ -196,9 +251,17 @@ def train(
         ),
     ] = 0.0,
     val_max: Annotated[
-        int, typer.Option("--val-max", metavar="N", help="Validate on at most N images.")
+        int,
+        typer.Option(
+            "--val-max",
+            callback=number_option(PROG, minimum=0, maximum=10_000_000),
+            metavar="N",
+            help="Validate on at most N images.",
+        ),
     ] = 500,
-    seed: Annotated[int, typer.Option("--seed", metavar="S")] = 0,
+    seed: Annotated[
+        int, typer.Option("--seed", callback=number_option(PROG, minimum=0, maximum=2**32 - 1), metavar="S")
+    ] = 0,
     init: Annotated[
         str | None,
         typer.Option(
@@ -311,7 +374,13 @@ def export(
     model: Annotated[Path, typer.Argument(metavar="MODEL.pt", help="A checkpoint written by train.")],
     out: Annotated[Path | None, typer.Option("-o", "--out", metavar="model.onnx")] = None,
     imgsz: Annotated[
-        int | None, typer.Option("--imgsz", metavar="PX", help="Input size (default: training size).")
+        int | None,
+        typer.Option(
+            "--imgsz",
+            callback=number_option(PROG, minimum=32, maximum=2048),
+            metavar="PX",
+            help="Input size (default: training size).",
+        ),
     ] = None,
 ) -> None:
     """Export a single-file ONNX model (static 1x3xHxW input, metadata) and verify it against PyTorch."""
@@ -360,9 +429,30 @@ def predict(
     out: Annotated[
         Path | None, typer.Option("--out", metavar="DIR", help="Write the images with boxes here.")
     ] = None,
-    conf: Annotated[float, typer.Option("--conf", metavar="S", help="Score threshold.")] = 0.25,
-    iou: Annotated[float, typer.Option("--iou", metavar="T", help="NMS IoU threshold.")] = 0.5,
-    threads: Annotated[int, typer.Option("--threads", metavar="N", help="onnxruntime intra-op threads.")] = 2,
+    conf: Annotated[
+        float,
+        typer.Option(
+            "--conf", callback=number_option(PROG, minimum=0, maximum=1), metavar="S", help="Score threshold."
+        ),
+    ] = 0.25,
+    iou: Annotated[
+        float,
+        typer.Option(
+            "--iou",
+            callback=number_option(PROG, minimum=0, maximum=1),
+            metavar="T",
+            help="NMS IoU threshold.",
+        ),
+    ] = 0.5,
+    threads: Annotated[
+        int,
+        typer.Option(
+            "--threads",
+            callback=number_option(PROG, minimum=1, maximum=256),
+            metavar="N",
+            help="onnxruntime intra-op threads.",
+        ),
+    ] = 2,
     json_out: Annotated[bool, typer.Option("--json", help="One JSON line per image.")] = False,
 ) -> None:
     """Detect doors, lifts and stairs in images; print the detections, optionally draw them."""
@@ -373,6 +463,8 @@ def predict(
 
     try:
         det = Detector(model, conf=conf, iou=iou, threads=threads)
+        if out is not None:
+            check_output_dir(out, "--out", (), force=True)  # a folder of drawn images, never over a file
         files = _images(images)
         if out is not None:
             out.mkdir(parents=True, exist_ok=True)
@@ -421,11 +513,35 @@ def evaluate(
         str, typer.Option("--split", metavar="val|train", help="Which split to evaluate.")
     ] = "val",
     conf: Annotated[
-        float, typer.Option("--conf", metavar="S", help="Score for precision and recall.")
+        float,
+        typer.Option(
+            "--conf",
+            callback=number_option(PROG, minimum=0, maximum=1),
+            metavar="S",
+            help="Score for precision and recall.",
+        ),
     ] = 0.25,
-    iou: Annotated[float, typer.Option("--iou", metavar="T", help="NMS IoU threshold.")] = 0.5,
-    max_images: Annotated[int, typer.Option("--max-images", metavar="N", help="0 = all.")] = 0,
-    threads: Annotated[int, typer.Option("--threads", metavar="N")] = 2,
+    iou: Annotated[
+        float,
+        typer.Option(
+            "--iou",
+            callback=number_option(PROG, minimum=0, maximum=1),
+            metavar="T",
+            help="NMS IoU threshold.",
+        ),
+    ] = 0.5,
+    max_images: Annotated[
+        int,
+        typer.Option(
+            "--max-images",
+            callback=number_option(PROG, minimum=0, maximum=10_000_000),
+            metavar="N",
+            help="0 = all.",
+        ),
+    ] = 0,
+    threads: Annotated[
+        int, typer.Option("--threads", callback=number_option(PROG, minimum=1, maximum=256), metavar="N")
+    ] = 2,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON document.")] = False,
 ) -> None:
     """Precision and recall (at --conf) and AP@0.5 per class of an ONNX model on a labelled dataset."""

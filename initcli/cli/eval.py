@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import shlex
+import shutil
 import sys
 import time
 from pathlib import Path
@@ -20,9 +21,10 @@ from rich.progress import (
 )
 from rich.table import Table
 
+from bimtools.checks import check_output_dir, number_option
 from bimtools.errors import EXIT_BAD_INPUT, InputError
 from initcli.config import REALITY_PROFILES
-from initcli.eval.campaign import default_workers, plan_jobs, prepare_sites, run_jobs
+from initcli.eval.campaign import check_start_poses, default_workers, plan_jobs, prepare_sites, run_jobs
 from initcli.eval.config import load_eval_config, parse_methods
 from initcli.eval.executor import make_executor
 from initcli.eval.records import TrialRecord
@@ -32,6 +34,8 @@ from initcli.eval.sweep import parse_sweep
 from initcli.eval.tables import NONE, table2, table3
 
 EXIT_INTERRUPTED = 130
+PROG = "bim-init"
+EVAL_MARKERS = ("results.jsonl", "table.md")  # an --out folder holding one was written by bim-init eval
 
 
 def _rich_table(title: str, header: list[str], rows: list[list[str]]) -> Table:
@@ -61,7 +65,12 @@ def evaluate(
     ] = None,
     starts: Annotated[
         int | None,
-        typer.Option("--starts", metavar="N", min=1, help="Starts per site (overrides the config)."),
+        typer.Option(
+            "--starts",
+            metavar="N",
+            help="Starts per site, 1-100000 (overrides the config).",
+            callback=number_option(PROG, minimum=1, maximum=100000),
+        ),
     ] = None,
     methods: Annotated[
         str | None,
@@ -71,11 +80,19 @@ def evaluate(
     ] = None,
     workers: Annotated[
         int | None,
-        typer.Option("--workers", metavar="W", min=1, help="Parallel processes [default: all cores]."),
+        typer.Option(
+            "--workers",
+            metavar="W",
+            help="Parallel processes, 1-1024 [default: all cores].",
+            callback=number_option(PROG, minimum=1, maximum=1024),
+        ),
     ] = None,
     out: Annotated[Path, typer.Option("--out", metavar="DIR", help="Output folder.")] = Path("eval_results"),
     resume: Annotated[
         bool, typer.Option("--resume", help="Keep DIR/results.jsonl and run only the trials it lacks.")
+    ] = False,
+    force: Annotated[
+        bool, typer.Option("--force", help="Use an --out folder that holds other files than an eval's.")
     ] = False,
     sweep: Annotated[
         str | None,
@@ -111,6 +128,7 @@ def evaluate(
     """Reproduce the paper's Tables 2 and 3: success, distance and error of every method over many starts."""
     console = Console(stderr=False)
     err = Console(stderr=True)
+    existed = out.exists()
     try:
         eval_config = load_eval_config(config)
         chosen = parse_methods(methods) if methods else eval_config.methods
@@ -123,12 +141,16 @@ def evaluate(
             if unknown:
                 names = ", ".join(x.name for x in eval_config.sites)
                 raise InputError(f"--sites: no site {unknown[0]!r} in the config (sites: {names})")
+        check_output_dir(out, "--out", EVAL_MARKERS, force)
         results_path = out / "results.jsonl"
         previous: list[TrialRecord] = read_results(results_path) if resume and results_path.exists() else []
         with err.status("preparing site models (extracting IFC)..."):
             prepared = prepare_sites(eval_config, out / ".sites", only)
+            check_start_poses(eval_config, prepared)
         runner = make_executor(executor, workers, address)
     except InputError as exc:
+        if not existed:  # nothing left behind: the site models extracted so far go too
+            shutil.rmtree(out, ignore_errors=True)
         print(f"bim-init: error: {' '.join(str(exc).split())}", file=sys.stderr)
         raise typer.Exit(EXIT_BAD_INPUT) from None
     n_workers = runner.slots if executor != "local" else workers or default_workers()

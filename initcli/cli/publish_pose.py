@@ -15,13 +15,22 @@ from typing import Annotated
 
 import typer
 
+from bimtools.checks import number_option
 from bimtools.errors import EXIT_BAD_INPUT, InputError
 
 
 def publish_pose(
     summary: Annotated[Path, typer.Argument(metavar="SUMMARY.json", help="summary.json of bim-init run.")],
     host: Annotated[str, typer.Option("--host", metavar="HOST", help="rosbridge server.")] = "localhost",
-    port: Annotated[int, typer.Option("--port", metavar="PORT", help="rosbridge port.")] = 9090,
+    port: Annotated[
+        int,
+        typer.Option(
+            "--port",
+            metavar="PORT",
+            help="rosbridge port, 1-65535.",
+            callback=number_option("bim-init", minimum=1, maximum=65535),
+        ),
+    ] = 9090,
     dry_run: Annotated[
         bool, typer.Option("--dry-run", help="Print the message as JSON instead of sending it.")
     ] = False,

@@ -15,6 +15,7 @@ from rich.console import Console
 from rich.live import Live
 from rich.table import Table
 
+from bimtools.checks import check_number, check_output_dir, check_output_file, number_option
 from bimtools.errors import EXIT_BAD_INPUT, InputError
 from bimtools.site.atomic import staged_directory
 from initcli.config import SessionConfig, config_to_dict, load_config
@@ -24,13 +25,19 @@ from initcli.session.result import SessionResult
 from initcli.session.setup import prepare_site, prepare_world, sim_session
 
 EXIT_FAILED = 1
+PROG = "bim-init"
+SEED_MAX = 2**32 - 1  # numpy seeds
+RUN_MARKERS = ("summary.json",)  # an --out folder holding one was written by bim-init run
 
 
 def parse_start(text: str) -> Pose2D:
+    """``--start x,y,yaw_degrees``: finite, x and y within +-1000000 m, yaw within +-3600 degrees."""
     try:
         x, y, yaw = (float(v) for v in text.split(","))
     except ValueError:
         raise InputError(f"--start: expected x,y,yaw_degrees (e.g. 12.5,3.0,90), got {text!r}") from None
+    for name, value, bound in (("x", x, 1e6), ("y", y, 1e6), ("yaw", yaw, 3600.0)):
+        check_number(value, f"--start {name}", minimum=-bound, maximum=bound)
     return Pose2D(x, y, math.radians(yaw))
 
 
@@ -201,7 +208,14 @@ def run(
         Path | None,
         typer.Option("--out", metavar="DIR", help="Output folder [default: ./runs/<timestamp>/]."),
     ] = None,
-    seed: Annotated[int | None, typer.Option("--seed", help="Override sim.seed.")] = None,
+    seed: Annotated[
+        int | None,
+        typer.Option(
+            "--seed",
+            help="Override sim.seed (0-4294967295).",
+            callback=number_option(PROG, minimum=0, maximum=SEED_MAX),
+        ),
+    ] = None,
     start: Annotated[
         str | None,
         typer.Option("--start", metavar="x,y,yaw", help="Override sim.start (BIM frame, yaw in degrees)."),
@@ -210,6 +224,9 @@ def run(
         bool, typer.Option("--quiet", help="No live view or table; print the summary path only.")
     ] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print summary.json.")] = False,
+    force: Annotated[
+        bool, typer.Option("--force", help="Replace an --out folder that holds other files than a run's.")
+    ] = False,
     record: Annotated[
         Path | None,
         typer.Option("--record", metavar="SESSION.mcap", help="Also write the session as a ROS 2 bag."),
@@ -222,6 +239,9 @@ def run(
         start_pose = parse_start(start) if start else None
         the_seed = int(cfg.sim.seed if seed is None else seed)
         target = out or Path("runs") / datetime.now().strftime("%Y%m%d-%H%M%S")
+        check_output_dir(target, "--out", RUN_MARKERS, force)
+        if record is not None:
+            check_output_file(record, "--record")
         if cfg.robot.driver == "rosbridge":
             if start_pose is not None:
                 raise InputError("--start: only for the simulated robot (robot.driver: sim)")

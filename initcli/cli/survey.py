@@ -13,6 +13,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from bimtools.checks import check_output_dir, number_option
 from bimtools.errors import EXIT_BAD_INPUT, InputError
 from bimtools.site.atomic import write_text_atomic
 from bimtools.site.load import load_site
@@ -34,6 +35,10 @@ from initcli.survey.uniqueness import UniquenessParams
 
 EXIT_INTERRUPTED = 130
 SURVEY_VERSION = 1
+
+
+PROG = "bim-init"
+SURVEY_MARKERS = ("survey.json",)  # an --out folder holding one was written by bim-init survey
 
 
 def survey_params(config: SessionConfig, spacing: float, headings: int) -> SurveyParams:
@@ -66,13 +71,31 @@ def survey(
         ),
     ] = None,
     spacing: Annotated[
-        float, typer.Option("--spacing", metavar="M", min=0.1, help="Metres between start positions.")
+        float,
+        typer.Option(
+            "--spacing",
+            metavar="M",
+            help="Metres between start positions, [0.1, 100].",
+            callback=number_option(PROG, minimum=0.1, maximum=100),
+        ),
     ] = 1.0,
     headings: Annotated[
-        int, typer.Option("--headings", metavar="N", min=1, help="Start headings per position.")
+        int,
+        typer.Option(
+            "--headings",
+            metavar="N",
+            help="Start headings per position, 1-360.",
+            callback=number_option(PROG, minimum=1, maximum=360),
+        ),
     ] = 4,
     landmarks: Annotated[
-        int, typer.Option("--landmarks", metavar="N", min=0, max=2, help="Extra landmarks to suggest (0-2).")
+        int,
+        typer.Option(
+            "--landmarks",
+            metavar="N",
+            help="Extra landmarks to suggest (0-2).",
+            callback=number_option(PROG, minimum=0, maximum=2),
+        ),
     ] = 2,
     executor: Annotated[
         str,
@@ -82,17 +105,27 @@ def survey(
     ] = "local",
     workers: Annotated[
         int | None,
-        typer.Option("--workers", metavar="W", min=1, help="Local processes [default: all cores]."),
+        typer.Option(
+            "--workers",
+            metavar="W",
+            help="Local processes, 1-1024 [default: all cores].",
+            callback=number_option(PROG, minimum=1, maximum=1024),
+        ),
     ] = None,
     address: Annotated[
         str | None, typer.Option("--address", metavar="ADDR", help="Ray cluster (auto, ray://host:10001).")
     ] = None,
+    force: Annotated[
+        bool,
+        typer.Option("--force", help="Use an --out folder holding other files than a survey's."),
+    ] = False,
 ) -> None:
     """Map the distance to a unique match over a floor from its features and walls alone (no noise):
     sampled starts look round, follow the wall and match until one hypothesis is left."""
     console = Console()
     err = Console(stderr=True)
     try:
+        check_output_dir(out, "--out", SURVEY_MARKERS, force)
         model = load_site(site)
         session = load_config(config) if config is not None else SessionConfig()
         params = survey_params(session, spacing, headings)

@@ -43,8 +43,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
+from bimtools.checks import read_text, read_yaml
 from bimtools.errors import InputError
 
 IMAGE_SUFFIXES = {".jpg", ".jpeg", ".png", ".bmp", ".webp", ".tif", ".tiff"}
@@ -139,7 +139,7 @@ def _list_images(source: Path, where: Path) -> list[Path]:
         return sorted(p for p in source.rglob("*") if p.suffix.lower() in IMAGE_SUFFIXES)
     if source.suffix.lower() == ".txt":
         out = []
-        for line in source.read_text(encoding="utf-8").splitlines():
+        for line in read_text(source, "an image list (.txt)").splitlines():
             line = line.strip()
             if not line:
                 continue
@@ -198,12 +198,7 @@ def read_yolo_labels(path: Path, nc: int) -> tuple[np.ndarray, np.ndarray]:
 
 def load_yolo(yaml_path: Path) -> Dataset:
     yaml_path = Path(yaml_path)
-    try:
-        doc = yaml.safe_load(yaml_path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise InputError(f"{yaml_path}: cannot read: {exc.strerror or exc}") from None
-    except yaml.YAMLError as exc:
-        raise InputError(f"{yaml_path}: invalid YAML ({getattr(exc, 'problem', exc)})") from None
+    doc = read_yaml(yaml_path, "a YOLO data.yaml")
     if not isinstance(doc, dict):
         raise InputError(f"{yaml_path}: expected a mapping with path, train, val and names")
     names = _names(doc, yaml_path)
@@ -379,10 +374,11 @@ def _coco_items(json_path: Path, doc: dict, cat_index: dict[int, int]) -> list[D
 
 
 def _read_json(path: Path) -> dict:
+    text = read_text(path, "a COCO detection file (JSON)")
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read: {exc.strerror or exc}") from None
+        doc = json.loads(text)
+    except RecursionError:
+        raise InputError(f"{path}: JSON nested too deeply") from None
     except json.JSONDecodeError as exc:
         raise InputError(f"{path}:{exc.lineno}: invalid JSON ({exc.msg})") from None
     if not isinstance(doc, dict) or "images" not in doc or "categories" not in doc:

@@ -6,14 +6,16 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
+from bimtools.site.load import load_site
 from initcli.config import load_config
+from initcli.core.geometry import Pose2D
 from initcli.eval.config import EvalConfig, EvalSite
 from initcli.eval.executor import Executor, LocalExecutor, map_unordered
 from initcli.eval.executor import default_workers as default_workers
 from initcli.eval.records import TrialKey, TrialRecord
 from initcli.eval.sweep import Sweep, sweep_label
 from initcli.eval.trial import TrialJob, run_trial, trial_seed
-from initcli.session.setup import prepare_site, prepare_world
+from initcli.session.setup import check_start, choose_storey, prepare_site, prepare_world
 
 
 @dataclass(frozen=True)
@@ -42,6 +44,21 @@ def prepare_sites(config: EvalConfig, workdir: Path, only: Iterable[str] | None 
             worlds[key] = Path(world.root) if world is not None else None
         out.append(PreparedSite(site, extracted[key], worlds[key]))
     return out
+
+
+def check_start_poses(config: EvalConfig, sites: list[PreparedSite]) -> None:
+    """Every explicit start (``sites.N.start_poses``) is on a free cell of its storey's map; else
+    one :class:`InputError` before any trial runs."""
+    for index, site in enumerate(config.sites):
+        prepared = next((p for p in sites if p.site is site), None)
+        if prepared is None or not site.start_poses:
+            continue
+        session_config = load_config(site.config)
+        model = load_site(prepared.site_dir)
+        storey, _ = choose_storey(session_config, model)
+        for k, pose in enumerate(site.start_poses):
+            where = f"{config.source}: sites.{index}.start_poses.{k}"
+            check_start(session_config, model.storeys[storey], Pose2D(*pose), where)
 
 
 def plan_jobs(

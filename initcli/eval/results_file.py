@@ -6,9 +6,11 @@ import csv
 import dataclasses
 import io
 import json
+import math
 from pathlib import Path
 from typing import IO
 
+from bimtools.checks import read_text
 from bimtools.errors import InputError
 from bimtools.site.atomic import write_text_atomic
 from initcli.eval.records import TrialRecord
@@ -21,6 +23,53 @@ def record_line(record: TrialRecord) -> str:
     return json.dumps(dataclasses.asdict(record), separators=(",", ":"))
 
 
+_KINDS = {
+    "site": "str",
+    "start": "int",
+    "method": "str",
+    "success": "bool",
+    "reason": "str",
+    "features": "int",
+    "distance_m": "number",
+    "error_translation_m": "number?",
+    "error_rotation_deg": "number?",
+    "confident_wrong": "bool",
+    "seconds": "number",
+    "localised": "bool",
+    "seed": "int",
+    "start_pose": "numbers",
+    "pose": "numbers?",
+    "truth": "numbers?",
+    "sweep_key": "str",
+    "sweep_value": "str",
+}
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _type_problem(key: str, value: object) -> str | None:
+    """What is wrong with one field of a resumed record (None: nothing)."""
+    kind = _KINDS.get(key, "")
+    if kind.endswith("?"):
+        if value is None:
+            return None
+        kind = kind[:-1]
+    ok = {
+        "str": isinstance(value, str),
+        "int": isinstance(value, int) and not isinstance(value, bool),
+        "bool": isinstance(value, bool),
+        "number": _is_number(value),
+        "numbers": isinstance(value, list) and all(_is_number(v) for v in value),
+    }.get(kind, True)
+    return (
+        None
+        if ok
+        else f"expected {kind.replace('numbers', 'a list of finite numbers')}, got {json.dumps(value)[:40]}"
+    )
+
+
 def parse_record(doc: object, where: str) -> TrialRecord:
     if not isinstance(doc, dict):
         raise InputError(f"{where}: expected a JSON object")
@@ -28,6 +77,10 @@ def parse_record(doc: object, where: str) -> TrialRecord:
     if missing:
         raise InputError(f"{where}: missing {missing[0]!r}")
     known = {k: v for k, v in doc.items() if k in _FIELDS}
+    for key, value in known.items():
+        problem = _type_problem(key, value)
+        if problem:
+            raise InputError(f"{where}: {key!r}: {problem}")
     try:
         return TrialRecord(**known)
     except TypeError as exc:
@@ -37,10 +90,7 @@ def parse_record(doc: object, where: str) -> TrialRecord:
 def read_results(path: Path) -> list[TrialRecord]:
     """The records of ``results.jsonl``. A last line cut short (an interrupted run) is dropped."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read results: {exc.strerror or exc}") from None
+    text = read_text(path, "results")
     lines = text.split("\n")
     out = []
     for number, line in enumerate(lines, start=1):

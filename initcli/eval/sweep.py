@@ -4,9 +4,12 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import json
 from dataclasses import dataclass
 
+from bimtools.checks import check_number
 from bimtools.errors import InputError
+from initcli.config import SCHEMA_PATH as SITE_SCHEMA
 from initcli.config import SessionConfig
 
 # Short names for the parameters the issue asks to sweep; any dotted config path works too.
@@ -83,7 +86,36 @@ def parse_sweep(text: str, config: SessionConfig | None = None) -> Sweep:
         current, bool
     ):
         raise InputError(f"--sweep {key}: {path} is not a number")
+    for value in numbers:
+        _check_value(key, path, value, scaled=dataclasses.is_dataclass(current))
     return Sweep(key, path, numbers)
+
+
+def _field_schema(path: str) -> dict:
+    """The site-config schema of the field at a dotted path (its range)."""
+    node: dict = json.loads(SITE_SCHEMA.read_text(encoding="utf-8"))
+    for part in path.split("."):
+        node = node.get("properties", {}).get(part, {})
+    return node
+
+
+def _check_value(key: str, path: str, value: float, scaled: bool) -> None:
+    """A swept value is finite and within the field's range in the site-config schema; a factor
+    on a section (``odometry_drift``) is within [0, 1000]."""
+    name = f"--sweep {key}"
+    if scaled:
+        check_number(value, name, minimum=0, maximum=1000)
+        return
+    schema = _field_schema(path)
+    bounds = {
+        "minimum": schema.get("minimum"),
+        "maximum": schema.get("maximum"),
+        "above": schema.get("exclusiveMinimum"),
+        "below": schema.get("exclusiveMaximum"),
+    }
+    check_number(value, name, **bounds)
+    if schema.get("type") == "integer" and not value.is_integer():
+        raise InputError(f"{name}: {path} takes whole numbers, got {value:g}")
 
 
 def apply_sweep(config: SessionConfig, sweep: Sweep, value: float) -> SessionConfig:

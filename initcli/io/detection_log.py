@@ -162,9 +162,32 @@ def _num(obj: dict, key: str, where: str = "") -> float:
     v = obj[key]
     if isinstance(v, bool) or not isinstance(v, int | float):
         raise _Bad(f"field {where}{key!r} must be a number, got {json.dumps(v)}")
+    if isinstance(v, int) and abs(v) > 2**1000:
+        raise _Bad(f"field {where}{key!r} is too large a number")
     if not math.isfinite(v):
         raise _Bad(f"field {where}{key!r} must be finite, got {v}")
     return float(v)
+
+
+MAX_COORDINATE = 1e6  # m: odometry, poses and features in the log (a building is far smaller)
+MAX_ANGLE = 1e4  # rad: headings (unwrapped odometry yaw may grow, but not without bound)
+MAX_TIME = 1e10  # s
+
+
+def _coord(obj: dict, key: str, where: str = "", bound: float = MAX_COORDINATE, unit: str = "m") -> float:
+    """A finite number within +-bound (metres of odometry, radians of heading, seconds)."""
+    v = _num(obj, key, where)
+    if abs(v) > bound:
+        raise _Bad(f"field {where}{key!r}: {v:g} {unit} is outside +-{bound:g} {unit}")
+    return v
+
+
+def _t(obj: dict) -> float:
+    return _coord(obj, "t", bound=MAX_TIME, unit="s")
+
+
+def _yaw(obj: dict, where: str = "") -> float:
+    return _coord(obj, "yaw", where, bound=MAX_ANGLE, unit="rad")
 
 
 def _str(obj: dict, key: str, where: str = "") -> str:
@@ -236,30 +259,30 @@ def _parse_object(o: Any, i: int) -> DetectedObject:
     bbox = o.get("bbox")
     if not isinstance(bbox, list) or len(bbox) != 4:
         raise _Bad(f"field {where}'bbox' must be a list of 4 numbers [u1, v1, u2, v2]")
-    box = tuple(_num({"v": b}, "v", f"{where}bbox.") for b in bbox)
+    box = tuple(_coord({"v": b}, "v", f"{where}bbox.", bound=1e6, unit="px") for b in bbox)
     if box[2] < box[0] or box[3] < box[1]:
         raise _Bad(f"field {where}'bbox' must have u1 <= u2 and v1 <= v2, got {list(box)}")
     depth = o.get("depth", None)
     if depth is not None:
-        depth = _num(o, "depth", where)
+        depth = _coord(o, "depth", where, bound=1000.0)
     return DetectedObject(cls=_str(o, "class", where), score=_num(o, "score", where), bbox=box, depth=depth)  # type: ignore[arg-type]
 
 
 def _parse_body(kind: str, o: dict) -> Record:
     if kind == "odom":
-        return Odom(_num(o, "t"), _num(o, "x"), _num(o, "y"), _num(o, "yaw"))
+        return Odom(_t(o), _coord(o, "x"), _coord(o, "y"), _yaw(o))
     if kind == "detections":
         pose = _obj(o, "pose")
         objects = o.get("objects")
         if not isinstance(objects, list):
             raise _Bad("field 'objects' must be a list")
         return Detections(
-            _num(o, "t"),
-            Pose2D(_num(pose, "x", "pose."), _num(pose, "y", "pose."), _num(pose, "yaw", "pose.")),
+            _t(o),
+            Pose2D(_coord(pose, "x", "pose."), _coord(pose, "y", "pose."), _yaw(pose, "pose.")),
             tuple(_parse_object(obj, i) for i, obj in enumerate(objects)),
         )
     if kind == "feature":
-        return FeatureRecord(_num(o, "t"), _str(o, "class"), _num(o, "x"), _num(o, "y"))
+        return FeatureRecord(_t(o), _str(o, "class"), _coord(o, "x"), _coord(o, "y"))
     if kind == "scan":
         ranges = o.get("ranges")
         if not isinstance(ranges, list):
@@ -280,7 +303,7 @@ def _parse_body(kind: str, o: dict) -> Record:
             tuple(values),
         )
     if kind == "truth":
-        return Truth(_num(o, "t"), _num(o, "x"), _num(o, "y"), _num(o, "yaw"))
+        return Truth(_t(o), _coord(o, "x"), _coord(o, "y"), _yaw(o))
     if kind in ("state", "hypotheses"):
         t = _num(o, "t") if "t" in o else None
         data = {k: v for k, v in o.items() if k != "type"}

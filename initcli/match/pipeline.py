@@ -19,8 +19,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import yaml
 
+from bimtools.checks import check_number, read_yaml
 from bimtools.errors import InputError
 from bimtools.site.load import Site, StoreyModel, load_site
 from initcli.core.classes import ClassMap
@@ -55,6 +55,24 @@ EXIT_NO_MATCH = 4
 # 0.115 m / 2.20 deg. The paper's method uses only the last three features and wins slightly in
 # position where odometry drift dominates (ntu_hallway: 0.075 vs 0.093 m), never in heading.
 DEFAULT_POSE_METHOD = "rigid"
+
+
+OPTION_RANGES: dict[str, dict[str, float]] = {
+    "alpha": {"maximum": 50.0},  # m
+    "beta": {"maximum": 180.0},  # degrees
+    "top": {"maximum": 10000},
+    "max_outliers": {"maximum": 10},  # the search grows combinatorially
+    "pose_window": {"maximum": 10000},
+    "drift_window": {"maximum": 100000.0},  # m
+    "d_thre": {"maximum": 10.0},  # m
+    "pose_radius": {"maximum": 100.0},  # m
+    "merge_radius": {"maximum": 50.0},  # m
+    "min_sightings": {"maximum": 1000},
+    "score_threshold": {"minimum": 0.0, "maximum": 1.0},
+    "min_depth": {"maximum": 100.0},  # m
+    "max_depth": {"maximum": 100.0},  # m
+    "edge_margin": {"minimum": -10000.0, "maximum": 10000.0},  # px
+}
 
 
 @dataclass(frozen=True)
@@ -106,6 +124,12 @@ class MatchOptions:
         )
 
     def validate(self) -> None:
+        """Every option finite and within its range (the same ranges as the ``matching:`` section of
+        ``schemas/site_config.schema.json``); else one :class:`InputError` naming the option."""
+        for name, bounds in OPTION_RANGES.items():
+            value = getattr(self, name)
+            if value is not None:
+                check_number(value, f"--{name.replace('_', '-')}", **bounds)
         checks = [
             (self.alpha > 0, "--alpha must be > 0"),
             (0 < self.beta <= 180, "--beta must be in (0, 180] degrees"),
@@ -179,10 +203,7 @@ def site_class_map(site: Site) -> ClassMap:
     for path, keys in ((root / "site.yaml", ("detector", "classes")), (root / "site.json", ("classes",))):
         if not path.exists():
             continue
-        try:
-            doc = yaml.safe_load(path.read_text(encoding="utf-8"))  # YAML also reads JSON
-        except (OSError, yaml.YAMLError) as exc:
-            raise InputError(f"{path}: cannot read the class mapping ({exc})") from None
+        doc = read_yaml(path, "the class mapping")  # YAML also reads JSON
         mapping = doc
         for key in keys:
             mapping = mapping.get(key) if isinstance(mapping, dict) else None

@@ -4,14 +4,15 @@ from a finished session (``summary.json`` and its ``session.jsonl``)."""
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from bimtools.checks import check_number
 from bimtools.errors import InputError
+from bimtools.site.jsonfile import read_json
 from initcli.core.geometry import Pose2D
 from initcli.io.detection_log import Detections, HypothesesRecord, Odom, read_log
 from initcli.ros.records import InitialPose
@@ -97,8 +98,14 @@ def session_initial_pose(summary: dict[str, Any], log_path: Path | None) -> Init
         final = Pose2D(float(p["x"]), float(p["y"]), math.radians(float(p["yaw_deg"])))
     except (KeyError, TypeError, ValueError):
         raise InputError("summary.json: 'pose' needs x, y and yaw_deg") from None
-    cov = covariance_6x6(summary.get("covariance"))
-    t, pose = float(summary.get("duration_s", 0.0)), final
+    for name, value, bound in (("x", final.x, 1e6), ("y", final.y, 1e6), ("yaw_deg", p["yaw_deg"], 3600.0)):
+        check_number(float(value), f"summary.json: pose.{name}", minimum=-bound, maximum=bound)
+    try:
+        cov = covariance_6x6(summary.get("covariance"))
+        duration = float(summary.get("duration_s", 0.0))
+    except (TypeError, ValueError):
+        raise InputError("summary.json: 'covariance' must be 3x3 numbers and 'duration_s' a number") from None
+    t, pose = duration, final
     if log_path is not None and log_path.exists():
         log = read_log(log_path)
         odom = log.odom
@@ -112,12 +119,7 @@ def session_initial_pose(summary: dict[str, Any], log_path: Path | None) -> Init
 
 
 def read_summary(path: Path) -> dict[str, Any]:
-    try:
-        doc = json.loads(Path(path).read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise InputError(f"{path}: not a summary.json ({exc})") from None
+    doc = read_json(Path(path))  # text, valid JSON, every number finite
     if not isinstance(doc, dict) or "success" not in doc:
         raise InputError(f"{path}: not a bim-init run summary.json (no 'success')")
     return doc

@@ -405,7 +405,8 @@ class Session:
     def _out_of_limits(self, frame: SensorFrame) -> bool:
         """Fail once the session drove or took longer than its limits allow."""
         limits = self.config.limits
-        if self.driver.distance > limits.max_distance:
+        # Measured on what the robot knows (its odometry), as on a real robot: not the true path.
+        if self.perception.travel > limits.max_distance:
             self._fail(
                 frame,
                 f"moved {limits.max_distance:g} m without a unique match "

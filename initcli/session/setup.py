@@ -12,7 +12,7 @@ import numpy as np
 
 from bimtools.errors import InputError
 from bimtools.site.load import Site, StoreyModel, load_site
-from bimtools.site.records import FREE
+from bimtools.site.records import FREE, OCCUPIED
 from initcli.config import SessionConfig, as_built_params, start_pose_degrees
 from initcli.core.classes import ClassMap
 from initcli.core.geometry import Pose2D
@@ -111,6 +111,7 @@ def build_sim(
 ) -> SimSetup:
     """The simulated robot in the storey's world. ``detect_features=False`` leaves the feature
     detector out (methods that do not use it: the world, start and noise are the same)."""
+    check_start(config, site.storeys[storey], start)
     rng = np.random.default_rng(seed)
     model = world_storey(site, world_site, storey)
     circulation = Circulation.of(model)
@@ -147,7 +148,7 @@ def build_sim(
             if world.clearance(start.x, start.y, 0.0, 1.0) > config.robot.radius + 0.2:
                 break
     else:
-        check_start(start, model, world, config.robot.radius)
+        check_clearance(start, world, config.robot.radius)
         enclosed = not reachable.contains(start.x, start.y)
     assert start is not None
     n = config.sim.odometry_noise
@@ -195,16 +196,50 @@ def build_sim(
     return SimSetup(driver, start, world, storey, None if ideal else built, enclosed)
 
 
-def check_start(start: Pose2D, model: StoreyModel, world: SimWorld, radius: float) -> None:
-    """A start outside the storey's map or inside or against an obstacle is bad input."""
-    where = f"sim.start ({start.x:.2f}, {start.y:.2f})"
-    grid = model.grid
-    if grid is not None and grid.value_at(start.x, start.y) != FREE:
-        raise InputError(
-            f"{where}: not in the free space of storey {model.name!r} (outside the building or in a wall)"
-        )
+def check_clearance(start: Pose2D, world: SimWorld, radius: float) -> None:
+    """A start against an obstacle of the simulated world (clutter, a hoarding) is bad input."""
     if world.clearance(start.x, start.y, 0.0, 1.0) < radius:
-        raise InputError(f"{where}: inside or against an obstacle")
+        raise InputError(f"sim.start ({start.x:.2f}, {start.y:.2f}): inside or against an obstacle")
+
+
+def check_start(
+    config: SessionConfig, model: StoreyModel, start: Pose2D | None = None, where: str | None = None
+) -> None:
+    """An explicit start (``--start`` or ``sim.start``) must lie on a free cell of the storey's map:
+    outside the building or inside a wall is one :class:`InputError`, before anything runs.
+    ``where`` names it in the message (default: ``--start`` for ``start``, else ``sim.start``)."""
+    if start is None:
+        explicit = start_pose_degrees(config)
+        if explicit is None:
+            return
+        start = Pose2D(*explicit)
+        where = where or (f"{config.source}: sim.start" if config.source else "sim.start")
+    where = where or "--start"
+    at = f"({start.x:g}, {start.y:g})"
+    if not all(math.isfinite(v) for v in (start.x, start.y, start.yaw)):
+        raise InputError(f"{where}: {at}, {math.degrees(start.yaw):g} degrees is not a finite pose")
+    grid = model.grid
+    if grid is None:
+        return
+    from shapely.geometry import Point, Polygon
+
+    point = Point(start.x, start.y)
+    for obstacle in model.obstacles:
+        if len(obstacle.exterior) >= 3 and Polygon(obstacle.exterior, obstacle.holes).covers(point):
+            raise InputError(
+                f"{where}: {at} is inside {obstacle.ifc_class} {obstacle.element} on storey {model.name!r}"
+            )
+    value = grid.value_at(start.x, start.y)
+    if value == OCCUPIED:
+        raise InputError(f"{where}: {at} is on a wall of storey {model.name!r} (an occupied map cell)")
+    if value != FREE:
+        x0, y0 = grid.origin[0], grid.origin[1]
+        x1 = x0 + grid.shape[1] * grid.resolution
+        y1 = y0 + grid.shape[0] * grid.resolution
+        raise InputError(
+            f"{where}: {at} is outside the building on storey {model.name!r} (its map spans "
+            f"x {x0:.1f}..{x1:.1f}, y {y0:.1f}..{y1:.1f} m; a start must be on a free cell)"
+        )
 
 
 @dataclass

@@ -140,6 +140,7 @@ def test_failed_run_keeps_previous_output(tmp_path):
     out = tmp_path / "out"
     out.mkdir()
     (out / "features.csv").write_text("previous\n")
+    (out / "site.json").write_text("{}\n")  # an earlier bim-extract run's folder
     path = tmp_path / "bad.ifc"
     path.write_text("garbage")
     assert_bad_input(run_extract(str(path), "-o", str(out), cwd=tmp_path), "bad.ifc")

@@ -31,7 +31,7 @@ def test_bag2log_writes_a_valid_log(tmp_path):
     [
         (["--image-topic", "/nope"], "no topic /nope (--image-topic)"),
         (["--image-topic", "/odom"], "/odom is nav_msgs/msg/Odometry, --image-topic needs"),
-        (["--rate", "0"], "--rate must be positive"),
+        (["--rate", "0"], "--rate: 0 must be > 0"),
         (["--class-names", "door,1=lift"], "--class-names"),
     ],
 )

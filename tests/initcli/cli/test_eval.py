@@ -188,7 +188,7 @@ def test_bad_options_exit_2_with_one_line(tmp_path, args, fragment):
 @pytest.mark.parametrize(
     ("edit", "fragment"),
     [
-        ({"starts": 0}, "starts: expected a number >= 1"),
+        ({"starts": 0}, "starts: 0 is below the minimum 1"),
         ({"methods": ["bim", "gps"]}, "methods.1: expected one of"),
         ({"sites": [{"config": "missing.site.yaml"}]}, "sites.0.config:"),
         ({"sites": [{"path": "x"}]}, "sites.0.path: unknown key"),

@@ -127,7 +127,7 @@ def test_hard_starts_initialise(tmp_path, name, start, sim):
         ({"camera": {"fx": "abc"}}, 'camera.fx: expected a number, got "abc"'),
         ({"lidar": {"beam": 3}}, "lidar.beam: unknown key"),
         ({"detector": {"kind": "yolo"}}, "detector.kind: expected one of simulated, onnx"),
-        ({"robot": {"radius": -0.3}}, "robot.radius: expected a number > 0"),
+        ({"robot": {"radius": -0.3}}, "robot.radius: -0.3 must be > 0"),
         ({"site": {"path": "missing.ifc"}}, "site.path"),
     ],
 )

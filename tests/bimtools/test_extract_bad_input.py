@@ -1,0 +1,94 @@
+"""bim-extract walks a list of bad inputs: exit 2, one line on stderr, no traceback, nothing left."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from bimtools.cli import app
+from tests.helpers import SAMPLES
+
+runner = CliRunner()
+MODEL = str(SAMPLES / "ntu_hallway.ifc")
+BINARY = bytes(range(256)) * 4
+
+
+def snapshot(root: Path) -> dict[str, int]:
+    return {str(p.relative_to(root)): p.stat().st_size for p in root.rglob("*") if p.is_file()}
+
+
+@pytest.fixture()
+def work(tmp_path: Path) -> Path:
+    (tmp_path / "binary.yaml").write_bytes(BINARY)
+    (tmp_path / "latin1.yaml").write_bytes("categories:\n  - name: Caf\xe9\n".encode("latin-1"))
+    (tmp_path / "nan.yaml").write_text(
+        "categories:\n  - name: Doors\n    doors: [{classes: [IfcDoor]}]\n    enclosure_max_area: .nan\n"
+    )
+    (tmp_path / "afile").write_text("x\n")
+    (tmp_path / "other").mkdir()
+    (tmp_path / "other" / "notes.txt").write_text("someone else's\n")
+    (tmp_path / "model.ifc").write_bytes(BINARY)
+    return tmp_path
+
+
+CASES = [
+    ("--resolution nan", [MODEL, "--resolution", "nan"], "--resolution: nan is not a finite number"),
+    ("--resolution 1e-9", [MODEL, "--resolution", "1e-9"], "--resolution: 1e-09 is below the minimum 0.005"),
+    ("--resolution inf", [MODEL, "--resolution", "inf"], "--resolution"),
+    ("--resolution 5", [MODEL, "--resolution", "5"], "is above the maximum 1"),
+    (
+        "--section-height 1e308",
+        [MODEL, "--section-height", "1e308"],
+        "--section-height: 1e+308 is above the maximum 10",
+    ),
+    ("--section-height -1", [MODEL, "--section-height", "-1"], "--section-height: -1 must be > 0"),
+    ("--section-height nan", [MODEL, "--section-height", "nan"], "--section-height"),
+    ("binary --categories", [MODEL, "--categories", "binary.yaml", "-o", "out"], "not a text file"),
+    ("latin-1 --categories", [MODEL, "--categories", "latin1.yaml", "-o", "out"], "not UTF-8"),
+    ("--categories nan area", [MODEL, "--categories", "nan.yaml", "-o", "out"], "nan is not a finite number"),
+    ("--categories a folder", [MODEL, "--categories", "other", "-o", "out"], "is a folder"),
+    ("-o a file", [MODEL, "-o", "afile"], "-o/--outdir afile: is a file"),
+    ("-o under a file", [MODEL, "-o", "afile/site"], "is a file"),
+    ("-o foreign folder", [MODEL, "-o", "other"], "pass --force"),
+    ("binary model", ["model.ifc", "-o", "out"], "model.ifc"),
+    ("missing model", ["missing.ifc", "-o", "out"], "missing.ifc"),
+]
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
+def test_extract_refuses_bad_input(work: Path, case) -> None:
+    _, args, fragment = case
+    before = snapshot(work)
+    here = os.getcwd()
+    os.chdir(work)
+    try:
+        result = runner.invoke(app, args)
+    finally:
+        os.chdir(here)
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert result.exit_code == 2, (args, result.output)
+    assert len(lines) == 1 and lines[0].startswith("bim-extract: error: "), result.stderr
+    assert fragment in lines[0], lines[0]
+    assert "Traceback" not in result.output
+    assert snapshot(work) == before
+    assert not [p for p in work.iterdir() if p.name.startswith(".")]
+
+
+def test_an_earlier_site_folder_is_replaced_whole(work: Path) -> None:
+    out = work / "site"
+    out.mkdir()
+    (out / "site.json").write_text("{}")
+    (out / "stale.txt").write_text("from an older run")
+    result = runner.invoke(app, [MODEL, "-o", str(out), "--json"])
+    assert result.exit_code == 0, result.output
+    assert (out / "features.csv").is_file() and not (out / "stale.txt").exists()
+    assert sorted(p.name for p in work.iterdir() if p.name.startswith(".")) == []
+
+
+def test_force_replaces_a_foreign_folder(work: Path) -> None:
+    result = runner.invoke(app, [MODEL, "-o", str(work / "other"), "--force", "--json"])
+    assert result.exit_code == 0, result.output
+    assert (work / "other" / "site.json").is_file() and not (work / "other" / "notes.txt").exists()
