@@ -13,6 +13,10 @@ have seen but did not, nor whether the lidar agrees with the walls. Two checks:
   The share test follows a binomial likelihood ratio: with a per-feature miss probability
   ``p_right`` at the right place and ``p_wrong`` at a wrong one, ``k`` misses of ``n`` favour the
   wrong place when ``k log(p_wrong/p_right) + (n-k) log((1-p_wrong)/(1-p_right)) > log_odds``.
+* **Path in free space** -- the robot drove its odometry path, so under the right ``T`` that path
+  (the last ``PATH_CHECK`` metres, as the images' poses) lies on free cells of the BIM map, within
+  ``path_margin`` of one (odometry drift, as-built offsets). A hypothesis that puts the path through
+  walls or outside the building is wrong.
 * **Scan fit** -- the share of lidar beam end points of the recent scans, put into the BIM frame with
   ``T``, that land within ``scan_tolerance`` of an occupied map cell (the beam end-point model of the
   fine-tuning filter, Eq. 18, with no beam skipped). As-built deviations move walls by centimetres;
@@ -26,8 +30,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 
+from bimtools.site.records import FREE, OccupancyGrid
 from initcli.core.geometry import Pose2D
 from initcli.core.particle_filter import LikelihoodField, scan_fit
 from initcli.core.projection import CameraIntrinsics, CameraMount
@@ -46,10 +52,12 @@ class VerificationParams:
     p_right: float = 0.4  # chance that a predicted feature is missed at the right place
     p_wrong: float = 0.9  # ... and at a wrong place
     log_odds: float = 2.3  # natural log of the likelihood ratio that rejects (about 10:1)
-    min_scan_fit: float = 0.5  # share of beams on mapped walls below which the place is wrong
+    min_scan_fit: float = 0.65  # share of beams on mapped walls below which the place is wrong
     scan_tolerance: float = 0.25  # m: a beam end point this close to an occupied cell fits
     scan_search_xy: float = 0.3  # m: the fit is the best over shifts of the pose up to this ...
     scan_search_yaw_deg: float = 3.0  # ... and turns up to this (a coarse pose is decimetres off)
+    min_path_free: float = 0.85  # share of the recent path on (or near) free BIM cells
+    path_margin: float = 0.3  # m: a path point this close to a free cell counts as free
     min_claim_inliers: int = 4  # matched features a unique match needs before it is claimed
     rival_outliers: int = 0  # a claim must stay unique with this many more outliers allowed (0: off) ...
     rival_distance: float = 2.0  # m: ... counting rivals this far from it (or turned rival_turn_deg)
@@ -74,6 +82,7 @@ class Verification:
     missed_predictions: int  # ... of which never detected
     missed_ids: tuple[str, ...] = ()
     scan_fit: float | None = None  # None: no scans to judge by
+    path_free: float | None = None  # share of the recent path on free BIM cells (None: no map)
     passed: bool = True
     reasons: tuple[str, ...] = field(default_factory=tuple)
 
@@ -83,6 +92,7 @@ class Verification:
             "missed_predictions": self.missed_predictions,
             "missed_ids": list(self.missed_ids),
             "scan_fit": None if self.scan_fit is None else round(self.scan_fit, 4),
+            "path_free": None if self.path_free is None else round(self.path_free, 4),
             "passed": self.passed,
             "reasons": list(self.reasons),
         }
@@ -153,6 +163,27 @@ def misses_reject(missed: int, predicted: int, params: VerificationParams) -> bo
     return llr > params.log_odds
 
 
+class FreeSpace:
+    """The BIM map's free cells, grown by a margin, for the path check."""
+
+    def __init__(self, grid: OccupancyGrid, margin: float) -> None:
+        free = (grid.cells == FREE).astype(np.uint8)
+        k = max(1, int(round(margin / grid.resolution)))
+        self.mask = cv2.dilate(free, np.ones((2 * k + 1, 2 * k + 1), np.uint8)) > 0
+        self.grid = grid
+
+    def share_free(self, xy: np.ndarray) -> float:
+        """Share of the points (N, 2) on grown free cells (points off the map are not free)."""
+        xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+        if len(xy) == 0:
+            return 1.0
+        row, col = self.grid.world_to_cell(xy[:, 0], xy[:, 1])
+        inside = (row >= 0) & (row < self.mask.shape[0]) & (col >= 0) & (col < self.mask.shape[1])
+        ok = np.zeros(len(xy), dtype=bool)
+        ok[inside] = self.mask[row[inside], col[inside]]
+        return float(ok.mean())
+
+
 @dataclass(frozen=True)
 class ScanSample:
     """One lidar scan in the odometry frame: the robot's odom pose and its beams."""
@@ -210,6 +241,8 @@ def verify_hypothesis(
     scans: list[ScanSample],
     field_: LikelihoodField | None,
     params: VerificationParams,
+    free: FreeSpace | None = None,
+    path_odom: list[Pose2D] | None = None,
 ) -> Verification:
     """Both checks for the hypothesis ``transform`` (odom -> BIM) on one storey's BIM features.
 
@@ -234,7 +267,12 @@ def verify_hypothesis(
         if field_ is not None
         else None
     )
+    path_free = None
+    if free is not None and path_odom:
+        path_free = free.share_free(transform.apply(np.array([[p.x, p.y] for p in path_odom])))
     reasons = []
+    if path_free is not None and path_free < params.min_path_free:
+        reasons.append(f"the path runs through walls or outside ({path_free:.2f} of it on free space)")
     if misses_reject(n_miss, n_pred, params):
         reasons.append(f"{n_miss} of {n_pred} BIM features in view were never detected")
     if fit is not None and fit < params.min_scan_fit:
@@ -244,6 +282,7 @@ def verify_hypothesis(
         missed_predictions=n_miss,
         missed_ids=tuple(feature_ids[i] for i in np.flatnonzero(missed_mask)),
         scan_fit=fit,
+        path_free=path_free,
         passed=not reasons or not params.enabled,
         reasons=tuple(reasons),
     )

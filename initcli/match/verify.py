@@ -21,6 +21,7 @@ from initcli.core.geometry import Pose2D
 from initcli.core.particle_filter import LikelihoodField
 from initcli.core.verification import (
     CameraView,
+    FreeSpace,
     ScanSample,
     Verification,
     VerificationParams,
@@ -34,6 +35,7 @@ SCAN_BEAM_STEP = 3  # every third beam is enough for a fit share
 RECENT_SCANS_M = 8.0  # m of the latest travel whose scans are fitted (older ones carry odometry drift)
 MAX_SCANS = 16  # scans fitted at most, the latest first
 PATH_WINDOW_M = 60.0  # m of the latest travel whose images predict features
+PATH_CHECK_M = 30.0  # m of the latest travel that must lie in the BIM's free space
 
 
 @dataclass
@@ -47,6 +49,7 @@ class StoreyEvidence:
     categories: list[str]
     walls: np.ndarray
     field_: LikelihoodField | None
+    free: FreeSpace | None = None
 
     @staticmethod
     def of(storey: StoreyModel, cmap: ClassMap) -> StoreyEvidence:
@@ -60,6 +63,7 @@ class StoreyEvidence:
             [cmap.canonical(x.category) for x in f],
             walls,
             LikelihoodField(storey.grid) if storey.grid is not None else None,
+            FreeSpace(storey.grid, VerificationParams().path_margin) if storey.grid is not None else None,
         )
 
 
@@ -132,6 +136,7 @@ def verify_transform(
     BIM) on ``storey``, with the images of the last ``PATH_WINDOW_M`` m and the scans of the last
     ``RECENT_SCANS_M`` m."""
     poses, scans = path.recent(PATH_WINDOW_M, RECENT_SCANS_M)
+    recent_path, _ = path.recent(PATH_CHECK_M, 0.0)
     return verify_hypothesis(
         transform,
         storey.ids,
@@ -147,6 +152,8 @@ def verify_transform(
         scans,
         storey.field_,
         params,
+        storey.free,
+        recent_path,
     )
 
 

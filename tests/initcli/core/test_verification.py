@@ -129,3 +129,20 @@ def test_scan_fit_is_high_at_the_right_transform_and_low_when_turned() -> None:
     assert path_scan_fit(off, scans, field, 0.1) < 0.5  # type: ignore[operator]
     assert path_scan_fit(off, scans, field, 0.1, search_xy=0.3) > 0.95  # type: ignore[operator]
     assert path_scan_fit(Pose2D.identity(), [], field, 0.25) is None
+
+
+def test_the_path_must_lie_in_free_space() -> None:
+    from bimtools.site.records import UNKNOWN
+    from initcli.core.verification import FreeSpace
+
+    grid = corridor_grid()
+    cells = grid.cells.copy()
+    rows_y = grid.origin[1] + (cells.shape[0] - 1 - np.arange(cells.shape[0]) + 0.5) * grid.resolution
+    cells[(rows_y < 0.0) | (rows_y > 2.0)] = UNKNOWN  # outside the corridor: not free space
+    free = FreeSpace(OccupancyGrid(cells, grid.resolution, grid.origin), 0.3)
+    along = np.column_stack([np.linspace(1.0, 30.0, 60), np.full(60, 1.0)])  # the corridor's centre line
+    assert free.share_free(along) == 1.0
+    across = np.column_stack([np.full(60, 10.0), np.linspace(-0.9, 2.9, 60)])  # through both walls
+    assert free.share_free(across) < 0.9
+    outside = along + np.array([0.0, 40.0])
+    assert free.share_free(outside) == 0.0
