@@ -229,3 +229,32 @@ def fail(prog: str, message: str) -> None:
 
     typer.echo(f"{prog}: error: {' '.join(str(message).split())}", err=True)
     raise typer.Exit(EXIT_BAD_INPUT)
+
+
+def run_cli(app: Any, prog: str) -> None:
+    """Run a typer ``app`` as a console script: a usage error (an unknown option, ``--seed abc``) is
+    one line on stderr and exit 2 like every other bad input, not click's usage block; Ctrl-C is 130."""
+    import sys
+
+    try:  # typer >= 0.20 carries its own copy of click
+        from typer._click import exceptions as cx
+    except ImportError:  # pragma: no cover - older typer on click
+        from click import exceptions as cx  # type: ignore[no-redef]
+
+    try:
+        code = app(standalone_mode=False)
+    except getattr(cx, "NoArgsIsHelpError", ()) as exc:  # a bare command: its help, as before
+        if exc.ctx is not None:
+            print(exc.ctx.get_help(), file=sys.stderr)
+        sys.exit(EXIT_BAD_INPUT)
+    except cx.UsageError as exc:
+        where = f" ({exc.ctx.command_path})" if exc.ctx is not None else ""
+        print(f"{prog}: error{where}: {' '.join(exc.format_message().split())}", file=sys.stderr)
+        sys.exit(EXIT_BAD_INPUT)
+    except cx.ClickException as exc:
+        print(f"{prog}: error: {' '.join(exc.format_message().split())}", file=sys.stderr)
+        sys.exit(exc.exit_code)
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        sys.exit(130)
+    sys.exit(code if isinstance(code, int) else 0)

@@ -152,7 +152,9 @@ def extract(
 
 
 def main() -> None:
-    app()
+    from bimtools.checks import run_cli
+
+    run_cli(app, "bim-extract")
 
 
 if __name__ == "__main__":

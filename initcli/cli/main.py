@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import typer
 
+from bimtools.checks import run_cli
 from initcli.cli.bag2log import bag2log
 from initcli.cli.detector import detector_app
 from initcli.cli.eval import evaluate
@@ -44,7 +45,7 @@ app.add_typer(detector_app, name="detector")
 
 def main() -> None:
     """Console-script entry point (``bim-init``)."""
-    app()
+    run_cli(app, "bim-init")
 
 
 if __name__ == "__main__":

@@ -21,7 +21,7 @@ from bimtools.site.atomic import staged_directory
 from initcli.config import SessionConfig, config_to_dict, load_config
 from initcli.core.geometry import Pose2D
 from initcli.session.outputs import render_report, summary_document, write_summary
-from initcli.session.result import SessionResult
+from initcli.session.result import MatchStep, SessionResult
 from initcli.session.setup import prepare_site, prepare_world, sim_session
 
 EXIT_FAILED = 1
@@ -166,6 +166,8 @@ def run_live_session(config: SessionConfig, out: Path, seed: int, quiet: bool, c
         )
         view = None if quiet else LiveView(console)
         last_state: list[str] = []
+        published = [0]  # match steps whose hypotheses went out
+        steps: list[MatchStep] = []  # the session's match steps (bound below)
 
         def observe(update: dict) -> None:
             if view is not None:
@@ -173,6 +175,10 @@ def run_live_session(config: SessionConfig, out: Path, seed: int, quiet: bool, c
             if not last_state or update["state"] != last_state[-1]:
                 last_state.append(update["state"])
                 driver.publish_state(str(update["state"]))
+            if len(steps) > published[0]:
+                published[0] = len(steps)
+                step = steps[-1]
+                driver.publish_hypotheses(step.t, [Pose2D(*p) for p in step.poses])
 
         session = Session(
             config,
@@ -184,6 +190,7 @@ def run_live_session(config: SessionConfig, out: Path, seed: int, quiet: bool, c
             observe,
             meta_source=f"bim-init run (rosbridge ws://{r.rosbridge.host}:{r.rosbridge.port})",
         )
+        steps = session.result.match_steps
         try:
             result = session.run()
         finally:

@@ -36,3 +36,23 @@ def test_help_lists_only_registered_commands() -> None:
         "--skip-bad",
     ):
         assert flag in sub.stdout
+
+
+def test_usage_errors_are_one_line_and_exit_2(tmp_path) -> None:
+    """Click's own parse errors (a word for a number, an unknown option) read like every other bad
+    input: one line on stderr, exit 2, no usage block."""
+    import subprocess
+    import sys
+
+    for args in (
+        ["run", "--config", "x.yaml", "--seed", "abc"],
+        ["match", "--nope"],
+        ["eval", "--starts", "x"],
+    ):
+        done = subprocess.run(
+            [sys.executable, "-m", "initcli.cli.main", *args], capture_output=True, text=True, cwd=tmp_path
+        )
+        lines = done.stderr.strip().splitlines()
+        assert done.returncode == 2, done.stderr
+        assert len(lines) == 1 and lines[0].startswith("bim-init: error"), done.stderr
+        assert "Traceback" not in done.stderr

@@ -53,6 +53,9 @@ def test_a_live_session_drives_publishes_its_state_and_stops_the_robot(tmp_path:
         assert not out.exists()  # staged: nothing half-written
         states = [m["data"] for m in server.published("/bim_init/state")]
         assert states and states[0] in ("look", "explore")
+        # Hypotheses go out as a PoseArray once the session matched (not before three features).
+        for msg in server.published("/bim_init/hypotheses"):
+            assert msg["header"]["frame_id"] == "map" and isinstance(msg["poses"], list)
         twists = _twists(server)
         assert twists and twists[-1] == (0.0, 0.0)  # the robot was stopped
         assert any(v != 0.0 or w != 0.0 for v, w in twists)  # and it was driven before
