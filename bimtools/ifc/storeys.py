@@ -74,13 +74,14 @@ def list_storeys(model: ifcopenshell.file, scale: float) -> list[Storey]:
         else:
             seen[base] = 1
         storey.slug = storey_slug(storey.name)
-    slugs: dict[str, int] = {}
+    used: set[str] = set()
     for storey in storeys:
-        if storey.slug in slugs:
-            slugs[storey.slug] += 1
-            storey.slug = f"{storey.slug}_{slugs[storey.slug]}"
-        else:
-            slugs[storey.slug] = 1
+        slug, k = storey.slug, 1
+        while slug in used:  # a renamed slug may itself be taken: count on until it is free
+            k += 1
+            slug = f"{storey.slug}_{k}"
+        storey.slug = slug
+        used.add(slug)
     return storeys
 
 

@@ -48,10 +48,6 @@ def test_names_that_differ_only_in_punctuation_get_distinct_slugs() -> None:
     assert [s.slug for s in list_storeys(model, 1.0)] == ["Level_2", "Level_2_2"]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="bug: a renamed slug (Level_2 -> Level_2_2) is not checked against the slugs already taken",
-)
 def test_slugs_stay_unique_when_a_renamed_slug_collides() -> None:
     model = ifcopenshell.file(schema="IFC4")
     _storey(model, "Level 2", 0.0)
