@@ -1,0 +1,115 @@
+"""initcli.session.runner: a Session on a scripted driver that sees nothing, ended by its limits."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bimtools.site.load import Site
+from initcli.config import load_config
+from initcli.core.geometry import Pose2D
+from initcli.drivers.base import LaserScan, SensorFrame
+from initcli.session.runner import Session
+from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
+from tests.helpers import SAMPLES
+
+
+class BlindDriver:
+    """Unicycle odometry at 10 Hz, no images, an open-space scan (``scan``) or none; the truth is the
+    odometry shifted by (10, 0)."""
+
+    camera = DEFAULT_CAMERA
+    mount = DEFAULT_MOUNT
+    control_rate = 10.0
+    depth_window = 2
+
+    def __init__(self, scan: bool = False) -> None:
+        n = 360
+        self.scan = LaserScan(-math.pi, 2 * math.pi / n, 12.0, np.full(n, 12.0)) if scan else None
+        self.t, self.pose, self._distance = 0.0, Pose2D(0.0, 0.0, 0.0), 0.0
+        self.commands: list[tuple[float, float]] = []
+
+    def _frame(self) -> SensorFrame:
+        return SensorFrame(
+            self.t, self.pose, self.scan, truth=Pose2D(self.pose.x + 10.0, self.pose.y, self.pose.yaw)
+        )
+
+    def start(self) -> SensorFrame:
+        return self._frame()
+
+    def step(self, v: float, w: float) -> SensorFrame:
+        self.commands.append((v, w))
+        dt = 1.0 / self.control_rate
+        self.pose = self.pose * Pose2D(v * dt, 0.0, w * dt)
+        self._distance += abs(v) * dt
+        self.t = round(self.t + dt, 6)
+        return self._frame()
+
+    @property
+    def distance(self) -> float:
+        return self._distance
+
+
+@pytest.fixture(scope="module")
+def config():
+    return load_config(SAMPLES / "block_a.site.yaml")
+
+
+def _session(
+    config, tmp_path: Path | None = None, observer=None, scan: bool = False, **limits: float
+) -> tuple[Session, BlindDriver]:
+    config = dataclasses.replace(config, limits=dataclasses.replace(config.limits, **limits))
+    driver = BlindDriver(scan)
+    log = tmp_path / "session.jsonl" if tmp_path is not None else None
+    site = Site(SAMPLES, {})
+    return Session(config, site, None, driver, log, np.random.default_rng(0), observer), driver
+
+
+def test_time_limit_ends_the_session_with_its_reason_and_paths(config, tmp_path: Path) -> None:
+    seen: list[dict] = []
+    session, driver = _session(config, tmp_path, seen.append, max_time=2.0)
+    result = session.run()
+    assert not result.success
+    assert result.reason == "no unique match within 2 s"
+    assert result.duration_s == pytest.approx(2.1)
+    assert len(result.odom_path) == len(driver.commands) + 1 == 22
+    assert result.true_path[0] == (10.0, 0.0, 0.0)
+    assert result.truth_pose == Pose2D(driver.pose.x + 10.0, driver.pose.y, driver.pose.yaw)
+    assert result.features_detected == 0 and result.features == []
+    assert result.states[-1] == (pytest.approx(2.1), "failed")
+    if config.exploration.initial_look:
+        assert result.states[0][1] == "look"
+        assert all(v == 0.0 and w != 0.0 for v, w in driver.commands[:5])  # turning on the spot
+    assert result.wall_seconds > 0.0
+    assert len(seen) == 21 and {"t", "state", "distance", "features", "hypotheses"} <= seen[0].keys()
+    records = [json.loads(line) for line in (tmp_path / "session.jsonl").read_text().splitlines()]
+    assert records[0]["type"] == "meta"
+    states = [r for r in records if r["type"] == "state"]
+    assert states[-1]["state"] == "failed" and states[-1]["reason"] == result.reason
+    assert sum(r["type"] == "odom" for r in records) >= 2
+
+
+def test_distance_limit_is_measured_on_odometry(config) -> None:
+    no_look = dataclasses.replace(
+        config, exploration=dataclasses.replace(config.exploration, initial_look=False)
+    )
+    session, driver = _session(no_look, scan=True, max_distance=1.0, max_time=60.0)
+    result = session.run()
+    assert result.reason.startswith("moved 1 m without a unique match (0 features, 0 hypotheses)")
+    assert session.perception.travel > 1.0
+    assert result.distance_total_m == pytest.approx(driver.distance)
+    assert result.duration_s < 60.0
+
+
+def test_a_start_that_cannot_leave_fails_before_moving(config) -> None:
+    session, driver = _session(config)
+    session.cannot_leave = "cannot leave: closed in"
+    result = session.run()
+    assert result.reason == "cannot leave: closed in" and driver.commands == []
+    assert result.duration_s == 0.0 and result.distance_total_m == 0.0
+    assert math.isclose(result.truth_pose.x, 10.0)
