@@ -5,6 +5,7 @@ Exit codes: 0 written, 2 bad input (one line on stderr).
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import tempfile
 from collections.abc import Iterator
@@ -51,7 +52,8 @@ def convert_bag(
         write_log(tmp, records)
         tmp.replace(out)
     except OSError as exc:
-        tmp.unlink(missing_ok=True)
+        with contextlib.suppress(OSError):  # a parent that is a file: there is nothing to remove
+            tmp.unlink(missing_ok=True)
         raise InputError(f"{out}: cannot write the log: {exc.strerror or exc}") from None
     return records, stats
 

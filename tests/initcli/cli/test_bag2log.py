@@ -57,12 +57,6 @@ def test_convert_bag_onto_a_folder_is_input_error_and_leaves_no_partial(tmp_path
     assert out.is_dir() and not (tmp_path / ".taken.jsonl.partial").exists()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=NotADirectoryError,
-    reason="bug: convert_bag's cleanup tmp.unlink(missing_ok=True) raises NotADirectoryError "
-    "when a parent of the output is a file, so the OSError escapes instead of an InputError",
-)
 def test_convert_bag_under_a_file_is_input_error(tmp_path: Path) -> None:
     bag = write(tmp_path, make_recording(duration=1.0), "mcap")
     blocker = tmp_path / "file"
