@@ -1,0 +1,33 @@
+"""The match-result JSON document (initcli.io.match_result) against its schema."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import jsonschema
+import numpy as np
+
+from initcli.io.detection_log import write_log
+from initcli.io.match_result import RESULT_FORMAT, report_to_dict
+from initcli.match.pipeline import MatchOptions, run_match
+from initcli.sim.synthetic_floor import write_site_folder
+from initcli.sim.synthetic_log import SimFeature, make_log, path_from_waypoints
+from tests.helpers import ROOT
+
+
+def test_report_to_dict_follows_the_schema_and_carries_the_verdict(tmp_path: Path) -> None:
+    doors = [SimFeature(f"D{i}", "door", x, 1.0, 0.0, -1.0) for i, x in enumerate((3.0, 7.5, 13.0, 16.0))]
+    walls = np.array([[0.0, -1.0, 20.0, -1.0, 0.0, 1.0], [0.0, 1.0, 20.0, 1.0, 0.0, -1.0]])
+    site = write_site_folder(tmp_path / "site", {"L1": (doors, walls)})
+    t, path = path_from_waypoints([(1.0, 0.0), (18.0, 0.0)], start_yaw=0.0)
+    write_log(tmp_path / "log.jsonl", make_log(doors, t, path).records)
+    report = run_match(tmp_path / "log.jsonl", site, MatchOptions())
+    doc = report_to_dict(report)
+    schema = json.loads((ROOT / "schemas" / "match_result.schema.json").read_text())
+    jsonschema.validate(doc, schema)
+    assert doc["format"] == RESULT_FORMAT
+    assert doc["verdict"] == report.verdict and doc["n_hypotheses"] == report.n_hypotheses
+    assert len(doc["hypotheses"]) == len(report.hypotheses)
+    assert all(h["verification"] is None for h in doc["hypotheses"])  # none asked for
+    assert doc["parameters"]["beta_deg"] == MatchOptions().beta
