@@ -243,6 +243,7 @@ class VerificationSection:
     p_wrong: float = _CHECKS.p_wrong  # ... and at a wrong place
     log_odds: float = _CHECKS.log_odds  # likelihood ratio (natural log) that rejects
     min_scan_fit: float = _CHECKS.min_scan_fit  # share of beams on mapped walls
+    min_fine_scan_fit: float = _CHECKS.min_fine_scan_fit  # ... at the fine pose
     min_path_free: float = _CHECKS.min_path_free  # share of the recent path on free BIM cells
     scan_tolerance: float = _CHECKS.scan_tolerance  # m
     min_claim_inliers: int = _CHECKS.min_claim_inliers  # matched features before a claim

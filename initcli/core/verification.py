@@ -53,6 +53,7 @@ class VerificationParams:
     p_wrong: float = 0.9  # ... and at a wrong place
     log_odds: float = 2.3  # natural log of the likelihood ratio that rejects (about 10:1)
     min_scan_fit: float = 0.65  # share of beams on mapped walls below which the place is wrong
+    min_fine_scan_fit: float = 0.6  # the same for the fine pose (fine tuning's own rule)
     scan_tolerance: float = 0.25  # m: a beam end point this close to an occupied cell fits
     scan_search_xy: float = 0.3  # m: the fit is the best over shifts of the pose up to this ...
     scan_search_yaw_deg: float = 3.0  # ... and turns up to this (a coarse pose is decimetres off)

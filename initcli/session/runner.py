@@ -17,6 +17,7 @@ log so far, so the log replays to the same coarse verdict and pose.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable
@@ -308,14 +309,17 @@ class Session:
             self._evidence[storey] = StoreyEvidence.of(self.site.storeys[storey], self.perception.cmap)
         return self._evidence[storey]
 
-    def _verify(self, storey: str, transform: Pose2D) -> Verification:
+    def _verify(self, storey: str, transform: Pose2D, fine: bool = False) -> Verification:
+        checks = self.checks
+        if fine:  # the fine pose: the fine-tuning filter's own scan-fit rule
+            checks = dataclasses.replace(checks, min_scan_fit=checks.min_fine_scan_fit)
         return verify_transform(
             transform,
             self._evidence_of(storey),
             self.perception.path,
             self.perception.sightings,
             self.view,
-            self.checks,
+            checks,
         )
 
     def _record_check(
@@ -484,7 +488,7 @@ class Session:
         else:
             pose = transform * frame.odom
         if self.checks.enabled:
-            check = self._verify(best.storey, pose * frame.odom.inverse())
+            check = self._verify(best.storey, pose * frame.odom.inverse(), fine=True)
             carried = transform * frame.odom
             apart = pose.distance_to(carried) > AGREE_M or pose.yaw_error(carried) > math.radians(AGREE_DEG)
             self._record_check(frame, "fine", best.storey, pose, check, agrees_with_coarse=not apart)
