@@ -28,17 +28,9 @@ def convert_bag(
     from initcli.ros.bag_reader import bag_to_records
 
     if show_progress and sys.stderr.isatty():
-        from rich.console import Console
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+        from initcli.cli.progress import count_bar
 
-        with Progress(
-            TextColumn("bag2log"),
-            BarColumn(),
-            MofNCompleteColumn(),
-            TimeRemainingColumn(),
-            console=Console(stderr=True),
-            transient=True,
-        ) as bar:
+        with count_bar("bag2log") as bar:
             task = bar.add_task("messages", total=None)
             records, stats = bag_to_records(
                 bag, options, lambda done, total: bar.update(task, completed=done, total=total)

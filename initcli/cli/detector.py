@@ -146,8 +146,7 @@ def synth(
     ] = 0.0,
 ) -> None:
     """Render a YOLO dataset (RGB, depth, labels) from site models with domain randomisation."""
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeRemainingColumn
-
+    from initcli.cli.progress import count_bar
     from initcli.detector.synth import SynthOptions, dataset_preview, write_dataset
 
     try:
@@ -164,14 +163,7 @@ def synth(
             shuffle_classes=shuffle_classes,
             sites=[str(s) for s in site],
         )
-        with Progress(
-            "[progress.description]{task.description}",
-            BarColumn(),
-            MofNCompleteColumn(),
-            TimeRemainingColumn(),
-            console=Console(stderr=True),
-            transient=True,
-        ) as bar:
+        with count_bar("rendering") as bar:
             task = bar.add_task("rendering", total=images)
             doc = write_dataset(
                 site,
