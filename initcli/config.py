@@ -110,6 +110,7 @@ class MatchingSection:
     alpha: float = _MATCH.alpha  # m, Eq. 7
     beta: float = _MATCH.beta  # degrees, Eq. 9
     max_outliers: int = _MATCH.max_outliers
+    outlier_share: float = _MATCH.outlier_share  # share of the features the budget grows to
     revisits: bool = _MATCH.revisits
     pose_method: str = _MATCH.pose_method
     pose_window: int = _MATCH.pose_window  # rigid: the last N matched features; 0: all
@@ -460,6 +461,7 @@ def match_options(config: SessionConfig, storey: str | None) -> MatchOptions:
         beta=m.beta,
         top=max(m.m_thre, _MATCH.top),
         max_outliers=m.max_outliers,
+        outlier_share=m.outlier_share,
         revisits=m.revisits,
         pose_method=m.pose_method,
         pose_window=m.pose_window,

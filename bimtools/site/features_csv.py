@@ -64,7 +64,14 @@ def read_features(path: Path) -> list[Feature]:
     """Read a features.csv; raise :class:`InputError` naming ``file:line`` on a bad row."""
     path = Path(path)
     text = read_text(path, "a feature table (features.csv)", encoding="utf-8-sig")
-    reader = csv.DictReader(io.StringIO(text))
+    reader = csv.DictReader(io.StringIO(text, newline=""))
+    try:
+        return _rows(path, reader)
+    except csv.Error as exc:
+        raise InputError(f"{path}:{reader.line_num}: not a CSV row ({exc})") from None
+
+
+def _rows(path: Path, reader: csv.DictReader) -> list[Feature]:
     header = [h.strip() for h in (reader.fieldnames or [])]
     missing = [c for c in TABLE1_COLUMNS if c not in header]
     if missing:

@@ -145,6 +145,15 @@ def match(
     max_outliers: Annotated[
         int, typer.Option("--max-outliers", metavar="N", help="False or misclassified detections tolerated.")
     ] = _DEFAULTS.max_outliers,
+    outlier_share: Annotated[
+        float,
+        typer.Option(
+            "--outlier-share",
+            metavar="S",
+            help="With no match at --max-outliers, let the outlier budget grow up to this share of the "
+            "features (0-0.5; 0: --max-outliers alone).",
+        ),
+    ] = _DEFAULTS.outlier_share,
     pose_method: Annotated[
         str,
         typer.Option(
@@ -210,6 +219,7 @@ def match(
         beta=beta,
         top=top,
         max_outliers=max_outliers,
+        outlier_share=outlier_share,
         revisits=revisits,
         pose_method=pose_method,
         pose_window=pose_window,

@@ -133,6 +133,7 @@ def run_session(
             result,
             site.storeys[result.storey or built.simulated_storey],
             f"{config.site.path}: {'success' if result.success else 'failure'} - {result.reason}",
+            world_segments=setup.world.static,
         )
     return doc
 

@@ -39,6 +39,8 @@ from initcli.core.particle_filter import LikelihoodField, scan_fit
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.core.visibility import CameraModel, FeatureArrays, visible
 
+SCAN_TURN_STEP_DEG = 3.0  # degrees between the turns path_scan_fit tries
+
 
 @dataclass(frozen=True)
 class VerificationParams:
@@ -56,7 +58,9 @@ class VerificationParams:
     min_fine_scan_fit: float = 0.6  # the same for the fine pose (fine tuning's own rule)
     scan_tolerance: float = 0.25  # m: a beam end point this close to an occupied cell fits
     scan_search_xy: float = 0.3  # m: the fit is the best over shifts of the pose up to this ...
-    scan_search_yaw_deg: float = 3.0  # ... and turns up to this (a coarse pose is decimetres off)
+    # ... and turns up to this, in 3-degree steps: a coarse pose is decimetres and, from doors built
+    # off their place, up to 15 degrees off (the fit at a wrong place gains little from turning)
+    scan_search_yaw_deg: float = 12.0
     min_path_free: float = 0.85  # share of the recent path on (or near) free BIM cells
     path_margin: float = 0.3  # m: a path point this close to a free cell counts as free
     min_claim_inliers: int = 4  # matched features a unique match needs before it is claimed
@@ -204,15 +208,17 @@ def path_scan_fit(
     search_yaw: float = 0.0,
 ) -> float | None:
     """Mean share of beams on mapped walls over ``scans``, each placed in the BIM frame by ``transform``
-    (odom -> BIM); the best over a 5 x 5 x 3 grid of shifts (up to ``search_xy`` m) and turns (up to
-    ``search_yaw`` rad) of the pose at the last scan. None when there is no scan."""
+    (odom -> BIM); the best over a 5 x 5 grid of shifts (up to ``search_xy`` m) and turns in steps of
+    at most 3 degrees (up to ``search_yaw`` rad) of the pose at the last scan. None when there is no
+    scan."""
     if not scans:
         return None
     last = scans[-1].odom
     here = transform * last
     best = 0.0
     shifts = np.linspace(-search_xy, search_xy, 5) if search_xy > 0 else np.zeros(1)
-    turns = np.linspace(-search_yaw, search_yaw, 3) if search_yaw > 0 else np.zeros(1)
+    steps = 2 * math.ceil(search_yaw / math.radians(SCAN_TURN_STEP_DEG)) + 1
+    turns = np.linspace(-search_yaw, search_yaw, steps) if search_yaw > 0 else np.zeros(1)
     for dyaw in turns:
         for dx in shifts:
             for dy in shifts:

@@ -74,6 +74,7 @@ def report_to_dict(report: MatchReport, verifications: list[Any] | None = None) 
             "beta_deg": o.beta,  # the JSON key keeps its unit
             "top": o.top,
             "max_outliers": o.max_outliers,
+            "outlier_share": o.outlier_share,
             "min_inliers": o.min_inliers,
             "d_thre": o.d_thre,
             "pose_radius": o.pose_radius,

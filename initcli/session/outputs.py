@@ -70,9 +70,17 @@ def _ellipse(cov: np.ndarray, scale: float = 2.0) -> np.ndarray:
     return (vectors @ np.vstack([values[0] * np.cos(t), values[1] * np.sin(t)])).T
 
 
-def render_report(path: Path, result: SessionResult, storey: StoreyModel, title: str) -> None:
+def render_report(
+    path: Path,
+    result: SessionResult,
+    storey: StoreyModel,
+    title: str,
+    world_segments: np.ndarray | None = None,
+) -> None:
     """Floor plan, true path, odometry path mapped through the final pose, features, hypotheses
-    at each matching step, and the final pose with its covariance ellipse."""
+    at each matching step, and the final pose with its covariance ellipse. ``world_segments``:
+    (S, 4) outlines of the simulated site as built (hoardings, door leaves, clutter), drawn under
+    the BIM where the simulated world is not the BIM."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -81,6 +89,16 @@ def render_report(path: Path, result: SessionResult, storey: StoreyModel, title:
     from matplotlib.collections import LineCollection
 
     fig, ax = plt.subplots(figsize=(13, 8))
+    if world_segments is not None and len(world_segments):
+        ax.add_collection(
+            LineCollection(
+                list(world_segments.reshape(-1, 2, 2)),
+                colors="tab:orange",
+                linewidths=1.0,
+                alpha=0.7,
+                label="site as built (simulated)",
+            )
+        )
     lines = [((w.x1, w.y1), (w.x2, w.y2)) for w in storey.walls]
     ax.add_collection(LineCollection(lines, colors="0.25", linewidths=0.6, label="walls (BIM)"))
     markers = {"Door": "s", "Lift": "^", "Stairs": "D"}

@@ -75,22 +75,28 @@ class Perception:
         extra: int,
         apart_m: float,
         apart_rad: float,
-    ) -> list[Hypothesis]:
-        """Pose-distinct hypotheses (``apart_m`` / ``apart_rad`` from ``hypothesis``) with at least
-        min_inliers matches that appear when ``extra`` more outliers are allowed than ``report`` had."""
+    ) -> int:
+        """How many pose-distinct hypotheses (``apart_m`` / ``apart_rad`` from ``hypothesis``) with at
+        least min_inliers matches appear when ``extra`` more outliers are allowed than ``report``'s
+        hypotheses were found with (a search stopped at its cap counts as many)."""
         if extra <= 0:
-            return []
-        opts = dataclasses.replace(report.options, max_outliers=report.options.max_outliers + extra)
+            return 0
+        opts = dataclasses.replace(
+            report.options,
+            max_outliers=max(report.outliers_allowed, report.options.max_outliers) + extra,
+            outlier_share=0.0,
+        )
         wider = match_log(self.log, site, opts, self.cmap)
-        out = []
+        if wider.overflow:
+            return wider.n_hypotheses
+        count = 0
         for h in wider.hypotheses:
             inliers = sum(m is not None for m in h.matches)
             far = (
                 h.pose.distance_to(hypothesis.pose) > apart_m or h.pose.yaw_error(hypothesis.pose) > apart_rad
             )
-            if far and inliers >= self.options.min_inliers:
-                out.append(h)
-        return out
+            count += far and inliers >= self.options.min_inliers
+        return count
 
     def close(self) -> None:
         if self._writer is not None:

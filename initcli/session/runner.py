@@ -352,13 +352,16 @@ class Session:
             )
             return False
         c = self.checks
+        # A match found only once the outlier budget grew (outlier_share) is unique among the
+        # fewest-outlier explanations; it must stay unique with one more outlier allowed.
+        extra = max(c.rival_outliers, 1 if report.outliers_allowed > report.options.max_outliers else 0)
         rivals = self.perception.rivals(
-            self.site, report, hypothesis, c.rival_outliers, c.rival_distance, math.radians(c.rival_turn_deg)
+            self.site, report, hypothesis, extra, c.rival_distance, math.radians(c.rival_turn_deg)
         )
         if rivals:
             self._note(
                 frame.t,
-                f"unique match has {len(rivals)} rival(s) with {c.rival_outliers} more outlier(s) allowed",
+                f"unique match has {rivals} rival(s) with {extra} more outlier(s) allowed",
             )
             return False
         pose = hypothesis.rectified_pose or hypothesis.pose

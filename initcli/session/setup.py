@@ -84,7 +84,7 @@ class SimSetup:
     world: SimWorld
     storey: str
     as_built: AsBuiltWorld | None = None  # what differs from the design (None: the ideal world)
-    enclosed: bool = False  # the start lies in a room closed off by doors
+    enclosed: bool = False  # the start lies in a space closed off (doors, hoardings, narrow gaps)
 
 
 def world_storey(site: Site, world: Site | None, storey: str) -> StoreyModel:
@@ -97,6 +97,7 @@ def world_storey(site: Site, world: Site | None, storey: str) -> StoreyModel:
     return min(world.storeys.values(), key=lambda s: abs(s.elevation - elevation))
 
 
+START_MARGIN = 0.15  # m beyond the robot's radius: gaps narrower than 2 (radius + this) do not connect
 AS_BUILT_SEED = 104729  # the as-built world draws from its own generator: the same starts at every value
 
 
@@ -129,15 +130,20 @@ def build_sim(
     )
     clutter = place_clutter(model, circulation, config.sim.clutter, rng)
     clutter = stand_out(
-        clutter, config.sim.as_built.clutter_in_corridor, np.random.default_rng([seed, AS_BUILT_SEED, 1])
+        clutter,
+        config.sim.as_built.clutter_in_corridor,
+        np.random.default_rng([seed, AS_BUILT_SEED, 1]),
+        SimWorld.from_obstacles(built.obstacles, clutter).static,
     )
     static = SimWorld.from_obstacles(built.obstacles, clutter)
     workers = place_workers(model, circulation, static.static, int(config.sim.workers), rng)
     world = SimWorld.from_obstacles(built.obstacles, clutter, workers)
     # Starts lie where a robot can be: the free space connected to the corridors with the doors as
-    # the simulated world has them (closed leaves, hoardings).
+    # the simulated world has them (closed leaves, hoardings), material stacks, and the robot's size.
     closed = [o for o in built.obstacles if o.ifc_class in (LEAF_CLASS, HOARDING_CLASS)]
-    reachable = Circulation.of(model, closed=closed)
+    reachable = Circulation.of(
+        model, closed=closed, boxes=clutter, footprint=config.robot.radius + START_MARGIN
+    )
     if start is None:
         explicit = start_pose_degrees(config)
         start = Pose2D(*explicit) if explicit is not None else None
@@ -149,7 +155,7 @@ def build_sim(
                 break
     else:
         check_clearance(start, world, config.robot.radius)
-        enclosed = not reachable.contains(start.x, start.y)
+        enclosed = not reachable.reaches(start.x, start.y, within=config.robot.radius + START_MARGIN)
     assert start is not None
     n = config.sim.odometry_noise
     o = config.sim.odometry
@@ -270,8 +276,8 @@ def sim_session(
     session = Session(config, site, matched, setup.driver, log_path, rng, observer, meta_source)
     if setup.enclosed:
         session.cannot_leave = (
-            "cannot leave: the start is in a room closed off by doors (no way to the corridors, "
-            "where the features face)"
+            "cannot leave: the start is in a space closed off by doors, hoardings or material "
+            "(no way wide enough for the robot to the corridors, where the features face)"
         )
     return SimSession(session, setup, simulated)
 

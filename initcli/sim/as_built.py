@@ -22,7 +22,9 @@ persistent_phantoms    posters or panels detected as a door every time they are 
 never_seen             share of the real features the detector never fires on                 share
 =====================  =====================================================================  ========
 
-Every installed door that is not open is closed in the simulated world: a leaf across its opening
+The building envelope stays closed, as sites keep it: a missing door in an exterior wall (nothing
+behind it in the plan) is boarded up (nothing to detect, no way out), and exterior doors are never
+left open. Every installed door that is not open is closed in the simulated world: a leaf across its opening
 (the feature's width, along its wall), whatever pieces of the door the 1 m plan cut happened to hold
 (often only frame parts). Corridor length is estimated as the circulation area over a 2 m corridor
 width.
@@ -35,7 +37,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from bimtools.site.records import Obstacle
+from bimtools.site.records import UNKNOWN, Obstacle
 from initcli.core.raycast import ray_segment_distances
 from initcli.sim.scenario import Circulation
 from initcli.sim.synthetic_log import SimFeature
@@ -107,6 +109,13 @@ def door_leaf(f: SimFeature) -> Obstacle:
     centre = np.array([f.x, f.y]) - (LEAF_THICKNESS / 2 + 0.01) * np.array([f.norm_x, f.norm_y])
     ring = _box(centre, along, max(f.width, 0.6) / 2, LEAF_THICKNESS / 2)
     return Obstacle("", f.id, LEAF_CLASS, tuple(map(tuple, ring[:-1].tolist())))
+
+
+def is_exterior(f: SimFeature, circulation: Circulation) -> bool:
+    """A door in the building envelope: behind it (0.5-1.5 m against its normal) the storey map has
+    no building (unknown cells, outside the plan)."""
+    grid = circulation.grid
+    return any(grid.value_at(f.x - d * f.norm_x, f.y - d * f.norm_y) == UNKNOWN for d in (0.5, 0.8, 1.1, 1.5))
 
 
 def _corridor_walls(model_walls: list, circulation: Circulation, min_length: float) -> list:
@@ -193,10 +202,13 @@ def derive_as_built(
     for f in features:
         pieces = by_element.get(f.id, [])  # indices of the door's own obstacles
         if f.cls in DOOR_CLASSES:
+            exterior = f.id in doors and is_exterior(f, circulation)
             if f.id in doors and p.missing_doors > 0 and rng.random() < p.missing_doors:
                 for k in pieces:
                     out_obstacles[k] = None
                 changes["missing_doors"] += 1
+                if exterior:  # the envelope stays closed: a board across the opening
+                    closed.append(door_leaf(f))
                 continue
             if p.door_shift > 0:
                 s = float(rng.normal(0.0, p.door_shift))
@@ -208,7 +220,7 @@ def derive_as_built(
                         out_obstacles[k] = _shift(piece, dx, dy)
                         moved_obstacles.add(k)
                 changes["shifted_doors"] += 1
-            if p.open_doors > 0 and rng.random() < p.open_doors:
+            if p.open_doors > 0 and rng.random() < p.open_doors and not exterior:
                 for k in pieces:
                     out_obstacles[k] = None
                 changes["open_doors"] += 1
@@ -247,9 +259,16 @@ def derive_as_built(
     return AsBuiltWorld(kept, out_features + extra + phantoms, hoardings, changes)
 
 
-def stand_out(boxes: list[np.ndarray], share: float, rng: np.random.Generator) -> list[np.ndarray]:
+STAND_OUT = 0.6  # m a stack standing out in the corridor is moved off its wall
+MIN_PASSAGE = 1.0  # m of corridor a stack standing out leaves free (sites keep escape routes open)
+
+
+def stand_out(
+    boxes: list[np.ndarray], share: float, rng: np.random.Generator, segments: np.ndarray | None = None
+) -> list[np.ndarray]:
     """``clutter_in_corridor``: move a ``share`` of the stacks placed against corridor walls 0.6 m out
-    into the corridor (along the stack's own depth axis, away from its wall)."""
+    into the corridor (along the stack's own depth axis, away from its wall), where that leaves at
+    least ``MIN_PASSAGE`` to the obstacles ``segments`` (S, 4) across the corridor."""
     if share <= 0:
         return boxes
     out = []
@@ -260,6 +279,19 @@ def stand_out(boxes: list[np.ndarray], share: float, rng: np.random.Generator) -
             free_side = (c[2] + c[3]) / 2
             n = free_side - wall_side
             n = n / max(float(np.hypot(*n)), 1e-9)
-            b = b + 0.6 * n
+            moved = b + STAND_OUT * n
+            if segments is None or _passage(moved, n, segments) >= MIN_PASSAGE:
+                b = moved
         out.append(b)
     return out
+
+
+def _passage(box: np.ndarray, n: np.ndarray, segments: np.ndarray) -> float:
+    """The narrowest free distance from the free face of ``box`` along ``n`` (its ends and middle)."""
+    c = box[:4]
+    angle = np.array([math.atan2(n[1], n[0])])
+    gaps = [
+        float(ray_segment_distances(p + 0.01 * n, angle, segments, 10.0)[0])
+        for p in (c[2], c[3], (c[2] + c[3]) / 2)
+    ]
+    return min(gaps)

@@ -37,40 +37,67 @@ class Circulation:
         return int(self.regions[row, col])
 
     @staticmethod
-    def of(storey: StoreyModel, closed: Sequence[Obstacle] = ()) -> Circulation:
+    def of(
+        storey: StoreyModel,
+        closed: Sequence[Obstacle] = (),
+        boxes: Sequence[np.ndarray] = (),
+        footprint: float = 0.0,
+    ) -> Circulation:
         """The region of the storey map that most features face. ``closed``: obstacles of the simulated
-        world that the map leaves open (closed door leaves), burnt in first, so that the region is the
-        one a robot can actually drive in: rooms behind closed doors are not part of it."""
+        world that the map leaves open (closed door leaves, hoardings) and ``boxes``: closed (n, 2)
+        rings of material stacks, burnt in first; ``footprint``: the robot's radius (m), by which the
+        free space is shrunk before it is split into connected regions. The region is then the one a
+        robot of that size can actually drive in: rooms behind closed doors, corridor sections closed
+        off by hoardings and gaps narrower than the robot are not part of it. ``clearance`` stays the
+        distance to the nearest obstacle."""
         grid = storey.grid
         if grid is None:
             raise ValueError(f"storey {storey.name!r} has no occupancy map")
         free = (grid.cells == FREE).astype(np.uint8)
-        for o in closed:
-            ring = np.asarray(o.exterior, dtype=float).reshape(-1, 2)
+        rings = [np.asarray(o.exterior, dtype=float).reshape(-1, 2) for o in closed]
+        rings += [np.asarray(b, dtype=float).reshape(-1, 2) for b in boxes]
+        for ring in rings:
             if len(ring) < 3:
                 continue
             row, col = grid.world_to_cell(ring[:, 0], ring[:, 1])
             pts = np.column_stack([col, row]).astype(np.int32)
             cv2.fillPoly(free, [pts], 0)
             cv2.polylines(free, [pts], True, 0, thickness=1)
-        _, labels = cv2.connectedComponents(free, connectivity=4)
+        clearance = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * grid.resolution
+        passable = free if footprint <= 0 else (clearance >= footprint).astype(np.uint8)
+        _, labels = cv2.connectedComponents(passable, connectivity=4)
         votes: dict[int, int] = {}
         for f in storey.features:
-            row, col = grid.world_to_cell(f.x + 0.6 * f.norm_x, f.y + 0.6 * f.norm_y)
-            if 0 <= row < labels.shape[0] and 0 <= col < labels.shape[1] and labels[row, col]:
-                votes[int(labels[row, col])] = votes.get(int(labels[row, col]), 0) + 1
+            for out in (0.6, 0.9, 1.2):  # m in front of the feature: the first passable cell votes
+                row, col = grid.world_to_cell(f.x + out * f.norm_x, f.y + out * f.norm_y)
+                if 0 <= row < labels.shape[0] and 0 <= col < labels.shape[1] and labels[row, col]:
+                    votes[int(labels[row, col])] = votes.get(int(labels[row, col]), 0) + 1
+                    break
         main = (
             max(votes, key=lambda label: votes[label])
             if votes
             else int(np.bincount(labels.ravel())[1:].argmax() + 1)
         )
-        clearance = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * grid.resolution
         return Circulation(grid, labels == main, clearance, labels)
 
     def cells(self, min_clearance: float) -> np.ndarray:
         rows, cols = np.nonzero(self.label & (self.clearance >= min_clearance))
         x, y = self.grid.cell_centre(rows, cols)
         return np.column_stack([x, y])
+
+    def reaches(self, x: float, y: float, within: float) -> bool:
+        """Whether a cell of the region lies within ``within`` metres of a point (a robot standing
+        closer to a wall than the region's footprint allows can still drive into it)."""
+        row, col = self.grid.world_to_cell(x, y)
+        k = max(0, int(math.ceil(within / self.grid.resolution)))
+        r0, c0 = max(0, int(row) - k), max(0, int(col) - k)
+        patch = self.label[r0 : int(row) + k + 1, c0 : int(col) + k + 1]
+        if patch.size == 0:
+            return False
+        rr, cc = np.nonzero(patch)
+        return bool(
+            len(rr) and (np.hypot(rr + r0 - row, cc + c0 - col).min() * self.grid.resolution <= within)
+        )
 
     def contains(self, x: float, y: float, min_clearance: float = 0.0) -> bool:
         row, col = self.grid.world_to_cell(x, y)

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bimtools.site.records import Obstacle
-from initcli.core.raycast import cast_rays, segment_directions
+from initcli.core.raycast import cast_rays, ray_segment_params, segment_directions
 
 EPS = 1e-9  # m^2: shortest squared segment length in clearance()
 NEAR_CACHE_SIZE = 256  # blocks of grid cells whose segment indices SimWorld keeps
@@ -21,6 +21,14 @@ def polygon_edges(ring: np.ndarray) -> np.ndarray:
     return np.column_stack([ring[:-1], ring[1:]])
 
 
+def closed_ring(points: object) -> np.ndarray:
+    """(n, 2) points of an outline, with the first repeated at the end when it is not already."""
+    ring = np.asarray(points, dtype=float).reshape(-1, 2)
+    if len(ring) > 1 and not np.array_equal(ring[0], ring[-1]):
+        ring = np.vstack([ring, ring[:1]])
+    return ring
+
+
 def box_edges(cx: float, cy: float, half_w: float, half_h: float, yaw: float = 0.0) -> np.ndarray:
     c, s = math.cos(yaw), math.sin(yaw)
     corners = np.array(
@@ -28,6 +36,25 @@ def box_edges(cx: float, cy: float, half_w: float, half_h: float, yaw: float = 0
     )
     rot = corners @ np.array([[c, s], [-s, c]]) + [cx, cy]
     return polygon_edges(rot)
+
+
+GLASS_ECHO_DEG = 10.0  # a lidar beam returns from glass only this close to the pane's normal
+
+
+def glass_echoes(origin: np.ndarray, angles: np.ndarray, panes: np.ndarray, max_range: float) -> np.ndarray:
+    """Range along each ray to the first glass pane that sends the beam back: glass is transparent
+    to a lidar except at near-normal incidence (within ``GLASS_ECHO_DEG``), where it reflects."""
+    dx, dy = np.cos(angles)[:, None], np.sin(angles)[:, None]
+    e = segment_directions(panes)[None, :, :]
+    length = np.maximum(np.hypot(e[..., 0], e[..., 1]), 1e-12)
+    w = panes[None, :, 0:2] - origin[None, None, :]
+    denom, t, u = ray_segment_params(w[..., 0], w[..., 1], dx, dy, e[..., 0], e[..., 1])
+    near_normal = np.abs(denom) / length >= math.cos(
+        math.radians(GLASS_ECHO_DEG)
+    )  # |d x e|/|e| = cos(incidence)
+    hit = near_normal & (t > 0) & (u >= 0) & (u <= 1)
+    t = np.where(hit, t, np.inf)
+    return np.minimum(np.full(len(angles), max_range), t.min(axis=1))
 
 
 @dataclass
@@ -81,9 +108,15 @@ class SimWorld:
     clutter: list[np.ndarray] = field(default_factory=list)  # (5, 2) closed boxes, for plots
     workers: list[Worker] = field(default_factory=list)
     cell: float = 4.0
+    glass: np.ndarray | None = None  # (S,) bool: glazed segments (block motion, mostly not the lidar)
 
     def __post_init__(self) -> None:
         self.static = np.asarray(self.static, dtype=float).reshape(-1, 4)
+        self.glass = (
+            np.zeros(len(self.static), dtype=bool)
+            if self.glass is None
+            else np.asarray(self.glass, dtype=bool).reshape(-1)
+        )
         self._directions = segment_directions(self.static)
         self._index: dict[tuple[int, int], np.ndarray] = {}
         self._near_cache: dict[tuple[int, int, int, int], np.ndarray] = {}
@@ -104,12 +137,17 @@ class SimWorld:
         clutter: list[np.ndarray] | None = None,
         workers: list[Worker] | None = None,
     ) -> SimWorld:
-        parts = [polygon_edges(np.asarray(o.exterior)) for o in obstacles]
-        parts += [polygon_edges(np.asarray(h)) for o in obstacles for h in o.holes]
+        parts = [polygon_edges(closed_ring(o.exterior)) for o in obstacles]
+        glazed = [np.full(len(p), o.glass) for o, p in zip(obstacles, parts, strict=True)]
+        holes = [(o, polygon_edges(closed_ring(h))) for o in obstacles for h in o.holes]
+        parts += [p for _, p in holes]
+        glazed += [np.full(len(p), o.glass) for o, p in holes]
         boxes = clutter or []
         parts += [polygon_edges(b) for b in boxes]
+        glazed += [np.zeros(len(b) - 1, dtype=bool) for b in boxes]
         static = np.concatenate(parts) if parts else np.zeros((0, 4))
-        return SimWorld(static=static, clutter=boxes, workers=workers or [])
+        glass = np.concatenate(glazed) if glazed else np.zeros(0, dtype=bool)
+        return SimWorld(static=static, clutter=boxes, workers=workers or [], glass=glass)
 
     def ids_near(self, x: float, y: float, radius: float) -> np.ndarray:
         """Sorted indices into ``static`` of the segments in the grid cells within ``radius`` of a point.
@@ -166,16 +204,23 @@ class SimWorld:
         """Range along each ray to the nearest static segment or worker at ``t`` (see
         :func:`initcli.core.raycast.cast_rays`)."""
         origin = np.asarray(origin, dtype=float)
-        if self._index:
-            ids = self.ids_near(float(origin[0]), float(origin[1]), max_range)
-            static, directions = self.static[ids], self._directions[ids]
-        else:
-            static, directions = self.static, self._directions
+        ids = (
+            self.ids_near(float(origin[0]), float(origin[1]), max_range)
+            if self._index
+            else np.arange(len(self.static))
+        )
+        assert self.glass is not None
+        glazed = ids[self.glass[ids]]
+        ids = ids[~self.glass[ids]]
+        static, directions = self.static[ids], self._directions[ids]
         moving = self.worker_segments(t)
         if len(moving):
             static = np.concatenate([static, moving])
             directions = np.concatenate([directions, segment_directions(moving)])
-        return cast_rays(origin, angles, static, max_range, directions)
+        ranges = cast_rays(origin, angles, static, max_range, directions)
+        if len(glazed):
+            ranges = np.minimum(ranges, glass_echoes(origin, angles, self.static[glazed], max_range))
+        return ranges
 
     def clearance(self, x: float, y: float, t: float, radius: float = 1.0) -> float:
         """Distance from a point to the nearest segment (capped at ``radius``)."""

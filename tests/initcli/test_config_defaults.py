@@ -23,6 +23,7 @@ SITE_KEYS = {
     "alpha": ("matching", "alpha"),
     "beta": ("matching", "beta"),
     "max_outliers": ("matching", "max_outliers"),
+    "outlier_share": ("matching", "outlier_share"),
     "revisits": ("matching", "revisits"),
     "pose_method": ("matching", "pose_method"),
     "pose_window": ("matching", "pose_window"),

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from bimtools.errors import InputError
@@ -54,3 +56,11 @@ def test_features_csv_errors_name_the_line(tmp_path, text, message):
 def test_format_features_has_no_negative_zero():
     text = format_features([Feature("a", "Door", 0, 0, -1e-17, -1.0, 1, 2)])
     assert "-0.000000" not in text
+
+
+def test_a_stray_carriage_return_is_one_line_of_error(tmp_path: Path) -> None:
+    """Found by the fuzz test: a bare CR inside a field made the csv module raise its own error."""
+    path = tmp_path / "features.csv"
+    path.write_bytes(b"ID,Category,X,Y,Norm_X,Norm_Y,Width,Height\n1,Door,0,0,1,0\r\x01,1,2\n")
+    with pytest.raises(InputError, match=r"features\.csv:\d+: "):
+        read_features(path)

@@ -115,7 +115,7 @@ def test_outlier_is_null_in_json(tmp_path: Path, table1: Path) -> None:
     doc = json.loads(result.stdout)
     jsonschema.validate(doc, RESULT_SCHEMA)
     assert result.exit_code == 0 and doc["hypotheses"][0]["matches"].count(None) == 1
-    strict = invoke("match", log, "--site", table1, "--json", "--max-outliers", "0")
+    strict = invoke("match", log, "--site", table1, "--json", "--max-outliers", "0", "--outlier-share", "0")
     assert strict.exit_code == 4 and json.loads(strict.stdout)["verdict"] == "no consistent match"
 
 
@@ -141,7 +141,7 @@ def test_ambiguous_exit_3(tmp_path: Path) -> None:
 def test_no_match_exit_4(tmp_path: Path, table1: Path) -> None:
     other = [SimFeature(f"O{i}", "door", x, 0.0, 0.0, 1.0) for i, x in enumerate([1.0, 3.0, 9.5, 12.0, 19.0])]
     log = make(tmp_path, "other.jsonl", render=other, waypoints=((0.0, 1.0), (16.0, 1.0)))
-    result = invoke("match", log, "--site", table1, "--max-outliers", "0")
+    result = invoke("match", log, "--site", table1, "--max-outliers", "0", "--outlier-share", "0")
     assert result.exit_code == 4 and result.stdout.strip().splitlines()[-1].strip() == "no consistent match"
 
 

@@ -164,7 +164,9 @@ def test_point_symmetric_layout_is_never_unique(tmp_path) -> None:
 def test_a_persistent_false_positive_is_tolerated_with_one_outlier(tmp_path, distinct_csv) -> None:
     poster = SimFeature("poster", "door", 13.0, 0.0, 0.0, 1.0)  # looks like a door, not in the BIM
     waypoints = [(1.0, 1.0), (26.0, 1.0)]
-    strict, truth = run(tmp_path, distinct_csv, corridor(), waypoints, phantoms=[poster], max_outliers=0)
+    strict, truth = run(
+        tmp_path, distinct_csv, corridor(), waypoints, phantoms=[poster], max_outliers=0, outlier_share=0.0
+    )
     assert not any(
         h.pose.distance_to(truth) < 0.5 for h in strict.hypotheses
     )  # the paper's algorithm loses it
@@ -307,3 +309,19 @@ def test_three_detections_with_a_false_one_are_never_a_wrong_unique_match(tmp_pa
     tolerant = match_log(log, site, MatchOptions(max_outliers=1, top=50), ClassMap())
     assert tolerant.exit_code == 3
     assert ["L2", "L3", None] in [h.matches for h in tolerant.hypotheses]
+
+
+def test_the_outlier_budget_grows_with_the_sequence(tmp_path, distinct_csv) -> None:
+    """Three posters on one pass (a site as built): one outlier is not enough; the budget grows to a
+    share of the features, and the fewest outliers that explain the sequence win."""
+    posters = [SimFeature(f"poster-{x}", "door", x, 0.0, 0.0, 1.0) for x in (5.0, 13.5, 20.5)]
+    waypoints = [(1.0, 1.0), (38.0, 1.0)]
+    fixed, truth = run(tmp_path, distinct_csv, corridor(), waypoints, phantoms=posters, outlier_share=0.0)
+    assert not any(h.pose.distance_to(truth) < 0.5 for h in fixed.hypotheses)
+    assert fixed.outliers_allowed <= 1
+    grown, truth = run(tmp_path, distinct_csv, corridor(), waypoints, phantoms=posters)
+    assert grown.verdict == "unique match"
+    (h,) = grown.hypotheses
+    assert h.n_outliers == 3 and grown.outliers_allowed == 3
+    assert h.pose.distance_to(truth) < 1e-3
+    assert any("matched with 3" in n for n in grown.notes)

@@ -10,7 +10,14 @@ import pytest
 from bimtools.extract.output import write_site
 from bimtools.extract.pipeline import extract_site
 from bimtools.site.load import StoreyModel, load_site
-from initcli.sim.as_built import LEAF_CLASS, AsBuiltParams, corridor_length, derive_as_built
+from initcli.sim.as_built import (
+    LEAF_CLASS,
+    AsBuiltParams,
+    corridor_length,
+    derive_as_built,
+    is_exterior,
+    stand_out,
+)
 from initcli.sim.scenario import Circulation
 from initcli.sim.synthetic_log import sim_features_from_bim
 
@@ -23,6 +30,13 @@ def block_a(tmp_path_factory: pytest.TempPathFactory) -> StoreyModel:
     write_site(out, extract_site(SAMPLES / "block_a.ifc"), preview=False)
     site = load_site(out)
     return max(site.storeys.values(), key=lambda s: len(s.features))
+
+
+@pytest.fixture(scope="module")
+def ntu_hallway(tmp_path_factory: pytest.TempPathFactory) -> StoreyModel:
+    out = tmp_path_factory.mktemp("ntu") / "site"
+    write_site(out, extract_site(SAMPLES / "ntu_hallway.ifc"), preview=False)
+    return next(iter(load_site(out).storeys.values()))
 
 
 def derive(model: StoreyModel, seed: int = 1, leaves: bool = False, **params: float):
@@ -145,3 +159,50 @@ def test_every_installed_closed_door_gets_a_leaf_across_its_opening(block_a: Sto
     assert not any(
         o.ifc_class == LEAF_CLASS for o in derive(block_a, leaves=True, missing_doors=1.0).obstacles
     )
+
+
+def test_the_envelope_stays_closed(ntu_hallway: StoreyModel) -> None:
+    """Exterior doors are never left open; a missing one is boarded up (an obstacle, no feature)."""
+    model = ntu_hallway
+    circulation = Circulation.of(model)
+    features = sim_features_from_bim(model.features)
+    exterior = {f.id for f in features if f.cls == "door" and is_exterior(f, circulation)}
+    interior = door_ids(model) - exterior
+    assert exterior and interior  # the corridor ends in doors to the outside; the rest lead inside
+    world = derive(model, leaves=True, missing_doors=1.0)
+    boards = {o.element for o in world.obstacles if o.ifc_class == LEAF_CLASS}
+    assert boards == exterior and not exterior & {f.id for f in world.features}
+    world = derive(model, leaves=True, open_doors=1.0)
+    leaves = {o.element for o in world.obstacles if o.ifc_class == LEAF_CLASS}
+    assert leaves == exterior  # every inside door stands open, the outside ones are shut
+    assert door_ids(model) <= {f.id for f in world.features}
+
+
+def test_a_stack_standing_out_leaves_a_passage() -> None:
+    walls = np.array([[0.0, 0.0, 10.0, 0.0], [0.0, 1.6, 10.0, 1.6], [0.0, 3.2, 10.0, 3.2]])
+    narrow = np.array([[2.0, 0.0], [3.2, 0.0], [3.2, 0.6], [2.0, 0.6], [2.0, 0.0]])  # 1.6 m corridor
+    out = stand_out([narrow], 1.0, np.random.default_rng(0), walls[:2])
+    assert np.array_equal(out[0], narrow)  # 0.6 + 0.6 out would leave 0.4 m: it stays at its wall
+    wide = stand_out([narrow], 1.0, np.random.default_rng(0), walls[[0, 2]])  # 3.2 m corridor
+    assert np.allclose(wide[0] - narrow, [0.0, 0.6])
+    free = stand_out([narrow], 1.0, np.random.default_rng(0))  # no world given: always out
+    assert np.allclose(free[0] - narrow, [0.0, 0.6])
+
+
+def test_a_gap_narrower_than_the_robot_splits_the_circulation(block_a: StoreyModel) -> None:
+    open_plan = Circulation.of(block_a)
+    free = open_plan.cells(0.9)
+    x0, y0 = free[np.argmin(np.abs(free[:, 0] - 15.0) + np.abs(free[:, 1] - 11.0))]
+    # The corridor's walls either side of (x0, y0): a stack across it leaves a 0.4 m gap.
+    ys = [y for y in np.arange(y0 - 3, y0 + 3, 0.05) if open_plan.contains(x0, y)]
+    low, high = min(ys), max(ys)
+    box = np.array([[x0, low - 0.2], [x0 + 0.6, low - 0.2], [x0 + 0.6, high - 0.4], [x0, high - 0.4]])
+    west, east = (x0 - 3.0, y0), (x0 + 3.6, y0)
+    loose = Circulation.of(block_a, boxes=[box])
+    assert loose.region_at(*west) == loose.region_at(*east) > 0  # a point can slip through
+    tight = Circulation.of(block_a, boxes=[box], footprint=0.35)
+    assert tight.region_at(*west) > 0 and tight.region_at(*east) > 0
+    assert tight.region_at(*west) != tight.region_at(*east)  # a 0.7 m robot cannot
+    assert tight.clearance[tight.grid.world_to_cell(*west)] == pytest.approx(
+        loose.clearance[loose.grid.world_to_cell(*west)]
+    )  # clearance stays the distance to the nearest obstacle

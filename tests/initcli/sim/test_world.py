@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from bimtools.site.records import FREE
+from bimtools.site.records import FREE, Obstacle
 from initcli.config import load_config
 from initcli.core.raycast import ray_segment_distances
 from initcli.drivers.sim import LidarSpec
@@ -80,3 +80,29 @@ def test_segments_near_cache(storey_world) -> None:
     within = np.hypot(*(a + ab * s[:, None] - [x, y]).T) <= 20.0
     near = {tuple(r) for r in world.segments_near(x, y, 20.0)}
     assert {tuple(r) for r in world.static[within]} <= near
+
+
+def _pane(x: float) -> Obstacle:
+    """A 4 m glass pane along y at ``x`` (an open ring: the world closes it)."""
+    return Obstacle(
+        "", "pane", "IfcWindow", ((x, -2.0), (x + 0.02, -2.0), (x + 0.02, 2.0), (x, 2.0)), glass=True
+    )
+
+
+def test_glass_blocks_motion_but_lets_the_lidar_through_except_head_on() -> None:
+    wall = Obstacle("", "wall", "IfcWall", ((6.0, -5.0), (6.2, -5.0), (6.2, 5.0), (6.0, 5.0)))
+    world = SimWorld.from_obstacles([_pane(3.0), wall])
+    assert world.glass is not None and world.glass.sum() == 4  # the open ring was closed: 4 edges
+    origin = np.array([0.0, 0.0])
+    head_on, slanted = world.raycast(origin, np.radians([0.0, 25.0]), 20.0, 0.0)
+    assert head_on == pytest.approx(3.0, abs=1e-6)  # near-normal incidence: the pane reflects
+    assert slanted == pytest.approx(6.0 / math.cos(math.radians(25.0)), abs=1e-6)  # through to the wall
+    assert world.clearance(2.9, 0.5, 0.0, 1.0) == pytest.approx(0.1, abs=1e-6)  # but it is an obstacle
+
+
+def test_open_obstacle_rings_are_closed() -> None:
+    box = Obstacle("", "leaf", "DoorLeaf", ((0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)))
+    world = SimWorld.from_obstacles([box])
+    assert len(world.static) == 4
+    # the closing edge (0, 1) -> (0, 0) is there: a ray from the left hits x = 0
+    assert world.raycast(np.array([-1.0, 0.5]), np.array([0.0]), 5.0, 0.0)[0] == pytest.approx(1.0)
