@@ -56,7 +56,12 @@ def survey_params(config: SessionConfig, spacing: float, headings: int) -> Surve
         camera=CameraModel(
             camera, mount, max_range=config.camera.range, max_view_angle_deg=config.camera.max_view_angle
         ),
-        matching=UniquenessParams(alpha=m.alpha, beta_deg=m.beta, max_outliers=m.max_outliers),
+        matching=UniquenessParams(
+            alpha=m.alpha,
+            beta_deg=m.beta,
+            max_outliers=m.max_outliers,
+            min_claim=config.verification.min_claim_inliers if config.verification.enabled else 0,
+        ),
     )
 
 

@@ -34,7 +34,7 @@ class FrontierParams:
     half_size: float = 80.0  # m: the grid spans +-this around the odometry origin
     integrate_range: float = 8.0  # m of each beam written into the grid
     min_cluster: int = 6  # cells: smaller frontier clusters are noise
-    clearance: float = 0.45  # m: planning keeps this far from occupied and unknown cells
+    clearance: float = 0.35  # m: planning keeps this far from occupied and unknown cells (radius + 5 cm)
     size_weight: float = 0.05  # m of path traded for one frontier cell (prefers big openings)
     visited_radius: float = 1.5  # m: a frontier this close to a failed target is not chosen again
 

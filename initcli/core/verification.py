@@ -90,6 +90,7 @@ class Verification:
     path_free: float | None = None  # share of the recent path on free BIM cells (None: no map)
     passed: bool = True
     reasons: tuple[str, ...] = field(default_factory=tuple)
+    aligned: Pose2D | None = None  # the hypothesis (odom -> BIM) moved to where the scans fit best
 
     def as_dict(self) -> dict[str, object]:
         return {
@@ -199,6 +200,40 @@ class ScanSample:
     range_max: float
 
 
+def best_scan_alignment(
+    transform: Pose2D,
+    scans: list[ScanSample],
+    field_: LikelihoodField,
+    tolerance: float,
+    search_xy: float = 0.0,
+    search_yaw: float = 0.0,
+) -> tuple[float, Pose2D] | None:
+    """The best mean share of beams on mapped walls over ``scans``, each placed in the BIM frame by
+    ``transform`` (odom -> BIM) moved by a 5 x 5 grid of shifts (up to ``search_xy`` m) and turns in
+    steps of at most 3 degrees (up to ``search_yaw`` rad) of the pose at the last scan, and the moved
+    transform that fits best (the lidar's correction of a coarse pose). None when there is no scan."""
+    if not scans:
+        return None
+    last = scans[-1].odom
+    here = transform * last
+    best = (-1.0, transform)
+    shifts = np.linspace(-search_xy, search_xy, 5) if search_xy > 0 else np.zeros(1)
+    steps = 2 * math.ceil(search_yaw / math.radians(SCAN_TURN_STEP_DEG)) + 1
+    turns = np.linspace(-search_yaw, search_yaw, steps) if search_yaw > 0 else np.zeros(1)
+    # Nearest moves first, so that a tie keeps the smallest correction.
+    moves = sorted(
+        ((float(a), float(dx), float(dy)) for a in turns for dx in shifts for dy in shifts),
+        key=lambda m: (abs(m[0]) / max(search_yaw, 1e-9)) + math.hypot(m[1], m[2]) / max(search_xy, 1e-9),
+    )
+    for dyaw, dx, dy in moves:
+        moved = Pose2D(here.x + dx, here.y + dy, here.yaw + dyaw) * last.inverse()
+        fits = [scan_fit(moved * s.odom, s.angles, s.ranges, s.range_max, field_, tolerance) for s in scans]
+        fit = float(np.mean(fits))
+        if fit > best[0]:
+            best = (fit, moved)
+    return best
+
+
 def path_scan_fit(
     transform: Pose2D,
     scans: list[ScanSample],
@@ -207,30 +242,9 @@ def path_scan_fit(
     search_xy: float = 0.0,
     search_yaw: float = 0.0,
 ) -> float | None:
-    """Mean share of beams on mapped walls over ``scans``, each placed in the BIM frame by ``transform``
-    (odom -> BIM); the best over a 5 x 5 grid of shifts (up to ``search_xy`` m) and turns in steps of
-    at most 3 degrees (up to ``search_yaw`` rad) of the pose at the last scan. None when there is no
-    scan."""
-    if not scans:
-        return None
-    last = scans[-1].odom
-    here = transform * last
-    best = 0.0
-    shifts = np.linspace(-search_xy, search_xy, 5) if search_xy > 0 else np.zeros(1)
-    steps = 2 * math.ceil(search_yaw / math.radians(SCAN_TURN_STEP_DEG)) + 1
-    turns = np.linspace(-search_yaw, search_yaw, steps) if search_yaw > 0 else np.zeros(1)
-    for dyaw in turns:
-        for dx in shifts:
-            for dy in shifts:
-                moved = (
-                    Pose2D(here.x + float(dx), here.y + float(dy), here.yaw + float(dyaw)) * last.inverse()
-                )
-                fits = [
-                    scan_fit(moved * s.odom, s.angles, s.ranges, s.range_max, field_, tolerance)
-                    for s in scans
-                ]
-                best = max(best, float(np.mean(fits)))
-    return best
+    """The fit of :func:`best_scan_alignment` alone."""
+    found = best_scan_alignment(transform, scans, field_, tolerance, search_xy, search_yaw)
+    return None if found is None else found[0]
 
 
 def verify_hypothesis(
@@ -262,8 +276,8 @@ def verify_hypothesis(
     seen = explained(feature_xy, feature_categories, s_bim, sighting_categories, params.match_radius)
     missed_mask = predicted & ~seen
     n_pred, n_miss = int(predicted.sum()), int(missed_mask.sum())
-    fit = (
-        path_scan_fit(
+    found = (
+        best_scan_alignment(
             transform,
             scans,
             field_,
@@ -274,6 +288,7 @@ def verify_hypothesis(
         if field_ is not None
         else None
     )
+    fit, aligned = (None, None) if found is None else found
     path_free = None
     if free is not None and path_odom:
         path_free = free.share_free(transform.apply(np.array([[p.x, p.y] for p in path_odom])))
@@ -292,4 +307,5 @@ def verify_hypothesis(
         path_free=path_free,
         passed=not reasons or not params.enabled,
         reasons=tuple(reasons),
+        aligned=aligned,
     )

@@ -87,7 +87,10 @@ class MatchOptions:
     """
 
     storey: str | None = None  # None or "auto": every storey when the site has several
-    alpha: float = 0.5  # m, Eq. 7
+    # m, Eq. 7. The paper uses 0.5; on sites as built (doors 0.3 m off their place, a 2 % odometry
+    # scale error) 0.8 initialised 49 of 60 construction starts against 44 at 0.5, with no wrong
+    # claim at either and 59 against 60 of 60 in the ideal world (eval, 20 starts per sample).
+    alpha: float = 0.8
     beta: float = 15.0  # degrees, Eq. 9 (radians only inside initcli.core)
     top: int = 5  # hypotheses shown
     max_outliers: int = 1  # false/misclassified detections tolerated

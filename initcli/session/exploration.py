@@ -4,8 +4,9 @@ they disagree.
 Each hypothesis in turn (the most probable first) names a target: a viewpoint in front of the
 nearest BIM feature of the highest-priority category (fewest in the BIM) that it has not matched
 yet and whose sighting would rule out another hypothesis. The robot follows a route there along
-the BIM's corridors with the modified bug algorithm (Eq. 15-16). A target is given up when the
-robot got there and saw nothing new, stopped getting closer, or ran out of time.
+the BIM's corridors (doors shut: a robot cannot open one) with the modified bug algorithm
+(Eq. 15-16). A target is given up when the robot got there and saw nothing new, stopped getting
+closer, or ran out of time.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from bimtools.site.records import Feature
 from initcli.config import SessionConfig
 from initcli.core.bug_navigation import BugParams, RouteNavigator
 from initcli.core.geometry import Pose2D
-from initcli.core.grid_planner import PlanningGrid
+from initcli.core.grid_planner import PlanningGrid, with_doors_closed
 from initcli.core.wall_following import ScanView, WallFollowParams
 from initcli.drivers.base import SensorFrame
 from initcli.match.pipeline import Hypothesis
@@ -80,7 +81,15 @@ class ActiveExploration:
 
     def _planner(self, storey: str) -> PlanningGrid | None:
         if storey not in self._planners:
-            grid = self.site.storeys[storey].grid
+            model = self.site.storeys[storey]
+            grid = model.grid
+            if grid is not None:  # routes run along the corridors: doors stay shut
+                doors = [
+                    (f.x, f.y, f.norm_x, f.norm_y, f.width)
+                    for f in model.features
+                    if f.ifc_class == "IfcDoor"
+                ]
+                grid = with_doors_closed(grid, np.array(doors).reshape(-1, 5))
             self._planners[storey] = (
                 PlanningGrid.of(grid, self.robot_radius + PLANNER_MARGIN) if grid is not None else None
             )

@@ -117,6 +117,8 @@ class Session:
         self.last_feature_t = 0.0  # s: when the last new feature was confirmed
         self.turned = 0.0  # rad turned since the look or recovery rotation began
         self.hypotheses = 0  # of the last match step
+        self.storeys_left: list[str] = []  # storeys the last match step's hypotheses lie on
+        self.aligned: Pose2D | None = None  # the verified coarse transform moved to the scans' best fit
         self.checks = verification_params(config)
         self.view = CameraView(driver.camera, driver.mount, self.options.min_depth)
         self._evidence: dict[str, StoreyEvidence] = {}
@@ -182,7 +184,7 @@ class Session:
             self._set_state(frame.t, "look")
         else:
             self._set_state(frame.t, "explore")
-        self.hypotheses = 0
+        self.hypotheses, self.storeys_left = 0, []
         self.last_feature_t = frame.t
         self.turned = 0.0
         if self.cannot_leave is not None:
@@ -289,6 +291,7 @@ class Session:
             return False
         report = self._match(frame.t)
         self.hypotheses = report.n_hypotheses
+        self.storeys_left = sorted({h.storey for h in report.hypotheses})
         if report.n_hypotheses == 1:
             if self._verified(frame, report):
                 self._coarse_done(frame, report)
@@ -368,6 +371,7 @@ class Session:
         check = self._verify(hypothesis.storey, pose * frame.odom.inverse())
         self._record_check(frame, "coarse", hypothesis.storey, pose, check)
         if check.passed:
+            self.aligned = check.aligned
             return True
         self.result.rejected += 1
         return False
@@ -401,10 +405,19 @@ class Session:
             return
         self.side = -self.side
         self.exploration.navigator = None
+        # Shuttling in a corridor section (a stack or a hoarding narrows the way on): head for the
+        # nearest opening the lidar has seen and not yet reached, as out of a loop.
+        route = self.local_map.plan(frame.odom) if self.state == "explore" else []
+        if route:
+            self.escape = RouteNavigator(route, BugParams(follow=self.follow))
+            self.loop_escape_until = frame.t + LOOP_ESCAPE_S
+            self.result.loop_escapes += 1
         self._set_state(
             frame.t,
             "explore",
-            why="shuttling over the same ground; following the "
+            why="shuttling over the same ground; "
+            + ("heading for an unexplored opening, then " if route else "")
+            + "following the "
             + ("left" if self.side > 0 else "right")
             + " wall",
         )
@@ -417,7 +430,12 @@ class Session:
             self._fail(
                 frame,
                 f"moved {limits.max_distance:g} m without a unique match "
-                f"({len(self.perception.confirmed)} features, {self.hypotheses} hypotheses)",
+                f"({len(self.perception.confirmed)} features, {self.hypotheses} hypotheses"
+                + (
+                    f" on storeys {', '.join(self.storeys_left)}: the storey is not resolved)"
+                    if len(self.storeys_left) > 1
+                    else ")"
+                ),
             )
             return True
         if frame.t > limits.max_time:
@@ -464,6 +482,11 @@ class Session:
         r.matched_ids = list(best.matches)
         r.features = list(report.features)  # the ones matched (a drift window may leave old ones out)
         transform = rectified * frame.odom.inverse()
+        if self.aligned is not None:
+            # Fine tuning starts where the recent scans fit the BIM best near the coarse pose (the
+            # verification's search: decimetres, degrees): a coarse pose from doors built off their
+            # place can be 15 degrees off, which a filter seeded 10 degrees wide may not recover.
+            transform = self.aligned
         r.transform = transform
         self.perception.detecting = False  # the log ends its detections here: it replays to this verdict
         self._set_state(
@@ -481,7 +504,7 @@ class Session:
             tuning = FineTuning(cfg.fine_tuning, model.grid, self.rng, self.side, self.follow)
             hooks = FineTuningHooks(self._record_frame, self._note, self._emit)
             landmarks = matched_pairs(r.features, r.matched_ids, model.features)
-            outcome = tuning.run(self.driver, frame, rectified, transform, landmarks, hooks)
+            outcome = tuning.run(self.driver, frame, transform * frame.odom, transform, landmarks, hooks)
             frame = outcome.frame
             if isinstance(outcome, FineLost):
                 self._fail(frame, outcome.reason)

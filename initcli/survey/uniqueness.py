@@ -20,19 +20,24 @@ import numpy as np
 from initcli.core.hypotheses import drop_dominated, pose_groups, rank_order
 from initcli.core.matching import OUTLIER, BimIndex, Matcher, MatchOverflow, MatchParams, MatchState
 from initcli.core.pose import rigid_align_batch
+from initcli.core.verification import VerificationParams
+from initcli.match.pipeline import MatchOptions
 
 AMBIGUOUS = 1 << 30  # the count given to a pattern that overflowed the matcher
 
 
 @dataclass(frozen=True)
 class UniquenessParams:
-    alpha: float = 0.5  # m, Eq. 7
+    alpha: float = MatchOptions.alpha  # m, Eq. 7
     beta_deg: float = 15.0  # degrees, Eq. 9 (and the yaw tolerance of rule 3)
     max_outliers: int = 1
     min_inliers: int = 3
     revisits: bool = True
     pose_radius: float = 1.0  # m, rule 3
     max_partials: int = 2_000_000
+    # matched features a unique match needs before the session claims it (its verification's
+    # min_claim_inliers): the survey predicts the session, so it waits as long
+    min_claim: int = VerificationParams().min_claim_inliers
 
     def match_params(self) -> MatchParams:
         return MatchParams(
@@ -77,7 +82,8 @@ def first_unique(
     xy: np.ndarray, classes: Sequence[str], sequences: Sequence[Sequence[int]], params: UniquenessParams
 ) -> list[int]:
     """For each sequence of feature indices (in the order confirmed), the number of features after
-    which exactly one hypothesis is left, or -1 when that never happens.
+    which exactly one hypothesis is left (and at least ``min_claim`` were seen), or -1 when that never
+    happens.
 
     Sequences are matched in lexicographic order so that a shared prefix is matched once.
     """
@@ -107,7 +113,7 @@ def first_unique(
                     except MatchOverflow:
                         state, count = None, AMBIGUOUS
                 stack.append((seq[n], state, count))
-            if count == 1:
+            if count == 1 and n + 1 >= params.min_claim:
                 out[i] = n + 1
                 break
     return out

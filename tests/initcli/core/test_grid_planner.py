@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from bimtools.site.records import FREE, OCCUPIED, OccupancyGrid
-from initcli.core.grid_planner import PlanningGrid
+from initcli.core.grid_planner import PlanningGrid, with_doors_closed
 
 
 def _u_corridor(resolution: float = 0.1) -> OccupancyGrid:
@@ -75,3 +75,15 @@ def test_unreachable_and_outside_starts() -> None:
     dist, pred, start = planner.distances_from(-20.0, -20.0)
     assert start == -1 and np.isinf(dist).all()
     assert planner.path(pred, start, goal) == []
+
+
+def test_routes_never_pass_a_door() -> None:
+    """The gap above the dividing wall is a 1.5 m doorway: with its door shut no route crosses."""
+    grid = _u_corridor()
+    door = np.array([[5.0, 5.25, 1.0, 0.0, 1.4]])  # in the gap, facing +x, 1.4 m wide
+    closed = with_doors_closed(grid, door)
+    assert np.array_equal(grid.cells, _u_corridor().cells)  # the map itself is left alone
+    for g, crosses in ((grid, True), (closed, False)):
+        p = PlanningGrid.of(g, clearance=0.3, cell=0.2)
+        dist, _, _ = p.distances_from(2.0, 2.0)
+        assert math.isfinite(dist[p.node_at(8.0, 2.0)]) == crosses

@@ -14,6 +14,7 @@ from initcli.core.verification import (
     CameraView,
     ScanSample,
     VerificationParams,
+    best_scan_alignment,
     explained,
     frames_in_view,
     misses_reject,
@@ -146,3 +147,19 @@ def test_the_path_must_lie_in_free_space() -> None:
     assert free.share_free(across) < 0.9
     outside = along + np.array([0.0, 40.0])
     assert free.share_free(outside) == 0.0
+
+
+def test_the_best_alignment_corrects_a_turned_and_shifted_coarse_pose() -> None:
+    """A coarse pose 9 degrees turned and 0.3 m off the corridor's centre line: the search brings it
+    back to where the scans fit (the seed fine tuning starts from)."""
+    field = LikelihoodField(corridor_grid())
+    scans = [corridor_scan(Pose2D(float(x), 0.9, 0.0)) for x in (20.0, 21.0, 22.0)]
+    last = scans[-1].odom
+    wrong = Pose2D(last.x, last.y + 0.3, math.radians(9.0)) * last.inverse()
+    found = best_scan_alignment(wrong, scans, field, 0.1, 0.3, math.radians(12.0))
+    assert found is not None
+    fit, aligned = found
+    assert fit > 0.9 > path_scan_fit(wrong, scans, field, 0.1)  # type: ignore[operator]
+    here = aligned * last
+    assert abs(here.y - last.y) < 0.1 and abs(math.degrees(here.yaw)) < 1.5
+    assert best_scan_alignment(Pose2D.identity(), [], field, 0.1, 0.3, 0.2) is None

@@ -7,6 +7,7 @@ import pytest
 from bimtools.errors import InputError
 from initcli.config import SessionConfig
 from initcli.eval.sweep import apply_sweep, parse_sweep
+from initcli.match.pipeline import MatchOptions
 
 
 def test_short_names_map_to_config_paths():
@@ -17,8 +18,8 @@ def test_short_names_map_to_config_paths():
 
 def test_apply_sets_one_value_and_leaves_the_original_alone():
     config = SessionConfig()
-    swept = apply_sweep(config, parse_sweep("alpha=0.8"), 0.8)
-    assert swept.matching.alpha == 0.8 and config.matching.alpha == 0.5
+    swept = apply_sweep(config, parse_sweep("alpha=1.1"), 1.1)
+    assert swept.matching.alpha == 1.1 and config.matching.alpha == MatchOptions().alpha
     assert swept.matching.beta == config.matching.beta
     workers = apply_sweep(config, parse_sweep("workers=0,4"), 4.0)
     assert workers.sim.workers == 4 and isinstance(workers.sim.workers, int)

@@ -113,3 +113,18 @@ def test_a_start_that_cannot_leave_fails_before_moving(config) -> None:
     assert result.reason == "cannot leave: closed in" and driver.commands == []
     assert result.duration_s == 0.0 and result.distance_total_m == 0.0
     assert math.isclose(result.truth_pose.x, 10.0)
+
+
+def test_an_unresolved_storey_is_named_in_the_reason(config) -> None:
+    """storey: auto with hypotheses left on two storeys: the failure says which storeys remain."""
+    session, driver = _session(config, max_distance=1.0)
+    session.perception.travel = 1.5  # past the limit, with what a match step left behind
+    session.hypotheses, session.storeys_left = 2, ["Level 1", "Level 2"]
+    assert session._out_of_limits(driver.start())
+    assert session.result.reason == (
+        "moved 1 m without a unique match (0 features, 2 hypotheses on storeys Level 1, Level 2: "
+        "the storey is not resolved)"
+    )
+    session.storeys_left = ["Level 1"]
+    assert session._out_of_limits(driver.start())
+    assert session.result.reason == "moved 1 m without a unique match (0 features, 2 hypotheses)"

@@ -80,9 +80,13 @@ def test_a_periodic_row_of_doors_stays_ambiguous_until_a_sign_with_no_outlier_al
     params = UniquenessParams()
     assert first_unique(xy, cls, [(2, 3, 4, 5), (3, 4, 5)], params) == [-1, -1]
     with_sign = np.vstack([xy, [[17.0, 1.5]]])
-    strict = UniquenessParams(max_outliers=0)
+    strict = UniquenessParams(max_outliers=0, min_claim=3)
     got = first_unique(with_sign, [*cls, "landmark_1"], [(3, 4, 10, 5), (3, 4, 5)], strict)
     assert got[1] == -1 and got[0] == 3
+    # The session claims a unique match on 4 features (min_claim_inliers): so does the survey.
+    claimed = UniquenessParams(max_outliers=0)
+    assert claimed.min_claim == 4
+    assert first_unique(with_sign, [*cls, "landmark_1"], [(3, 4, 10, 5), (3, 4, 10)], claimed) == [4, -1]
     # with one outlier tolerated, "the sign was a false detection" keeps every shift alive
     assert first_unique(with_sign, [*cls, "landmark_1"], [(3, 4, 10, 5)], params) == [-1]
     # an irregular layout: three features leave "one of them was false" open, a fourth settles it;
