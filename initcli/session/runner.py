@@ -39,7 +39,7 @@ from initcli.core.classes import ClassMap
 from initcli.core.confinement import ConfinementWatch
 from initcli.core.frontier import LocalMap
 from initcli.core.geometry import Pose2D, wrap_angle
-from initcli.core.verification import CameraView, Verification
+from initcli.core.verification import CameraView, Verification, rival_search
 from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
 from initcli.io.detection_log import Meta, State
@@ -355,9 +355,9 @@ class Session:
             )
             return False
         c = self.checks
-        # A match found only once the outlier budget grew (outlier_share) is unique among the
-        # fewest-outlier explanations; it must stay unique with one more outlier allowed.
-        extra = max(c.rival_outliers, 1 if report.outliers_allowed > report.options.max_outliers else 0)
+        extra = rival_search(
+            c.rival_outliers, hypothesis.n_outliers, report.outliers_allowed, report.options.max_outliers
+        )
         rivals = self.perception.rivals(
             self.site, report, hypothesis, extra, c.rival_distance, math.radians(c.rival_turn_deg)
         )

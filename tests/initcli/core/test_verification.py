@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from bimtools.site.records import FREE, OCCUPIED, OccupancyGrid
 from initcli.core.geometry import Pose2D
@@ -19,6 +20,7 @@ from initcli.core.verification import (
     frames_in_view,
     misses_reject,
     path_scan_fit,
+    rival_search,
     verify_hypothesis,
 )
 
@@ -163,3 +165,18 @@ def test_the_best_alignment_corrects_a_turned_and_shifted_coarse_pose() -> None:
     here = aligned * last
     assert abs(here.y - last.y) < 0.1 and abs(math.degrees(here.yaw)) < 1.5
     assert best_scan_alignment(Pose2D.identity(), [], field, 0.1, 0.3, 0.2) is None
+
+
+@pytest.mark.parametrize(
+    ("configured", "claim_outliers", "allowed", "expected"),
+    [
+        (0, 0, 1, 0),  # every detection explained: claimed without a rival search
+        (0, 1, 1, 1),  # it needed an outlier: the true place may need one more
+        (0, 0, 3, 1),  # found only once the budget grew past max_outliers (1)
+        (2, 0, 1, 2),  # rival_outliers set by the user wins when larger
+    ],
+)
+def test_a_noisy_claim_must_stay_unique_with_one_more_outlier(
+    configured: int, claim_outliers: int, allowed: int, expected: int
+) -> None:
+    assert rival_search(configured, claim_outliers, allowed, max_outliers=1) == expected
