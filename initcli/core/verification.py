@@ -200,16 +200,20 @@ class ScanSample:
     range_max: float
 
 
-def rival_search(configured: int, claim_outliers: int, outliers_allowed: int, max_outliers: int) -> int:
+def rival_search(
+    configured: int, claim_outliers: int, outliers_allowed: int, max_outliers: int, budget: int = 0
+) -> int:
     """How many more outliers than the claim was found with a unique match must stay unique under.
 
     A match that needed outliers (``claim_outliers`` > 0), or was found only once the outlier
     budget grew past ``max_outliers``, is unique among the fewest-outlier explanations of noisy
-    data; the true place may need one outlier more (a door built off its place, a poster): it must
-    stay unique with one more allowed. A match that explains every detection needs only the
-    ``configured`` search (``rival_outliers``, 0: none)."""
+    data; the true place may need more outliers (doors built off their place, posters): it must
+    stay unique with at least one more allowed, and up to the ``budget`` that the matcher accepts as
+    an explanation at all (``outlier_share`` of the features). A match that explains every
+    detection needs only the ``configured`` search (``rival_outliers``, 0: none)."""
     noisy = claim_outliers > 0 or outliers_allowed > max_outliers
-    return max(configured, 1 if noisy else 0)
+    found_with = max(outliers_allowed, max_outliers)
+    return max(configured, max(1, budget - found_with) if noisy else 0)
 
 
 def best_scan_alignment(

@@ -355,8 +355,13 @@ class Session:
             )
             return False
         c = self.checks
+        budget = int(report.options.outlier_share * len(report.features))
         extra = rival_search(
-            c.rival_outliers, hypothesis.n_outliers, report.outliers_allowed, report.options.max_outliers
+            c.rival_outliers,
+            hypothesis.n_outliers,
+            report.outliers_allowed,
+            report.options.max_outliers,
+            budget,
         )
         rivals = self.perception.rivals(
             self.site, report, hypothesis, extra, c.rival_distance, math.radians(c.rival_turn_deg)

@@ -180,3 +180,11 @@ def test_a_noisy_claim_must_stay_unique_with_one_more_outlier(
     configured: int, claim_outliers: int, allowed: int, expected: int
 ) -> None:
     assert rival_search(configured, claim_outliers, allowed, max_outliers=1) == expected
+
+
+def test_a_noisy_claim_must_stay_unique_up_to_the_outlier_budget() -> None:
+    # 9 features, outlier_share 0.34: the matcher accepts 3 outliers as an explanation, so a claim
+    # with one outlier must have no rival with up to 3 (2 more than the 1 it was found with).
+    assert rival_search(0, 1, 1, max_outliers=1, budget=3) == 2
+    assert rival_search(0, 3, 3, max_outliers=1, budget=3) == 1  # at the budget: still one more
+    assert rival_search(0, 0, 1, max_outliers=1, budget=3) == 0  # nothing unexplained: no search
