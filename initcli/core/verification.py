@@ -39,7 +39,7 @@ from initcli.core.particle_filter import LikelihoodField, scan_fit
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.core.visibility import CameraModel, FeatureArrays, visible
 
-SCAN_TURN_STEP_DEG = 3.0  # degrees between the turns path_scan_fit tries
+SCAN_TURN_STEP_DEG = 3.0  # degrees between the turns best_scan_alignment tries
 
 
 @dataclass(frozen=True)
@@ -248,19 +248,6 @@ def best_scan_alignment(
         if fit > best[0]:
             best = (fit, moved)
     return best
-
-
-def path_scan_fit(
-    transform: Pose2D,
-    scans: list[ScanSample],
-    field_: LikelihoodField,
-    tolerance: float,
-    search_xy: float = 0.0,
-    search_yaw: float = 0.0,
-) -> float | None:
-    """The fit of :func:`best_scan_alignment` alone."""
-    found = best_scan_alignment(transform, scans, field_, tolerance, search_xy, search_yaw)
-    return None if found is None else found[0]
 
 
 def verify_hypothesis(

@@ -114,6 +114,11 @@ class MatchOptions:
     edge_margin: float = 2.0  # px, detection filter: boxes cut by the left/right border are dropped
     skip_bad: bool = False
 
+    def outlier_budget(self, features: int) -> int:
+        """The most outliers a match of ``features`` confirmed features may declare: max_outliers,
+        grown to outlier_share of them."""
+        return max(self.max_outliers, int(self.outlier_share * features))
+
     def match_params(self) -> MatchParams:
         return MatchParams(
             alpha=self.alpha,
@@ -390,7 +395,7 @@ def match_log(log: DetectionLog, site: Site, opts: MatchOptions, cmap: ClassMap)
 
     # Step 3-4: Algorithm 1 on every storey, then rule 1 (sub-matches) per storey; with no match,
     # one more outlier at a time up to the outlier_share budget.
-    budget = max(params.max_outliers, int(opts.outlier_share * len(features)))
+    budget = opts.outlier_budget(len(features))
     while True:
         cand = _Candidates()
         indexes: dict[str, BimIndex] = {}

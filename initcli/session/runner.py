@@ -118,7 +118,6 @@ class Session:
         self.turned = 0.0  # rad turned since the look or recovery rotation began
         self.hypotheses = 0  # of the last match step
         self.storeys_left: list[str] = []  # storeys the last match step's hypotheses lie on
-        self.aligned: Pose2D | None = None  # the verified coarse transform moved to the scans' best fit
         self.checks = verification_params(config)
         self.view = CameraView(driver.camera, driver.mount, self.options.min_depth)
         self._evidence: dict[str, StoreyEvidence] = {}
@@ -235,13 +234,9 @@ class Session:
             # Circling (between obstacles, in an open hall with no wall in reach, round a room): drive
             # to the nearest unexplored opening the lidar has seen (a frontier), else out along the
             # most open direction; then resume.
-            route = self.local_map.plan(frame.odom)
-            if route:
-                self.escape = RouteNavigator(route, BugParams(follow=self.follow))
-            else:
-                self.escape = BugNavigator(self._open_point(frame, scan), BugParams(follow=self.follow))
-            self.loop_escape_until = frame.t + LOOP_ESCAPE_S
-            self.result.loop_escapes += 1
+            if not self._head_for_frontier(frame):
+                toward = self._open_point(frame, scan)
+                self._escape(frame, BugNavigator(toward, BugParams(follow=self.follow)))
             self._note(frame.t, "loop escape")
         return v, w
 
@@ -293,8 +288,9 @@ class Session:
         self.hypotheses = report.n_hypotheses
         self.storeys_left = sorted({h.storey for h in report.hypotheses})
         if report.n_hypotheses == 1:
-            if self._verified(frame, report):
-                self._coarse_done(frame, report)
+            verified, aligned = self._verified(frame, report)
+            if verified:
+                self._coarse_done(frame, report, aligned)
                 return True
             if self.state != "explore":
                 self._set_state(frame.t, "explore", why="the unique match failed verification")
@@ -341,21 +337,22 @@ class Session:
             frame.t, f"verification ({stage}): " + ("passed" if check.passed else "; ".join(check.reasons))
         )
 
-    def _verified(self, frame: SensorFrame, report: MatchReport) -> bool:
+    def _verified(self, frame: SensorFrame, report: MatchReport) -> tuple[bool, Pose2D | None]:
         """Check a unique match before claiming it (beyond the paper): enough matched features, no
         rival with one more outlier allowed (an as-built site has doors the BIM lacks), negative
-        evidence and the lidar. A failed one is logged and exploration goes on."""
+        evidence and the lidar. A failed one is logged and exploration goes on. Also returns the
+        transform moved to where the recent scans fit best (None: not checked)."""
         if not self.checks.enabled:
-            return True
+            return True, None
         hypothesis = report.hypotheses[0]
         inliers = sum(m is not None for m in hypothesis.matches)
         if inliers < self.checks.min_claim_inliers:
             self._note(
                 frame.t, f"unique match on {inliers} features: waiting for {self.checks.min_claim_inliers}"
             )
-            return False
+            return False, None
         c = self.checks
-        budget = int(report.options.outlier_share * len(report.features))
+        budget = report.options.outlier_budget(len(report.features))
         extra = rival_search(
             c.rival_outliers,
             hypothesis.n_outliers,
@@ -371,15 +368,14 @@ class Session:
                 frame.t,
                 f"unique match has {rivals} rival(s) with {extra} more outlier(s) allowed",
             )
-            return False
+            return False, None
         pose = hypothesis.rectified_pose or hypothesis.pose
         check = self._verify(hypothesis.storey, pose * frame.odom.inverse())
         self._record_check(frame, "coarse", hypothesis.storey, pose, check)
         if check.passed:
-            self.aligned = check.aligned
-            return True
+            return True, check.aligned
         self.result.rejected += 1
-        return False
+        return False, None
 
     def _match(self, t: float) -> MatchReport:
         report = self.perception.match(t, self.site)
@@ -404,6 +400,19 @@ class Session:
         )
         return True
 
+    def _head_for_frontier(self, frame: SensorFrame) -> bool:
+        """Drive out of a loop to the nearest unexplored opening of the local grid; False if none."""
+        route = self.local_map.plan(frame.odom)
+        if route:
+            self._escape(frame, RouteNavigator(route, BugParams(follow=self.follow)))
+        return bool(route)
+
+    def _escape(self, frame: SensorFrame, navigator: BugNavigator | RouteNavigator) -> None:
+        """Follow ``navigator`` for LOOP_ESCAPE_S instead of the wall (a loop or shuttle escape)."""
+        self.escape = navigator
+        self.loop_escape_until = frame.t + LOOP_ESCAPE_S
+        self.result.loop_escapes += 1
+
     def _watch_shuttling(self, frame: SensorFrame) -> None:
         """Shuttling over the same ground for minutes: follow the other wall."""
         if not self.shuttles.confined(frame.t, frame.odom):
@@ -412,16 +421,12 @@ class Session:
         self.exploration.navigator = None
         # Shuttling in a corridor section (a stack or a hoarding narrows the way on): head for the
         # nearest opening the lidar has seen and not yet reached, as out of a loop.
-        route = self.local_map.plan(frame.odom) if self.state == "explore" else []
-        if route:
-            self.escape = RouteNavigator(route, BugParams(follow=self.follow))
-            self.loop_escape_until = frame.t + LOOP_ESCAPE_S
-            self.result.loop_escapes += 1
+        heading = self.state == "explore" and self._head_for_frontier(frame)
         self._set_state(
             frame.t,
             "explore",
             why="shuttling over the same ground; "
-            + ("heading for an unexplored opening, then " if route else "")
+            + ("heading for an unexplored opening, then " if heading else "")
             + "following the "
             + ("left" if self.side > 0 else "right")
             + " wall",
@@ -472,7 +477,7 @@ class Session:
         r.truth_pose = frame.truth
         r.features = list(self.perception.confirmed)
 
-    def _coarse_done(self, frame: SensorFrame, report: MatchReport) -> None:
+    def _coarse_done(self, frame: SensorFrame, report: MatchReport, aligned: Pose2D | None = None) -> None:
         """The unique match: record the coarse and rectified poses (Eq. 17), fine-tune (Eq. 18)."""
         cfg = self.config
         best = report.hypotheses[0]
@@ -487,11 +492,11 @@ class Session:
         r.matched_ids = list(best.matches)
         r.features = list(report.features)  # the ones matched (a drift window may leave old ones out)
         transform = rectified * frame.odom.inverse()
-        if self.aligned is not None:
+        if aligned is not None:
             # Fine tuning starts where the recent scans fit the BIM best near the coarse pose (the
             # verification's search: decimetres, degrees): a coarse pose from doors built off their
             # place can be 15 degrees off, which a filter seeded 10 degrees wide may not recover.
-            transform = self.aligned
+            transform = aligned
         r.transform = transform
         self.perception.detecting = False  # the log ends its detections here: it replays to this verdict
         self._set_state(

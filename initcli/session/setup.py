@@ -25,7 +25,7 @@ from initcli.sim.camera import CameraNoise, SimulatedDetector
 from initcli.sim.robot import DiffDriveRobot, OdometryNoise
 from initcli.sim.scenario import Circulation, place_clutter, place_workers, random_start
 from initcli.sim.synthetic_log import sim_features_from_bim
-from initcli.sim.world import SimWorld
+from initcli.sim.world import SimWorld, world_edges
 
 SESSION_RNG_OFFSET = 7919  # the session's own generator (particle filter) is seeded apart from the world
 
@@ -133,7 +133,7 @@ def build_sim(
         clutter,
         config.sim.as_built.clutter_in_corridor,
         np.random.default_rng([seed, AS_BUILT_SEED, 1]),
-        SimWorld.from_obstacles(built.obstacles, clutter).static,
+        world_edges(built.obstacles, clutter)[0],
     )
     static = SimWorld.from_obstacles(built.obstacles, clutter)
     workers = place_workers(model, circulation, static.static, int(config.sim.workers), rng)

@@ -29,6 +29,20 @@ def closed_ring(points: object) -> np.ndarray:
     return ring
 
 
+def world_edges(obstacles: list[Obstacle], boxes: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """(S, 4) segments of the obstacles' outlines (exteriors, then holes) and of the closed (n, 2)
+    ``boxes``, and an (S,) mask of the glazed ones."""
+    parts = [polygon_edges(closed_ring(o.exterior)) for o in obstacles]
+    glazed = [np.full(len(p), o.glass) for o, p in zip(obstacles, parts, strict=True)]
+    holes = [(o, polygon_edges(closed_ring(h))) for o in obstacles for h in o.holes]
+    parts += [p for _, p in holes]
+    glazed += [np.full(len(p), o.glass) for o, p in holes]
+    parts += [polygon_edges(b) for b in boxes]
+    glazed += [np.zeros(len(b) - 1, dtype=bool) for b in boxes]
+    static = np.concatenate(parts) if parts else np.zeros((0, 4))
+    return static, (np.concatenate(glazed) if glazed else np.zeros(0, dtype=bool))
+
+
 def box_edges(cx: float, cy: float, half_w: float, half_h: float, yaw: float = 0.0) -> np.ndarray:
     c, s = math.cos(yaw), math.sin(yaw)
     corners = np.array(
@@ -137,16 +151,8 @@ class SimWorld:
         clutter: list[np.ndarray] | None = None,
         workers: list[Worker] | None = None,
     ) -> SimWorld:
-        parts = [polygon_edges(closed_ring(o.exterior)) for o in obstacles]
-        glazed = [np.full(len(p), o.glass) for o, p in zip(obstacles, parts, strict=True)]
-        holes = [(o, polygon_edges(closed_ring(h))) for o in obstacles for h in o.holes]
-        parts += [p for _, p in holes]
-        glazed += [np.full(len(p), o.glass) for o, p in holes]
         boxes = clutter or []
-        parts += [polygon_edges(b) for b in boxes]
-        glazed += [np.zeros(len(b) - 1, dtype=bool) for b in boxes]
-        static = np.concatenate(parts) if parts else np.zeros((0, 4))
-        glass = np.concatenate(glazed) if glazed else np.zeros(0, dtype=bool)
+        static, glass = world_edges(obstacles, boxes)
         return SimWorld(static=static, clutter=boxes, workers=workers or [], glass=glass)
 
     def ids_near(self, x: float, y: float, radius: float) -> np.ndarray:

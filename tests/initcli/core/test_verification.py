@@ -19,7 +19,6 @@ from initcli.core.verification import (
     explained,
     frames_in_view,
     misses_reject,
-    path_scan_fit,
     rival_search,
     verify_hypothesis,
 )
@@ -116,6 +115,14 @@ def corridor_scan(pose: Pose2D) -> ScanSample:
         r = np.where(sin > 1e-6, (2.0 - pose.y) / sin, np.where(sin < -1e-6, -pose.y / sin, np.inf))
     ranges = np.where(r < 10.0, r, 20.0)
     return ScanSample(pose, angles, ranges, 20.0)
+
+
+def path_scan_fit(
+    transform: Pose2D, scans: list[ScanSample], field: LikelihoodField, tolerance: float, **search: float
+) -> float | None:
+    """The fit of :func:`best_scan_alignment` alone (None: no scans)."""
+    found = best_scan_alignment(transform, scans, field, tolerance, **search)
+    return None if found is None else found[0]
 
 
 def test_scan_fit_is_high_at_the_right_transform_and_low_when_turned() -> None:
