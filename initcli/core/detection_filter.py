@@ -24,6 +24,7 @@ Positions are the mean of the sightings' odom positions (Eq. 1-2 results).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
@@ -130,8 +131,6 @@ def filter_detections(
     given: Sequence[GivenFeature] = (),
 ) -> FilterResult:
     """Aggregate sightings (and given features) into S_object, ordered by confirmation time."""
-    p = params
-    k = max(1, int(p.min_sightings))
     # Given features before sightings at the same time, each in input order.
     events: list[tuple[float, int, int, GivenFeature | Sighting]] = []
     for order, sighting in enumerate(sightings):
@@ -139,40 +138,67 @@ def filter_detections(
     for order, feature in enumerate(given):
         events.append((feature.t, 0, order, feature))
     events.sort(key=lambda e: (e[0], e[1], e[2]))
-
-    tracks: list[_Track] = []
-    result = FilterResult(features=[])
-    created = 0
+    online = DetectionFilter(params)
     for _t, _kind, _order, item in events:
         if isinstance(item, GivenFeature):
-            g = item
-            track = _nearest(tracks, g.cls, g.x, g.y, p.merge_radius, frame=None)
-            if track is None:
-                tracks.append(
-                    _Track(g.cls, g.x, g.y, k, g.t, created, -1, confirmed_at=g.t, fixed=(g.x, g.y))
-                )
-                created += 1
-            else:
-                track.fixed = (g.x, g.y)
-                track.n = max(track.n, k)
-                if track.confirmed_at is None:
-                    track.confirmed_at = g.t
-            continue
-        s = item
+            online.add_given(item)
+        else:
+            online.add(item)
+    return online.result()
+
+
+class DetectionFilter:
+    """The rules above applied online, one event at a time in time order (a session feeds each
+    image's sightings as they come): the same tracks and S_object as :func:`filter_detections` on
+    all of them, at the cost of the new sightings only."""
+
+    def __init__(self, params: FilterParams) -> None:
+        self.params = params
+        self.k = max(1, int(params.min_sightings))
+        self.tracks: list[_Track] = []
+        self.created = 0
+        self.t = -math.inf  # s: the last event's time
+        self.counts = FilterResult(features=[])  # the rejection counters
+
+    def _advance(self, t: float) -> None:
+        if t < self.t:
+            raise ValueError(f"detection filter: event at t={t} after one at t={self.t} (feed in time order)")
+        self.t = t
+
+    def add_given(self, g: GivenFeature) -> None:
+        """Rule 5: a feature aggregated by the robot, fixed where it is given."""
+        self._advance(g.t)
+        k = self.k
+        track = _nearest(self.tracks, g.cls, g.x, g.y, self.params.merge_radius, frame=None)
+        if track is None:
+            self.tracks.append(
+                _Track(g.cls, g.x, g.y, k, g.t, self.created, -1, confirmed_at=g.t, fixed=(g.x, g.y))
+            )
+            self.created += 1
+        else:
+            track.fixed = (g.x, g.y)
+            track.n = max(track.n, k)
+            if track.confirmed_at is None:
+                track.confirmed_at = g.t
+
+    def add(self, s: Sighting) -> None:
+        """Rules 1-4 and 6 for one sighting."""
+        self._advance(s.t)
+        p, counts, tracks = self.params, self.counts, self.tracks
         if not (s.score >= p.score_threshold):
-            result.rejected_score += 1
-            continue
+            counts.rejected_score += 1
+            return
         if not (math.isfinite(s.depth) and p.min_depth <= s.depth <= p.max_depth):
-            result.rejected_depth += 1
-            continue
+            counts.rejected_depth += 1
+            return
         if s.truncated and p.edge_margin >= 0:
-            result.rejected_truncated += 1
-            continue
-        result.used += 1
+            counts.rejected_truncated += 1
+            return
+        counts.used += 1
         track = _nearest(tracks, s.cls, s.x, s.y, p.merge_radius, frame=s.frame)
         if track is None:
-            track = _Track(s.cls, s.x, s.y, 1, s.t, created, s.frame, frames={s.frame})
-            created += 1
+            track = _Track(s.cls, s.x, s.y, 1, s.t, self.created, s.frame, frames={s.frame})
+            self.created += 1
             tracks.append(track)
         else:
             track.sum_x += s.x
@@ -181,32 +207,36 @@ def filter_detections(
             track.n += 1
             track.last_frame = s.frame
             track.frames.add(s.frame)
-        if track.confirmed_at is None and track.n >= k and not _misclassified(tracks, track, p):
+        if track.confirmed_at is None and track.n >= self.k and not _misclassified(tracks, track, p):
             track.confirmed_at = s.t
-        _suppress_duplicates(tracks, track, p.merge_radius, s.t, k)
+        _suppress_duplicates(tracks, track, p.merge_radius, s.t, self.k)
 
-    confirmed = [
-        (tr.confirmed_at, tr)
-        for tr in tracks
-        if tr.confirmed_at is not None and (tr.fixed is not None or not _misclassified(tracks, tr, p))
-    ]
-    confirmed.sort(key=lambda c: (c[0], c[1].created))
-    result.unconfirmed_tracks = len(tracks) - len(confirmed)
-    for i, (t_confirmed, tr) in enumerate(confirmed):
-        x, y = tr.pos
-        result.features.append(
-            ConfirmedFeature(
-                index=i,
-                cls=tr.cls,
-                x=float(x),
-                y=float(y),
-                sightings=int(tr.n),
-                t_first=float(tr.t_first),
-                t_confirmed=float(t_confirmed),
-                given=tr.fixed is not None,
+    def result(self) -> FilterResult:
+        """S_object so far (Eq. 3), ordered by confirmation time, with the counters."""
+        tracks, p = self.tracks, self.params
+        confirmed = [
+            (tr.confirmed_at, tr)
+            for tr in tracks
+            if tr.confirmed_at is not None and (tr.fixed is not None or not _misclassified(tracks, tr, p))
+        ]
+        confirmed.sort(key=lambda c: (c[0], c[1].created))
+        result = dataclasses.replace(self.counts, features=[])
+        result.unconfirmed_tracks = len(tracks) - len(confirmed)
+        for i, (t_confirmed, tr) in enumerate(confirmed):
+            x, y = tr.pos
+            result.features.append(
+                ConfirmedFeature(
+                    index=i,
+                    cls=tr.cls,
+                    x=float(x),
+                    y=float(y),
+                    sightings=int(tr.n),
+                    t_first=float(tr.t_first),
+                    t_confirmed=float(t_confirmed),
+                    given=tr.fixed is not None,
+                )
             )
-        )
-    return result
+        return result
 
 
 def _misclassified(tracks: list[_Track], track: _Track, p: FilterParams) -> bool:

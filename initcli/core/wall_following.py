@@ -67,7 +67,13 @@ def wall_follow(scan: ScanView, side: int, p: WallFollowParams) -> tuple[float, 
         return speed * 0.6, side * min(p.max_turn, 0.6 * speed / max(p.distance, 0.1))
     i = int(np.argmin(np.where(mask, scan.ranges, np.inf)))
     d, bearing = float(scan.ranges[i]), float(phi[i])
-    turn = p.k_angle * (bearing - math.pi / 2) + p.k_distance * (d - p.distance)
+    # A gap narrower than twice the wall distance (a stack against one wall, a door jamb): keep to
+    # its middle, or the robot is pushed into the far side and turns back.
+    across = (phi < -math.radians(60)) & (phi > -math.radians(120))
+    distance = p.distance
+    if across.any():
+        distance = min(distance, 0.5 * (d + float(scan.ranges[across].min())))
+    turn = p.k_angle * (bearing - math.pi / 2) + p.k_distance * (d - distance)
     w = float(np.clip(side * turn, -p.max_turn, p.max_turn))
     v = speed * max(0.3, 1.0 - abs(w) / (2 * p.max_turn))
     return v, w

@@ -15,7 +15,7 @@ import numpy as np
 
 from bimtools.site.load import Site
 from initcli.core.classes import ClassMap
-from initcli.core.detection_filter import ConfirmedFeature, Sighting, filter_detections
+from initcli.core.detection_filter import ConfirmedFeature, DetectionFilter, Sighting
 from initcli.core.geometry import Pose2D
 from initcli.drivers.base import SensorFrame
 from initcli.io.detection_log import (
@@ -54,6 +54,8 @@ class Perception:
         self.sightings: list[Sighting] = []
         self.frames = 0  # images recorded so far
         self.confirmed: list[ConfirmedFeature] = []
+        self.filter = DetectionFilter(options.filter_params())  # Eq. 3, fed each image's sightings
+        self._filtered = 0  # sightings fed to the filter so far
         self.detecting = True  # False once the coarse match is made: the log's detections end there
         self.path = PathEvidence()  # images and scans along the odometry path, for verification
         self.travel = 0.0  # m of odometry travel so far
@@ -75,12 +77,13 @@ class Perception:
         extra: int,
         apart_m: float,
         apart_rad: float,
-    ) -> int:
-        """How many pose-distinct hypotheses (``apart_m`` / ``apart_rad`` from ``hypothesis``) with at
-        least min_inliers matches appear when ``extra`` more outliers are allowed than ``report``'s
-        hypotheses were found with (a search stopped at its cap counts as many)."""
+    ) -> tuple[int, list[Hypothesis]]:
+        """The pose-distinct hypotheses (``apart_m`` / ``apart_rad`` from ``hypothesis``) with at least
+        min_inliers matches that appear when ``extra`` more outliers are allowed than ``report``'s
+        hypotheses were found with: how many (a search stopped at its cap counts as many) and those
+        found (most probable first; none past the cap)."""
         if extra <= 0:
-            return 0
+            return 0, []
         opts = dataclasses.replace(
             report.options,
             max_outliers=max(report.outliers_allowed, report.options.max_outliers) + extra,
@@ -88,15 +91,16 @@ class Perception:
         )
         wider = match_log(self.log, site, opts, self.cmap)
         if wider.overflow:
-            return wider.n_hypotheses
-        count = 0
-        for h in wider.hypotheses:
-            inliers = sum(m is not None for m in h.matches)
-            far = (
+            return wider.n_hypotheses, []
+        found = [
+            h
+            for h in wider.hypotheses
+            if sum(m is not None for m in h.matches) >= self.options.min_inliers
+            and (
                 h.pose.distance_to(hypothesis.pose) > apart_m or h.pose.yaw_error(hypothesis.pose) > apart_rad
             )
-            count += far and inliers >= self.options.min_inliers
-        return count
+        ]
+        return len(found), found
 
     def close(self) -> None:
         if self._writer is not None:
@@ -135,8 +139,14 @@ class Perception:
             self.frames += 1
 
     def new_features(self) -> bool:
-        """Run the detection filter (Eq. 3) on every sighting so far; True if it confirmed more features."""
-        confirmed = filter_detections(self.sightings, self.options.filter_params()).features
+        """Feed the detection filter (Eq. 3) the sightings since the last call; True if it confirmed
+        more features."""
+        if self._filtered == len(self.sightings):
+            return False
+        for sighting in self.sightings[self._filtered :]:
+            self.filter.add(sighting)
+        self._filtered = len(self.sightings)
+        confirmed = self.filter.result().features
         grew = len(confirmed) > len(self.confirmed)
         self.confirmed = confirmed
         return grew

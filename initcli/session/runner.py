@@ -43,7 +43,7 @@ from initcli.core.verification import CameraView, Verification, rival_search
 from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
 from initcli.io.detection_log import Meta, State
-from initcli.match.pipeline import MatchReport
+from initcli.match.pipeline import Hypothesis, MatchReport
 from initcli.match.verify import StoreyEvidence, verify_transform
 from initcli.session.exploration import ActiveExploration
 from initcli.session.fine_tuning import FineLost, FineTuning, FineTuningHooks, matched_pairs
@@ -65,6 +65,7 @@ SHUTTLE_LENGTH = 30.0  # m driven in that window (0.2 m/s on average) ...
 SHUTTLE_RADIUS = 8.0  # m ... without leaving a circle this size: follow the other wall
 FRONTIER_SCAN_EVERY = 10  # control steps between scans written into the local frontier map (1 Hz) ...
 FRONTIER_BEAM_STEP = 2  # ... every second beam of them
+RIVALS_CHECKED = 8  # rivals of a claim verified one by one; more count as credible without a check
 AGREE_M = 2.0  # m: a fine pose farther than this from the odometry-carried coarse pose disagrees ...
 AGREE_DEG = 30.0  # ... or turned more than this
 
@@ -118,6 +119,7 @@ class Session:
         self.turned = 0.0  # rad turned since the look or recovery rotation began
         self.hypotheses = 0  # of the last match step
         self.storeys_left: list[str] = []  # storeys the last match step's hypotheses lie on
+        self.rivals: list[Hypothesis] = []  # of the last unique match, with a few more outliers allowed
         self.checks = verification_params(config)
         self.view = CameraView(driver.camera, driver.mount, self.options.min_depth)
         self._evidence: dict[str, StoreyEvidence] = {}
@@ -292,6 +294,12 @@ class Session:
             if verified:
                 self._coarse_done(frame, report, aligned)
                 return True
+            if self.rivals and len(self.rivals) < self.config.matching.m_thre:
+                # Rivals with a few more outliers: go and look where the claim and they disagree,
+                # as with several hypotheses (§3.3.4), the claim first.
+                self.exploration.validate([report.hypotheses[0], *self.rivals])
+                if self._next_target(frame):
+                    return False
             if self.state != "explore":
                 self._set_state(frame.t, "explore", why="the unique match failed verification")
             return False
@@ -342,6 +350,7 @@ class Session:
         rival with one more outlier allowed (an as-built site has doors the BIM lacks), negative
         evidence and the lidar. A failed one is logged and exploration goes on. Also returns the
         transform moved to where the recent scans fit best (None: not checked)."""
+        self.rivals = []
         if not self.checks.enabled:
             return True, None
         hypothesis = report.hypotheses[0]
@@ -360,15 +369,21 @@ class Session:
             report.options.max_outliers,
             budget,
         )
-        rivals = self.perception.rivals(
+        rivals, self.rivals = self.perception.rivals(
             self.site, report, hypothesis, extra, c.rival_distance, math.radians(c.rival_turn_deg)
         )
         if rivals:
-            self._note(
-                frame.t,
-                f"unique match has {rivals} rival(s) with {extra} more outlier(s) allowed",
+            credible = self._credible(frame, rivals)
+            fewest = min((h.n_outliers for h in self.rivals), default=None)
+            why = f"unique match has {rivals} rival(s) with {extra} more outlier(s) allowed" + (
+                f" (the claim has {hypothesis.n_outliers} outlier(s), the best rival {fewest})"
+                if fewest is not None
+                else ""
             )
-            return False, None
+            if credible:
+                self._note(frame.t, f"{why}: {credible} pass the checks too")
+                return False, None
+            self._note(frame.t, f"{why}: none passes the checks")
         pose = hypothesis.rectified_pose or hypothesis.pose
         check = self._verify(hypothesis.storey, pose * frame.odom.inverse())
         self._record_check(frame, "coarse", hypothesis.storey, pose, check)
@@ -376,6 +391,21 @@ class Session:
             return True, check.aligned
         self.result.rejected += 1
         return False, None
+
+    def _credible(self, frame: SensorFrame, rivals: int) -> int:
+        """How many of the rivals of a claim pass the checks a claim must pass (negative evidence,
+        lidar fit, path through free space): a rival that fails them is no reason to doubt the claim
+        (a mirror-symmetric wing passes them, and keeps the claim out). More than RIVALS_CHECKED
+        rivals, or a search stopped at its cap, count as that many. Keeps only the credible ones in
+        ``self.rivals`` (those active exploration then validates)."""
+        if rivals > RIVALS_CHECKED or len(self.rivals) < rivals:
+            return rivals
+        self.rivals = [
+            h
+            for h in self.rivals
+            if self._verify(h.storey, (h.rectified_pose or h.pose) * frame.odom.inverse()).passed
+        ]
+        return len(self.rivals)
 
     def _match(self, t: float) -> MatchReport:
         report = self.perception.match(t, self.site)

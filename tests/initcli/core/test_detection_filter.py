@@ -5,9 +5,11 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from initcli.core.detection_filter import (
     ConfirmedFeature,
+    DetectionFilter,
     GivenFeature,
     Sighting,
     filter_detections,
@@ -137,3 +139,37 @@ def test_drift_window_keeps_the_features_of_the_last_metres():
     # standing still: nothing is old
     still = np.zeros((101, 2))
     assert len(within_drift_window(features, odom_t, still, 1.0)) == 6
+
+
+def test_online_filter_equals_the_batch_filter_after_every_image():
+    """A session feeds each image's sightings as they come: after each, the same S_object (positions,
+    counts, confirmation times, merges, rule 6) as filtering everything from the start."""
+    rng = np.random.default_rng(3)
+    doors = rng.uniform(0, 20, size=(8, 2))
+    sightings = []
+    for frame in range(300):
+        t = 0.2 * frame
+        for i in rng.choice(len(doors), size=int(rng.integers(0, 4)), replace=False):
+            cls = "lift" if rng.random() < 0.1 else "door"  # class confusion now and then
+            x, y = doors[i] + rng.normal(0, 0.25, 2)
+            depth = float(rng.choice([3.0, 3.0, 3.0, 12.0]))  # some out of range
+            sightings.append(Sighting(t, cls, float(x), float(y), float(rng.uniform(0.3, 1)), depth, frame))
+    online = DetectionFilter(DEFAULTS)
+    fed = 0
+    checked = 0
+    for end in range(1, len(sightings) + 1):
+        if end < len(sightings) and sightings[end].frame == sightings[end - 1].frame:
+            continue  # compare at the end of each image
+        for sighting in sightings[fed:end]:
+            online.add(sighting)
+        fed = end
+        assert online.result() == filter_detections(sightings[:end], DEFAULTS)
+        checked += 1
+    assert checked > 100 and len(online.result().features) >= 5
+
+
+def test_online_filter_refuses_events_out_of_time_order():
+    online = DetectionFilter(DEFAULTS)
+    online.add(s(1.0, 0.0))
+    with pytest.raises(ValueError, match="time order"):
+        online.add(s(0.5, 0.0))

@@ -11,6 +11,7 @@ import pytest
 from bimtools.site.load import Site
 from initcli.config import SessionConfig, load_config
 from initcli.core.geometry import Pose2D
+from initcli.io.detection_log import State
 from initcli.session.setup import prepare_site, sim_session
 from initcli.sim.synthetic_log import SimFeature
 from tests.helpers import SAMPLES
@@ -67,3 +68,24 @@ def test_a_poster_seen_as_a_door_right_beside_a_real_door(block_a) -> None:
     )
     result = built.session.run()
     assert_never_wrong(result)
+
+
+def test_a_claim_with_rivals_sends_the_robot_where_they_disagree(tmp_path_factory) -> None:
+    """ntu_hallway under construction, seed 26 (a start where it happens): a unique match that needed
+    an outlier has rivals once more outliers are allowed; instead of wall following on, the session
+    validates the claim and its rivals (§3.3.4's active exploration), and never claims a wrong pose."""
+    config = load_config(SAMPLES / "ntu_hallway.site.yaml", reality="construction")
+    site = prepare_site(config, tmp_path_factory.mktemp("ntu"))
+    built = sim_session(config, site, 26)
+    result = built.session.run()
+    assert_never_wrong(result)
+    states = [{**r.data, "t": r.t} for r in built.session.perception.log.records if isinstance(r, State)]
+    rivalled = [i for i, s in enumerate(states) if str(s.get("why", "")).startswith("unique match has")]
+    assert rivalled, "no claim with rivals in this session any more: pick another seed"
+    validated = [
+        i
+        for i in rivalled
+        if i + 1 < len(states) and "target" in states[i + 1] and states[i + 1]["t"] == states[i]["t"]
+    ]
+    assert validated, [states[i : i + 2] for i in rivalled]
+    assert all(states[i + 1]["state"] == "active" for i in validated)

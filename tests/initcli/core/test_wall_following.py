@@ -1,0 +1,63 @@
+"""Wall following (initcli.core.wall_following) on a simulated lidar in a small corridor."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from initcli.core.raycast import ray_segment_distances
+from initcli.core.wall_following import ScanView, WallFollowParams, wall_follow
+
+PARAMS = WallFollowParams(front_stop=0.5)  # a robot of radius 0.3 m, as the session sets it
+RADIUS = 0.3
+BEAMS = np.radians(np.arange(-180.0, 180.0, 1.0))
+
+
+def _box(x0: float, y0: float, x1: float, y1: float) -> list[list[float]]:
+    return [[x0, y0, x1, y0], [x1, y0, x1, y1], [x1, y1, x0, y1], [x0, y1, x0, y0]]
+
+
+def _corridor(width: float, stack_depth: float) -> np.ndarray:
+    """A corridor along +x, 16 m long and ``width`` wide (walls at y = 0 and y = width), closed at
+    both ends, with a 1.2 m long material stack ``stack_depth`` deep against the left wall at x = 8."""
+    segments = [[-1.0, 0.0, 16.0, 0.0], [-1.0, width, 16.0, width], [-1.0, 0.0, -1.0, width]]
+    segments += [[16.0, 0.0, 16.0, width]]
+    if stack_depth > 0:
+        segments += _box(8.0, width - stack_depth, 9.2, width)
+    return np.array(segments, dtype=float)
+
+
+def _drive(segments: np.ndarray, start: tuple[float, float, float], steps: int = 400) -> np.ndarray:
+    """Follow the left wall from ``start`` at 10 Hz; the (x, y) path."""
+    x, y, yaw = start
+    path = []
+    for _ in range(steps):
+        ranges = ray_segment_distances(np.array([x, y]), yaw + BEAMS, segments, 20.0)
+        v, w = wall_follow(ScanView.of(BEAMS, ranges, 20.0), +1, PARAMS)
+        yaw += 0.1 * w
+        x, y = x + 0.1 * v * math.cos(yaw), y + 0.1 * v * math.sin(yaw)
+        path.append((x, y))
+    return np.array(path)
+
+
+def _clearance(segments: np.ndarray, path: np.ndarray) -> float:
+    ranges = [ray_segment_distances(p, BEAMS, segments, 20.0).min() for p in path]
+    return float(min(ranges))
+
+
+def test_follows_the_wall_at_its_distance_down_a_wide_corridor() -> None:
+    segments = _corridor(3.0, 0.0)
+    path = _drive(segments, (0.0, 2.3, 0.0), steps=200)
+    assert path[-1, 0] > 8.0  # 10 s at up to 0.5 m/s
+    assert abs(path[-1, 1] - (3.0 - PARAMS.distance)) < 0.1
+
+
+def test_passes_a_stack_that_leaves_a_gap_narrower_than_twice_the_wall_distance() -> None:
+    """A 1.8 m corridor with a 0.65 m stack on the followed wall leaves 1.15 m: the robot (0.6 m
+    wide) keeps to the middle of the gap and drives on, where keeping 0.7 m from the stack would push
+    it into the far wall and turn it back."""
+    segments = _corridor(1.8, 0.65)
+    path = _drive(segments, (0.0, 1.1, 0.0))
+    assert path[:, 0].max() > 12.0  # past the stack (x 8-9.2) ...
+    assert _clearance(segments, path) > RADIUS  # ... without touching anything
