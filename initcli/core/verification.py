@@ -35,7 +35,7 @@ import numpy as np
 
 from bimtools.site.records import FREE, OccupancyGrid
 from initcli.core.geometry import Pose2D
-from initcli.core.particle_filter import LikelihoodField, scan_fit
+from initcli.core.particle_filter import LikelihoodField
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.core.visibility import CameraModel, FeatureArrays, visible
 
@@ -232,7 +232,6 @@ def best_scan_alignment(
         return None
     last = scans[-1].odom
     here = transform * last
-    best = (-1.0, transform)
     shifts = np.linspace(-search_xy, search_xy, 5) if search_xy > 0 else np.zeros(1)
     steps = 2 * math.ceil(search_yaw / math.radians(SCAN_TURN_STEP_DEG)) + 1
     turns = np.linspace(-search_yaw, search_yaw, steps) if search_yaw > 0 else np.zeros(1)
@@ -241,13 +240,33 @@ def best_scan_alignment(
         ((float(a), float(dx), float(dy)) for a in turns for dx in shifts for dy in shifts),
         key=lambda m: (abs(m[0]) / max(search_yaw, 1e-9)) + math.hypot(m[1], m[2]) / max(search_xy, 1e-9),
     )
-    for dyaw, dx, dy in moves:
-        moved = Pose2D(here.x + dx, here.y + dy, here.yaw + dyaw) * last.inverse()
-        fits = [scan_fit(moved * s.odom, s.angles, s.ranges, s.range_max, field_, tolerance) for s in scans]
-        fit = float(np.mean(fits))
-        if fit > best[0]:
-            best = (fit, moved)
-    return best
+    # Every valid beam end point once, in the frame of the robot at the last scan; a move turns and
+    # shifts them all together (one lookup per move instead of one per scan).
+    back = last.inverse()
+    points, owner = [], []
+    valid = np.zeros(len(scans))
+    for i, scan in enumerate(scans):
+        ok = np.isfinite(scan.ranges) & (scan.ranges < scan.range_max) & (scan.ranges > 0.05)
+        rel = back * scan.odom
+        heading = rel.yaw + scan.angles[ok]
+        r = scan.ranges[ok]
+        points.append(np.column_stack([rel.x + r * np.cos(heading), rel.y + r * np.sin(heading)]))
+        owner.append(np.full(len(r), i))
+        valid[i] = len(r)
+    xy, scan_of = np.vstack(points), np.concatenate(owner)
+    fits = np.empty(len(moves))
+    turned: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+    for k, (dyaw, dx, dy) in enumerate(moves):
+        if dyaw not in turned:
+            c, s_ = math.cos(here.yaw + dyaw), math.sin(here.yaw + dyaw)
+            turned[dyaw] = (here.x + c * xy[:, 0] - s_ * xy[:, 1], here.y + s_ * xy[:, 0] + c * xy[:, 1])
+        ex, ey = turned[dyaw]
+        on_wall = field_.lookup(ex + dx, ey + dy) < tolerance
+        hits = np.bincount(scan_of, weights=on_wall, minlength=len(scans))
+        fits[k] = float(np.mean(np.divide(hits, valid, out=np.zeros(len(scans)), where=valid > 0)))
+    k = int(np.argmax(fits))  # the first of the best: the nearest move
+    dyaw, dx, dy = moves[k]
+    return float(fits[k]), Pose2D(here.x + dx, here.y + dy, here.yaw + dyaw) * back
 
 
 def verify_hypothesis(

@@ -347,8 +347,9 @@ class Session:
 
     def _verified(self, frame: SensorFrame, report: MatchReport) -> tuple[bool, Pose2D | None]:
         """Check a unique match before claiming it (beyond the paper): enough matched features, no
-        rival with one more outlier allowed (an as-built site has doors the BIM lacks), negative
-        evidence and the lidar. A failed one is logged and exploration goes on. Also returns the
+        credible rival when more outliers are allowed (an as-built site has doors the BIM lacks;
+        the rivals found are kept in ``self.rivals`` for active exploration), negative evidence,
+        the path and the lidar. A failed one is logged and exploration goes on. Also returns the
         transform moved to where the recent scans fit best (None: not checked)."""
         self.rivals = []
         if not self.checks.enabled:
