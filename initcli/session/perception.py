@@ -118,7 +118,7 @@ class Perception:
             self.write(Truth(t, frame.truth.x, frame.truth.y, frame.truth.yaw))
         if frame.scan is not None and step % SCAN_LOG_EVERY == 0:
             s = frame.scan
-            ranges = tuple(round(float(r), 3) for r in s.ranges)
+            ranges = tuple(np.round(np.asarray(s.ranges, dtype=float), 3).tolist())
             self.write(Scan(t, s.angle_min, s.angle_increment, s.range_max, ranges), keep=False)
             angles = s.angle_min + s.angle_increment * np.arange(len(ranges))
             self.path.add_scan(frame.odom, self.travel, angles, np.array(ranges, dtype=float), s.range_max)

@@ -134,6 +134,7 @@ class SimWorld:
         self._directions = segment_directions(self.static)
         self._index: dict[tuple[int, int], np.ndarray] = {}
         self._near_cache: dict[tuple[int, int, int, int], np.ndarray] = {}
+        self._worker_cache: tuple[tuple[tuple[float, ...], ...], np.ndarray] | None = None
         if len(self.static) == 0:
             return
         lo = np.floor(np.minimum(self.static[:, 0:2], self.static[:, 2:4]) / self.cell).astype(int)
@@ -189,13 +190,22 @@ class SimWorld:
         return self.static[ids]
 
     def worker_segments(self, t: float) -> np.ndarray:
+        """The workers' outlines (4 edges each); the last ones are reused while no worker moved (the
+        lidar, the camera and the collision check ask several times per control period)."""
         if not self.workers:
             return np.zeros((0, 4))
-        edges = []
-        for w in self.workers:
-            x, y = w.position(t)
-            edges.append(box_edges(x, y, w.radius, w.radius))
-        return np.concatenate(edges)
+        key = tuple((w.phase, w.radius, w.a[0], w.a[1], w.b[0], w.b[1]) for w in self.workers)
+        if self._worker_cache is not None and self._worker_cache[0] == key:
+            return self._worker_cache[1]
+        edges = np.concatenate(
+            [
+                box_edges(float(x), float(y), w.radius, w.radius)
+                for w in self.workers
+                for x, y in [w.position(t)]
+            ]
+        )
+        self._worker_cache = (key, edges)
+        return edges
 
     def advance(self, dt: float, robot_xy: np.ndarray) -> None:
         for worker in self.workers:
