@@ -39,6 +39,7 @@ from initcli.core.particle_filter import LikelihoodField
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.core.visibility import CameraModel, FeatureArrays, visible
 
+RIVAL_MARGIN = 2  # more outliers than a noisy claim was found with that its rival search allows, at least
 SCAN_TURN_STEP_DEG = 3.0  # degrees between the turns best_scan_alignment tries
 
 
@@ -208,12 +209,14 @@ def rival_search(
     A match that needed outliers (``claim_outliers`` > 0), or was found only once the outlier
     budget grew past ``max_outliers``, is unique among the fewest-outlier explanations of noisy
     data; the true place may need more outliers (doors built off their place, posters): it must
-    stay unique with at least one more allowed, and up to the ``budget`` that the matcher accepts as
-    an explanation at all (``outlier_share`` of the features). A match that explains every
+    stay unique up to the ``budget`` that the matcher accepts as an explanation at all
+    (``outlier_share`` of the features), and with at least RIVAL_MARGIN more allowed even there (a
+    point-symmetric corridor with 40 % of its doors missing: the turned place explained the
+    detections within the budget, the true one needed two outliers more). A match that explains every
     detection needs only the ``configured`` search (``rival_outliers``, 0: none)."""
     noisy = claim_outliers > 0 or outliers_allowed > max_outliers
     found_with = max(outliers_allowed, max_outliers)
-    return max(configured, max(1, budget - found_with) if noisy else 0)
+    return max(configured, max(RIVAL_MARGIN, budget - found_with) if noisy else 0)
 
 
 def best_scan_alignment(

@@ -77,17 +77,20 @@ class Perception:
         extra: int,
         apart_m: float,
         apart_rad: float,
+        alpha_factor: float = 1.0,
     ) -> tuple[int, list[Hypothesis]]:
         """The pose-distinct hypotheses (``apart_m`` / ``apart_rad`` from ``hypothesis``) with at least
         min_inliers matches that appear when ``extra`` more outliers are allowed than ``report``'s
-        hypotheses were found with: how many (a search stopped at its cap counts as many) and those
-        found (most probable first; none past the cap)."""
-        if extra <= 0:
+        hypotheses were found with, and the distance tolerance alpha (Eq. 8) is ``alpha_factor``
+        times wider: how many (a search stopped at its cap counts as many) and those found (most
+        probable first; none past the cap)."""
+        if extra <= 0 and alpha_factor <= 1.0:
             return 0, []
         opts = dataclasses.replace(
             report.options,
-            max_outliers=max(report.outliers_allowed, report.options.max_outliers) + extra,
+            max_outliers=max(report.outliers_allowed, report.options.max_outliers) + max(extra, 0),
             outlier_share=0.0,
+            alpha=report.options.alpha * max(alpha_factor, 1.0),
         )
         wider = match_log(self.log, site, opts, self.cmap)
         if wider.overflow:

@@ -65,6 +65,12 @@ SHUTTLE_LENGTH = 30.0  # m driven in that window (0.2 m/s on average) ...
 SHUTTLE_RADIUS = 8.0  # m ... without leaving a circle this size: follow the other wall
 FRONTIER_SCAN_EVERY = 10  # control steps between scans written into the local frontier map (1 Hz) ...
 FRONTIER_BEAM_STEP = 2  # ... every second beam of them
+# Doors built off their place can push the true place past Eq. 8's distance tolerance while a
+# turned place of a nearly symmetric lobby fits within it: a claim must stay unique with alpha this
+# many times wider too (ntu_hallway, doors shifted sigma 0.6 m: a 177-degree-off claim on 5 features).
+RIVAL_ALPHA_FACTOR = 1.5
+RIVAL_ALPHA_MAX_INLIERS = 6  # ... for a claim on this many matched features or fewer (more: alpha as is)
+RIVAL_SEARCH_FACTOR = 2.0  # a rival's scan fit may shift it this many times farther than a claim's
 RIVALS_CHECKED = 8  # rivals of a claim verified one by one; more count as credible without a check
 AGREE_M = 2.0  # m: a fine pose farther than this from the odometry-carried coarse pose disagrees ...
 AGREE_DEG = 30.0  # ... or turned more than this
@@ -316,10 +322,14 @@ class Session:
             self._evidence[storey] = StoreyEvidence.of(self.site.storeys[storey], self.perception.cmap)
         return self._evidence[storey]
 
-    def _verify(self, storey: str, transform: Pose2D, fine: bool = False) -> Verification:
+    def _verify(
+        self, storey: str, transform: Pose2D, fine: bool = False, rival: bool = False
+    ) -> Verification:
         checks = self.checks
         if fine:  # the fine pose: the fine-tuning filter's own scan-fit rule
             checks = dataclasses.replace(checks, min_scan_fit=checks.min_fine_scan_fit)
+        if rival:  # found with wider tolerances, so less exact: the scans may move it twice as far
+            checks = dataclasses.replace(checks, scan_search_xy=RIVAL_SEARCH_FACTOR * checks.scan_search_xy)
         return verify_transform(
             transform,
             self._evidence_of(storey),
@@ -371,7 +381,13 @@ class Session:
             budget,
         )
         rivals, self.rivals = self.perception.rivals(
-            self.site, report, hypothesis, extra, c.rival_distance, math.radians(c.rival_turn_deg)
+            self.site,
+            report,
+            hypothesis,
+            extra,
+            c.rival_distance,
+            math.radians(c.rival_turn_deg),
+            RIVAL_ALPHA_FACTOR if inliers <= RIVAL_ALPHA_MAX_INLIERS else 1.0,
         )
         if rivals:
             credible = self._credible(frame, rivals)
@@ -404,7 +420,7 @@ class Session:
         self.rivals = [
             h
             for h in self.rivals
-            if self._verify(h.storey, (h.rectified_pose or h.pose) * frame.odom.inverse()).passed
+            if self._verify(h.storey, (h.rectified_pose or h.pose) * frame.odom.inverse(), rival=True).passed
         ]
         return len(self.rivals)
 
