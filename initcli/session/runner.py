@@ -125,7 +125,6 @@ class Session:
         self.turned = 0.0  # rad turned since the look or recovery rotation began
         self.hypotheses = 0  # of the last match step
         self.storeys_left: list[str] = []  # storeys the last match step's hypotheses lie on
-        self.rivals: list[Hypothesis] = []  # of the last unique match, with a few more outliers allowed
         self.checks = verification_params(config)
         self.view = CameraView(driver.camera, driver.mount, self.options.min_depth)
         self._evidence: dict[str, StoreyEvidence] = {}
@@ -296,14 +295,14 @@ class Session:
         self.hypotheses = report.n_hypotheses
         self.storeys_left = sorted({h.storey for h in report.hypotheses})
         if report.n_hypotheses == 1:
-            verified, aligned = self._verified(frame, report)
+            verified, aligned, rivals = self._verified(frame, report)
             if verified:
                 self._coarse_done(frame, report, aligned)
                 return True
-            if self.rivals and len(self.rivals) < self.config.matching.m_thre:
+            if rivals and len(rivals) < self.config.matching.m_thre:
                 # Rivals with a few more outliers: go and look where the claim and they disagree,
                 # as with several hypotheses (§3.3.4), the claim first.
-                self.exploration.validate([report.hypotheses[0], *self.rivals])
+                self.exploration.validate([report.hypotheses[0], *rivals])
                 if self._next_target(frame):
                     return False
             if self.state != "explore":
@@ -355,22 +354,23 @@ class Session:
             frame.t, f"verification ({stage}): " + ("passed" if check.passed else "; ".join(check.reasons))
         )
 
-    def _verified(self, frame: SensorFrame, report: MatchReport) -> tuple[bool, Pose2D | None]:
+    def _verified(
+        self, frame: SensorFrame, report: MatchReport
+    ) -> tuple[bool, Pose2D | None, list[Hypothesis]]:
         """Check a unique match before claiming it (beyond the paper): enough matched features, no
-        credible rival when more outliers are allowed (an as-built site has doors the BIM lacks;
-        the rivals found are kept in ``self.rivals`` for active exploration), negative evidence,
-        the path and the lidar. A failed one is logged and exploration goes on. Also returns the
-        transform moved to where the recent scans fit best (None: not checked)."""
-        self.rivals = []
+        credible rival when more outliers are allowed (an as-built site has doors the BIM lacks),
+        negative evidence, the path and the lidar. A failed one is logged and exploration goes on.
+        Also returns the transform moved to where the recent scans fit best (None: not checked) and
+        the rivals that keep a claim out (credible, or too many to check), for active exploration."""
         if not self.checks.enabled:
-            return True, None
+            return True, None, []
         hypothesis = report.hypotheses[0]
         inliers = sum(m is not None for m in hypothesis.matches)
         if inliers < self.checks.min_claim_inliers:
             self._note(
                 frame.t, f"unique match on {inliers} features: waiting for {self.checks.min_claim_inliers}"
             )
-            return False, None
+            return False, None, []
         c = self.checks
         budget = report.options.outlier_budget(len(report.features))
         extra = rival_search(
@@ -380,7 +380,7 @@ class Session:
             report.options.max_outliers,
             budget,
         )
-        rivals, self.rivals = self.perception.rivals(
+        rivals, found = self.perception.rivals(
             self.site,
             report,
             hypothesis,
@@ -390,8 +390,8 @@ class Session:
             RIVAL_ALPHA_FACTOR if inliers <= RIVAL_ALPHA_MAX_INLIERS else 1.0,
         )
         if rivals:
-            credible = self._credible(frame, rivals)
-            fewest = min((h.n_outliers for h in self.rivals), default=None)
+            credible, found = self._credible(frame, rivals, found)
+            fewest = min((h.n_outliers for h in found), default=None)
             why = f"unique match has {rivals} rival(s) with {extra} more outlier(s) allowed" + (
                 f" (the claim has {hypothesis.n_outliers} outlier(s), the best rival {fewest})"
                 if fewest is not None
@@ -399,30 +399,32 @@ class Session:
             )
             if credible:
                 self._note(frame.t, f"{why}: {credible} pass the checks too")
-                return False, None
+                return False, None, found
             self._note(frame.t, f"{why}: none passes the checks")
         pose = hypothesis.rectified_pose or hypothesis.pose
         check = self._verify(hypothesis.storey, pose * frame.odom.inverse())
         self._record_check(frame, "coarse", hypothesis.storey, pose, check)
         if check.passed:
-            return True, check.aligned
+            return True, check.aligned, []
         self.result.rejected += 1
-        return False, None
+        return False, None, []
 
-    def _credible(self, frame: SensorFrame, rivals: int) -> int:
+    def _credible(
+        self, frame: SensorFrame, rivals: int, found: list[Hypothesis]
+    ) -> tuple[int, list[Hypothesis]]:
         """How many of the rivals of a claim pass the checks a claim must pass (negative evidence,
         lidar fit, path through free space): a rival that fails them is no reason to doubt the claim
         (a mirror-symmetric wing passes them, and keeps the claim out). More than RIVALS_CHECKED
-        rivals, or a search stopped at its cap, count as that many. Keeps only the credible ones in
-        ``self.rivals`` (those active exploration then validates)."""
-        if rivals > RIVALS_CHECKED or len(self.rivals) < rivals:
-            return rivals
-        self.rivals = [
+        rivals, or a search stopped at its cap, count as that many (``found`` kept as it is). Also
+        returns the credible ones."""
+        if rivals > RIVALS_CHECKED or len(found) < rivals:
+            return rivals, found
+        credible = [
             h
-            for h in self.rivals
+            for h in found
             if self._verify(h.storey, (h.rectified_pose or h.pose) * frame.odom.inverse(), rival=True).passed
         ]
-        return len(self.rivals)
+        return len(credible), credible
 
     def _match(self, t: float) -> MatchReport:
         report = self.perception.match(t, self.site)
