@@ -129,6 +129,10 @@ class ExplorationSection:
     wall_distance: float = 0.7  # m kept to the followed wall
     d_thre: float = _MATCH.d_thre  # m, Eq. 17
     t_thre: float = 25.0  # s without a new feature during active exploration -> recovery
+    # §3.3.4's BIM-based active exploration (several but fewer than matching.m_thre hypotheses, or
+    # a claim's credible rivals); off: wall following until one hypothesis is left
+    active: bool = False
+    max_route: float = 0.0  # m: active exploration takes no target farther along the corridors; 0: any
     recovery: bool = True
     initial_look: bool = True  # turn once on the spot before exploring
 

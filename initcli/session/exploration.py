@@ -58,6 +58,7 @@ class ActiveExploration:
         self.t_thre = config.exploration.t_thre  # s to find something at a target
         self.max_linear = config.robot.max_linear  # m/s
         self.robot_radius = config.robot.radius  # m
+        self.max_route = config.exploration.max_route or math.inf  # m along the corridors
         self.plan: list[Hypothesis] = []  # hypotheses whose targets are still to visit
         self.plan_all: list[Hypothesis] = []  # every hypothesis of the last match step
         self.visited: list[np.ndarray] = []  # odom viewpoints planned so far
@@ -123,7 +124,7 @@ class ActiveExploration:
                 node = planner.node_at(*view_bim)
                 if node >= 0 and math.isfinite(dist[node]) and (best is None or dist[node] < best[0]):
                     best = (float(dist[node]), node, view)
-            if best is not None:
+            if best is not None and best[0] <= self.max_route:
                 self.visited.append(best[2])
                 route = planner.path(pred, start, best[1])
                 return [hypothesis.transform.apply_inverse(p) for p in route], best[0]

@@ -70,6 +70,7 @@ FRONTIER_BEAM_STEP = 2  # ... every second beam of them
 # many times wider too (ntu_hallway, doors shifted sigma 0.6 m: a 177-degree-off claim on 5 features).
 RIVAL_ALPHA_FACTOR = 1.5
 RIVAL_ALPHA_MAX_INLIERS = 6  # ... for a claim on this many matched features or fewer (more: alpha as is)
+DOUBT_WINDOW_M = 10.0  # m after a claim held back by credible rivals in which claims get the wide search
 RIVAL_SEARCH_FACTOR = 2.0  # a rival's scan fit may shift it this many times farther than a claim's
 RIVALS_CHECKED = 8  # rivals of a claim verified one by one; more count as credible without a check
 AGREE_M = 2.0  # m: a fine pose farther than this from the odometry-carried coarse pose disagrees ...
@@ -126,6 +127,9 @@ class Session:
         self.hypotheses = 0  # of the last match step
         self.storeys_left: list[str] = []  # storeys the last match step's hypotheses lie on
         self.checks = verification_params(config)
+        # m of travel when a claim was last held back by rivals that pass the checks: claims soon
+        # after get the wide rival search, however many features they have
+        self.doubted_at: float | None = None
         self.view = CameraView(driver.camera, driver.mount, self.options.min_depth)
         self._evidence: dict[str, StoreyEvidence] = {}
         self.cannot_leave: str | None = None  # set when the start is known to be closed in
@@ -299,7 +303,7 @@ class Session:
             if verified:
                 self._coarse_done(frame, report, aligned)
                 return True
-            if rivals and len(rivals) < self.config.matching.m_thre:
+            if rivals and self._active_below(len(rivals)):
                 # Rivals with a few more outliers: go and look where the claim and they disagree,
                 # as with several hypotheses (§3.3.4), the claim first.
                 self.exploration.validate([report.hypotheses[0], *rivals])
@@ -308,7 +312,7 @@ class Session:
             if self.state != "explore":
                 self._set_state(frame.t, "explore", why="the unique match failed verification")
             return False
-        if 1 < report.n_hypotheses < self.config.matching.m_thre:
+        if 1 < report.n_hypotheses and self._active_below(report.n_hypotheses):
             self.exploration.validate(report.hypotheses)
             if not self._next_target(frame) and self.state != "explore":
                 self._set_state(frame.t, "explore", why="no target left to validate")
@@ -387,7 +391,7 @@ class Session:
             extra,
             c.rival_distance,
             math.radians(c.rival_turn_deg),
-            RIVAL_ALPHA_FACTOR if inliers <= RIVAL_ALPHA_MAX_INLIERS else 1.0,
+            RIVAL_ALPHA_FACTOR if inliers <= RIVAL_ALPHA_MAX_INLIERS or self._doubted() else 1.0,
         )
         if rivals:
             credible, found = self._credible(frame, rivals, found)
@@ -398,6 +402,7 @@ class Session:
                 else ""
             )
             if credible:
+                self.doubted_at = self.perception.travel
                 self._note(frame.t, f"{why}: {credible} pass the checks too")
                 return False, None, found
             self._note(frame.t, f"{why}: none passes the checks")
@@ -408,6 +413,16 @@ class Session:
             return True, check.aligned, []
         self.result.rejected += 1
         return False, None, []
+
+    def _active_below(self, hypotheses: int) -> bool:
+        """Go and look where ``hypotheses`` disagree (§3.3.4: fewer than m_thre of them)?"""
+        return self.config.exploration.active and hypotheses < self.config.matching.m_thre
+
+    def _doubted(self) -> bool:
+        """Was a claim held back by credible rivals within the last DOUBT_WINDOW_M of travel? One new
+        feature (a phantom, a door the BIM lacks) can leave a claim unique, and its many matched
+        features would narrow the rival search just when the true place needs the wider one."""
+        return self.doubted_at is not None and self.perception.travel - self.doubted_at <= DOUBT_WINDOW_M
 
     def _credible(
         self, frame: SensorFrame, rivals: int, found: list[Hypothesis]

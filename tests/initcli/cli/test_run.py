@@ -112,14 +112,19 @@ def test_log_replays_to_the_coarse_verdict_and_pose(tmp_path):
     assert abs(math.degrees(replayed.yaw - pose["yaw"])) < 0.5
 
 
-def test_ambiguous_start_triggers_active_exploration(tmp_path):
+@pytest.mark.parametrize("active", [True, False])
+def test_ambiguous_start_triggers_active_exploration_when_it_is_on(tmp_path, active):
     start, seed = STARTS["ntu_hallway"]
-    _, doc = run(tmp_path, write_config(tmp_path, "ntu_hallway"), "--start", start, "--seed", str(seed))
+    config = write_config(tmp_path, "ntu_hallway", exploration={"active": active})
+    _, doc = run(tmp_path, config, "--start", start, "--seed", str(seed))
     log = read_log(tmp_path / "out" / "session.jsonl")
     states = [r.data.get("state") for r in log.records if type(r).__name__ == "State"]
-    assert "active" in states and doc["active_explorations"] >= 1
     hypotheses = [r.data for r in log.records if type(r).__name__ == "HypothesesRecord"]
-    assert any(h["count"] > 1 for h in hypotheses)
+    assert any(1 < h["count"] < 40 for h in hypotheses)  # fewer than m_thre: active exploration's case
+    if active:
+        assert "active" in states and doc["active_explorations"] >= 1
+    else:  # wall following only
+        assert "active" not in states and doc["active_explorations"] == 0
 
 
 @pytest.mark.parametrize(

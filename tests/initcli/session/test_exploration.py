@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from types import SimpleNamespace
 
@@ -102,3 +103,22 @@ def test_give_up_reasons_and_exhaustion(config) -> None:
     active.progress = (200.0, math.inf)
     assert active.give_up(SensorFrame(201.0, here), 0.0) == "time budget passed"
     assert active.fruitless == 3 and active.exhausted == (MAX_FRUITLESS <= 3)
+
+
+def test_targets_beyond_max_route_give_way_to_nearer_categories(config) -> None:
+    near = dataclasses.replace(config, exploration=dataclasses.replace(config.exploration, max_route=2.0))
+    active = ActiveExploration(near, _site(), WallFollowParams())
+    active.validate([_hypothesis(1, Pose2D(0, 0, 0), ["d1"])])
+    target = active.next_target(SensorFrame(0.0, Pose2D(2.0, 2.0, 0.0)))
+    # the lift (rarest) is about 4 m away along the room: the unmatched door d2 is looked at instead
+    assert target is not None and target.viewpoint == pytest.approx([2.5, VIEW_DISTANCE], abs=0.11)
+    assert target.route_m <= 2.0
+    tight = dataclasses.replace(config, exploration=dataclasses.replace(config.exploration, max_route=0.1))
+    none = ActiveExploration(tight, _site(), WallFollowParams())
+    none.validate([_hypothesis(1, Pose2D(0, 0, 0), ["d1"])])
+    assert none.next_target(SensorFrame(0.0, Pose2D(2.0, 2.0, 0.0))) is None
+    # 0: no limit, the lift as before
+    anywhere = _explorer(config)
+    anywhere.validate([_hypothesis(1, Pose2D(0, 0, 0), ["d1"])])
+    far = anywhere.next_target(SensorFrame(0.0, Pose2D(2.0, 2.0, 0.0)))
+    assert far is not None and far.viewpoint == pytest.approx([6.0, 5.0 - VIEW_DISTANCE], abs=0.11)
