@@ -3,10 +3,11 @@
 States: ``explore`` (random exploration by wall following) -> with >= 3 confirmed features,
 match (Algorithm 1) after each new one -> ``unique``: coarse initialisation done ->
 ``rectify`` (Eq. 17) -> ``fine`` (particle filter, Eq. 18, while following the wall) -> done.
-With several but fewer than m_thre hypotheses: ``active`` exploration toward the nearest feature
-of the highest-priority category (fewest in the BIM) under the most probable hypothesis, with the
-modified bug algorithm (Eq. 15-16); no new feature within t_thre -> ``recovery`` (rotate in place
-to widen the view) -> still nothing -> ``explore``.
+With ``exploration.active`` (off by default: in the site as built wall following initialised
+more sessions) and several but fewer than m_thre hypotheses: ``active`` exploration toward the
+nearest feature of the highest-priority category (fewest in the BIM) under the most probable
+hypothesis, with the modified bug algorithm (Eq. 15-16); no new feature within t_thre ->
+``recovery`` (rotate in place to widen the view) -> still nothing -> ``explore``.
 
 Each step lives in its own module: what the robot sees and logs in :mod:`.perception`, active
 exploration in :mod:`.exploration`, fine tuning in :mod:`.fine_tuning`, the outcome in
