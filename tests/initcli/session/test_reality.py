@@ -105,14 +105,14 @@ def test_a_turned_lobby_is_not_claimed_when_doors_are_far_off_their_place(tmp_pa
 
 
 def test_a_rival_that_passed_the_checks_is_still_looked_for_after_more_features(tmp_path_factory) -> None:
-    """ntu_hallway under construction without active exploration (m_thre 1), seed 97: a claim on 6
-    features is held back by the true place as a rival that passes the checks; one feature later the
-    claim has 7 matched features, so alpha is no longer widened for its rival search, and the true
-    place (doors built off their place) drops out of it. The claim, 10 m along the periodic
-    corridor, would pass every check. Once a claim was doubted, later claims get the wide rival
-    search: the session fails honestly instead."""
+    """ntu_hallway under construction without active exploration, seed 97: a claim on 6 features is
+    held back by the true place as a rival that passes the checks; one feature later the claim has 7
+    matched features, so alpha is no longer widened for its rival search, and the true place (doors
+    built off their place) drops out of it. The claim, 10 m along the periodic corridor, would pass
+    every check. Claims within 10 m of one held back by credible rivals get the wide rival search:
+    the session fails honestly instead."""
     config = load_config(SAMPLES / "ntu_hallway.site.yaml", reality="construction")
-    config = dataclasses.replace(config, matching=dataclasses.replace(config.matching, m_thre=1))
+    config = dataclasses.replace(config, exploration=dataclasses.replace(config.exploration, active=False))
     site = prepare_site(config, tmp_path_factory.mktemp("ntu_doubted"))
     built = sim_session(config, site, 97)
     result = built.session.run()
