@@ -28,6 +28,7 @@ from initcli.core.detection_filter import (
     ConfirmedFeature,
     FilterParams,
     GivenFeature,
+    Sighting,
     filter_detections,
     within_drift_window,
 )
@@ -329,8 +330,17 @@ def run_match(
     return match_log(log, site, opts, site_class_map(site))
 
 
-def match_log(log: DetectionLog, site: Site, opts: MatchOptions, cmap: ClassMap) -> MatchReport:
+def match_log(
+    log: DetectionLog,
+    site: Site,
+    opts: MatchOptions,
+    cmap: ClassMap,
+    sightings: Sequence[Sighting] | None = None,
+) -> MatchReport:
     """The pipeline on an already-read log and site.
+
+    ``sightings``: the log's sightings (Eq. 1-2) when the caller already holds them, as the online
+    session does (it converts each image as it arrives with the same code and ``edge_margin``).
 
     ``cmap`` maps the log's class names to the site's feature categories: the site folder's mapping
     for ``bim-init match`` (:func:`site_class_map`), the session config's ``detector.classes`` for
@@ -341,7 +351,8 @@ def match_log(log: DetectionLog, site: Site, opts: MatchOptions, cmap: ClassMap)
     notes: list[str] = []
 
     # Steps 1-2: Eq. 1-2 and the detection filter.
-    sightings = sightings_from_log(log, cmap, opts.edge_margin)
+    if sightings is None:
+        sightings = sightings_from_log(log, cmap, opts.edge_margin)
     given = [GivenFeature(f.t, cmap.canonical(f.cls), f.x, f.y) for f in log.features]
     filtered = filter_detections(sightings, opts.filter_params(), given)
     features = filtered.features

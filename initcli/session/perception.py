@@ -92,7 +92,7 @@ class Perception:
             outlier_share=0.0,
             alpha=report.options.alpha * max(alpha_factor, 1.0),
         )
-        wider = match_log(self.log, site, opts, self.cmap)
+        wider = match_log(self.log, site, opts, self.cmap, self.sightings)
         if wider.overflow:
             return wider.n_hypotheses, []
         found = [
@@ -156,13 +156,17 @@ class Perception:
 
     def match(self, t: float, site: Site) -> MatchReport:
         """Algorithm 1 on the log so far, logged as a ``hypotheses`` record."""
-        report = match_log(self.log, site, self.options, self.cmap)
+        report = match_log(self.log, site, self.options, self.cmap, self.sightings)
         window = self.drift_window
         if report.n_hypotheses == 0 and window > 0 and len(report.features) > self.options.min_inliers:
             # Odometry drift: the oldest features no longer fit; match the recent ones
             # (``bim-init match --drift-window`` replays this).
             recent = match_log(
-                self.log, site, dataclasses.replace(self.options, drift_window=window), self.cmap
+                self.log,
+                site,
+                dataclasses.replace(self.options, drift_window=window),
+                self.cmap,
+                self.sightings,
             )
             if recent.n_hypotheses > 0:
                 report = recent

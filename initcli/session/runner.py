@@ -304,6 +304,8 @@ class Session:
             if verified:
                 self._coarse_done(frame, report, aligned)
                 return True
+            if self.state == "look":
+                return False  # the look turns all the way round first: what is behind costs no distance
             if rivals and self._active_below(len(rivals)):
                 # Rivals with a few more outliers: go and look where the claim and they disagree,
                 # as with several hypotheses (§3.3.4), the claim first.
@@ -312,6 +314,8 @@ class Session:
                     return False
             if self.state != "explore":
                 self._set_state(frame.t, "explore", why="the unique match failed verification")
+            return False
+        if self.state == "look":
             return False
         if 1 < report.n_hypotheses and self._active_below(report.n_hypotheses):
             self.exploration.validate(report.hypotheses)

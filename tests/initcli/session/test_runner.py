@@ -147,3 +147,18 @@ def test_a_slow_arc_in_an_open_hall_is_a_loop() -> None:
     # Driving on down a corridor at the same speed is not a loop.
     straight = ConfinementWatch(LOOP_WINDOW_S, LOOP_LENGTH, LOOP_RADIUS)
     assert not any(straight.confined(k / 10.0, Pose2D(0.03 * k, 0.0, 0.0)) for k in range(900))
+
+
+def test_the_initial_look_turns_all_the_way_round_before_exploring(tmp_path: Path) -> None:
+    """block_a, seed 69: two doors are confirmed 2 s into the look, with 8 hypotheses. The look goes
+    on (what is behind the robot costs no distance) and the features seen on the rest of the turn
+    make the match unique on the spot; ending the look at the first ambiguous match drove 14 m."""
+    from initcli.session.setup import prepare_site, sim_session
+
+    config = load_config(SAMPLES / "block_a.site.yaml")
+    built = sim_session(config, prepare_site(config, tmp_path / "site"), 69)
+    result = built.session.run()
+    assert result.success, result.reason
+    assert [s for _, s in result.states[:2]] == ["look", "coarse"]
+    assert result.distance_total_m < 2.0
+    assert result.pose is not None and result.pose.distance_to(result.truth_pose) < 0.5
