@@ -12,18 +12,18 @@ the paper's failure rule) or ``limits.max_time``.
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from bimtools.site.load import Site
-from initcli.baselines.drive import WallFollowingExplorer
+from initcli.baselines.drive import drive_attempts
 from initcli.baselines.outcome import LocalisationOutcome
 from initcli.config import SessionConfig
 from initcli.core.geometry import Pose2D
 from initcli.core.global_localisation import GlobalLocalisation, GlobalLocalisationParams
 from initcli.core.motion import motion_delta
+from initcli.drivers.base import SensorFrame
 from initcli.session.setup import SimSetup
 
 MIN_TRAVEL = 1.0  # m driven before a convergence claim counts (as in fine tuning)
@@ -49,6 +49,78 @@ def converged(covariance: np.ndarray, config: SessionConfig) -> bool:
     )
 
 
+class AmclAttempt:
+    """AMCL in global localisation mode along the wall-following drive (a
+    :class:`~initcli.baselines.drive.BaselineAttempt`)."""
+
+    def __init__(
+        self,
+        config: SessionConfig,
+        site: Site,
+        setup: SimSetup,
+        rng: np.random.Generator,
+        params: GlobalLocalisationParams | None = None,
+        trace: list[AmclTracePoint] | None = None,
+    ) -> None:
+        grid = site.storeys[setup.storey].grid
+        if grid is None:
+            raise ValueError(f"storey {setup.storey!r} has no occupancy grid")
+        self.config = config
+        self.amcl = GlobalLocalisation(
+            grid, params if params is not None else GlobalLocalisationParams(), rng
+        )
+        self.driver = setup.driver
+        self.trace = trace
+        self.last_update: Pose2D | None = None
+
+    def _outcome(
+        self, frame: SensorFrame, localised: bool, reason: str, pose: Pose2D | None = None
+    ) -> LocalisationOutcome:
+        return LocalisationOutcome(
+            method="amcl",
+            localised=localised,
+            reason=reason,
+            pose=pose,
+            truth=frame.truth,
+            distance_m=round(self.driver.distance, 3),
+            duration_s=round(frame.t, 2),
+            features=0,
+        )
+
+    def start(self, frame: SensorFrame) -> LocalisationOutcome | None:
+        if frame.scan is not None:  # ROS AMCL integrates the first scan before any motion
+            self.amcl.update(frame.scan.angles, frame.scan.ranges, frame.scan.range_max)
+        self.last_update = frame.odom
+        return None
+
+    def observe(self, frame: SensorFrame, step: int) -> LocalisationOutcome | None:
+        limits = self.config.limits
+        if self.driver.distance > limits.max_distance:
+            return self._outcome(frame, False, f"not converged after {limits.max_distance:g} m")
+        if frame.t > limits.max_time:
+            return self._outcome(frame, False, f"not converged after {limits.max_time:g} s")
+        assert self.last_update is not None
+        moved = motion_delta(self.last_update, frame.odom)
+        amcl = self.amcl
+        if frame.scan is None or not amcl.moved_enough(moved):
+            return None
+        amcl.predict(moved)
+        amcl.update(frame.scan.angles, frame.scan.ranges, frame.scan.range_max)
+        self.last_update = frame.odom
+        covariance = amcl.whole_covariance()
+        distance = self.driver.distance
+        if self.trace is not None:
+            self.trace.append(
+                AmclTracePoint(frame.t, distance, amcl.count, float(max(covariance[0, 0], covariance[1, 1])))
+            )
+        if distance >= MIN_TRAVEL and converged(covariance, self.config):
+            estimate = amcl.estimate()
+            return self._outcome(
+                frame, True, "converged (covariance below the fine-tuning thresholds)", estimate.pose
+            )
+        return None
+
+
 def run_amcl(
     config: SessionConfig,
     site: Site,
@@ -62,54 +134,4 @@ def run_amcl(
 
     ``trace``, when given, receives one :class:`AmclTracePoint` per filter update.
     """
-    started = time.perf_counter()
-    grid = site.storeys[setup.storey].grid
-    if grid is None:
-        raise ValueError(f"storey {setup.storey!r} has no occupancy grid")
-    params = params if params is not None else GlobalLocalisationParams()
-    amcl = GlobalLocalisation(grid, params, rng)
-    explorer = WallFollowingExplorer(config)
-    driver = setup.driver
-    limits = config.limits
-
-    frame = driver.start()
-    if frame.scan is not None:  # ROS AMCL integrates the first scan before any motion
-        amcl.update(frame.scan.angles, frame.scan.ranges, frame.scan.range_max)
-    last_update = frame.odom
-
-    def outcome(localised: bool, reason: str, pose: Pose2D | None = None) -> LocalisationOutcome:
-        return LocalisationOutcome(
-            method="amcl",
-            localised=localised,
-            reason=reason,
-            pose=pose,
-            truth=frame.truth,
-            distance_m=round(driver.distance, 3),
-            duration_s=round(frame.t, 2),
-            features=0,
-            wall_seconds=round(time.perf_counter() - started, 3),
-        )
-
-    while True:
-        v, w = explorer.command(frame)
-        frame = driver.step(v, w)
-        if driver.distance > limits.max_distance:
-            return outcome(False, f"not converged after {limits.max_distance:g} m")
-        if frame.t > limits.max_time:
-            return outcome(False, f"not converged after {limits.max_time:g} s")
-        moved = motion_delta(last_update, frame.odom)
-        if frame.scan is None or not amcl.moved_enough(moved):
-            continue
-        amcl.predict(moved)
-        amcl.update(frame.scan.angles, frame.scan.ranges, frame.scan.range_max)
-        last_update = frame.odom
-        covariance = amcl.whole_covariance()
-        if trace is not None:
-            trace.append(
-                AmclTracePoint(
-                    frame.t, driver.distance, amcl.count, float(max(covariance[0, 0], covariance[1, 1]))
-                )
-            )
-        if driver.distance >= MIN_TRAVEL and converged(covariance, config):
-            estimate = amcl.estimate()
-            return outcome(True, "converged (covariance below the fine-tuning thresholds)", estimate.pose)
+    return drive_attempts(config, setup.driver, [AmclAttempt(config, site, setup, rng, params, trace)])[0]

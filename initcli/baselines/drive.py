@@ -3,16 +3,27 @@
 The baselines drive exactly as ``bim-init run`` explores (§4.3: "using the same wall following
 based motion planning algorithm"), including its initial turn on the spot
 (``exploration.initial_look``), so distances compare like for like.
+
+Their drive does not depend on what they sense (the commands come from the scans alone), so
+several baselines started from the same simulated setup drive the same path:
+:func:`drive_attempts` drives it once and hands every frame to each attempt still running
+(``bim-init eval`` runs AMCL and the markers that way; each attempt's outcome is the one it
+would have had alone).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import time
+from collections.abc import Sequence
+from typing import Protocol
 
+from initcli.baselines.outcome import LocalisationOutcome
 from initcli.config import SessionConfig, followed_side, turn_in_place_speed, wall_follow_params
 from initcli.core.geometry import wrap_angle
 from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
-from initcli.drivers.base import SensorFrame
+from initcli.drivers.base import RobotDriver, SensorFrame
 
 
 class WallFollowingExplorer:
@@ -39,3 +50,43 @@ class WallFollowingExplorer:
         if self.waiting.hold(frame.t, scan.front(), self.params.front_stop):
             return 0.0, 0.0
         return wall_follow(scan, self.side, self.params)
+
+
+class BaselineAttempt(Protocol):
+    """One baseline localising along the shared drive."""
+
+    def start(self, frame: SensorFrame) -> LocalisationOutcome | None:
+        """The first frame, before any motion; an outcome ends the attempt."""
+        ...
+
+    def observe(self, frame: SensorFrame, step: int) -> LocalisationOutcome | None:
+        """The frame after control period ``step`` (its limits checked here, in the attempt's own
+        order); an outcome ends the attempt."""
+        ...
+
+
+def drive_attempts(
+    config: SessionConfig, driver: RobotDriver, attempts: Sequence[BaselineAttempt]
+) -> list[LocalisationOutcome]:
+    """Drive one wall-following exploration until every attempt has an outcome (in their order);
+    each outcome's ``wall_seconds`` is the time from the start of the drive to its end."""
+    started = time.perf_counter()
+    explorer = WallFollowingExplorer(config)
+    outcomes: dict[int, LocalisationOutcome] = {}
+
+    def finish(i: int, outcome: LocalisationOutcome | None) -> None:
+        if outcome is not None:
+            outcomes[i] = dataclasses.replace(outcome, wall_seconds=round(time.perf_counter() - started, 3))
+
+    frame = driver.start()
+    for i, attempt in enumerate(attempts):
+        finish(i, attempt.start(frame))
+    step = 0
+    while len(outcomes) < len(attempts):
+        v, w = explorer.command(frame)
+        frame = driver.step(v, w)
+        step += 1
+        for i, attempt in enumerate(attempts):
+            if i not in outcomes:
+                finish(i, attempt.observe(frame, step))
+    return [outcomes[i] for i in range(len(attempts))]

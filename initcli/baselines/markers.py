@@ -10,21 +10,20 @@ tag (``cv2.solvePnP`` with ``SOLVEPNP_IPPE_SQUARE``). The run gives up after
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from bimtools.site.load import Site
-from initcli.baselines.drive import WallFollowingExplorer
+from initcli.baselines.drive import drive_attempts
 from initcli.baselines.outcome import LocalisationOutcome
 from initcli.config import SessionConfig
 from initcli.core.geometry import Pose2D
 from initcli.core.marker_pose import robot_pose_from_marker
+from initcli.drivers.base import SensorFrame
 from initcli.session.setup import SimSetup, camera_of
 from initcli.sim.markers import Marker, MarkerDetector, MarkerParams, place_markers
 from initcli.sim.scenario import Circulation
 
-__all__ = ["MarkerParams", "deploy_markers", "run_markers"]
+__all__ = ["MarkerAttempt", "MarkerParams", "deploy_markers", "run_markers"]
 
 METHOD = "markers"
 
@@ -37,35 +36,33 @@ def deploy_markers(config: SessionConfig, site: Site, storey: str, params: Marke
     return place_markers(model, Circulation.of(model), params.count, size=params.size, height=height)
 
 
-def run_markers(
-    config: SessionConfig,
-    site: Site,
-    setup: SimSetup,
-    rng: np.random.Generator,
-    params: MarkerParams | None = None,
-) -> LocalisationOutcome:
-    """One marker-baseline attempt from ``setup.start`` (§4.3).
+class MarkerAttempt:
+    """The marker baseline along the wall-following drive (a
+    :class:`~initcli.baselines.drive.BaselineAttempt`): at the camera rate (``detector.rate``) the
+    simulated ArUco detector looks from the true pose (it only hands over noisy corner pixels,
+    misses with ``sim.miss_rate``); the first image with a decoded tag gives the pose."""
 
-    Wall following at the control rate; at the camera rate (``detector.rate``) the simulated ArUco
-    detector looks from the true pose (it only hands over noisy corner pixels, misses with
-    ``sim.miss_rate``). At the first image with a decoded tag the robot claims the pose that tag
-    gives (the largest in the image if several are decoded at once); ``features`` is the number of tags
-    decoded in that image. Success is not judged here: ``bim-init eval`` compares ``pose`` with
-    ``truth``.
-    """
-    started = time.perf_counter()
-    params = params or MarkerParams()
-    markers = deploy_markers(config, site, setup.storey, params)
-    by_id = {m.id: m for m in markers}
-    intrinsics, mount = camera_of(config)
-    detector = MarkerDetector(markers, intrinsics, mount, setup.world, params, rng, config.sim.miss_rate)
-    explorer = WallFollowingExplorer(config)
-    driver = setup.driver
-    every = max(1, round(driver.control_rate / config.detector.rate))
-    limits = config.limits
+    def __init__(
+        self,
+        config: SessionConfig,
+        site: Site,
+        setup: SimSetup,
+        rng: np.random.Generator,
+        params: MarkerParams | None = None,
+    ) -> None:
+        params = params or MarkerParams()
+        markers = deploy_markers(config, site, setup.storey, params)
+        self.by_id = {m.id: m for m in markers}
+        self.intrinsics, self.mount = camera_of(config)
+        self.detector = MarkerDetector(
+            markers, self.intrinsics, self.mount, setup.world, params, rng, config.sim.miss_rate
+        )
+        self.driver = setup.driver
+        self.every = max(1, round(self.driver.control_rate / config.detector.rate))
+        self.limits = config.limits
 
-    def outcome(
-        localised: bool, reason: str, pose: Pose2D | None = None, features: int = 0
+    def _outcome(
+        self, frame: SensorFrame, localised: bool, reason: str, pose: Pose2D | None = None, features: int = 0
     ) -> LocalisationOutcome:
         return LocalisationOutcome(
             method=METHOD,
@@ -73,28 +70,41 @@ def run_markers(
             reason=reason,
             pose=pose,
             truth=frame.truth,
-            distance_m=float(driver.distance),
+            distance_m=float(self.driver.distance),
             duration_s=float(frame.t),
             features=features,
-            wall_seconds=time.perf_counter() - started,
         )
 
-    frame = driver.start()
-    step = 0
-    while True:
-        if step % every == 0 and frame.truth is not None:
-            seen = detector.detect(frame.truth, frame.t)
+    def start(self, frame: SensorFrame) -> LocalisationOutcome | None:
+        return self.observe(frame, 0)
+
+    def observe(self, frame: SensorFrame, step: int) -> LocalisationOutcome | None:
+        if step % self.every == 0 and frame.truth is not None:
+            seen = self.detector.detect(frame.truth, frame.t)
             if seen:
                 nearest = max(seen, key=lambda i: (_apparent_size(seen[i]), -i))
-                pose = robot_pose_from_marker(seen[nearest], by_id[nearest], intrinsics, mount)
-                return outcome(True, f"decoded marker {nearest}", pose, len(seen))
-        if driver.distance > limits.max_distance:
-            return outcome(False, f"no marker decoded within {limits.max_distance:g} m")
-        if frame.t > limits.max_time:
-            return outcome(False, f"no marker decoded within {limits.max_time:g} s")
-        v, w = explorer.command(frame)
-        frame = driver.step(v, w)
-        step += 1
+                pose = robot_pose_from_marker(seen[nearest], self.by_id[nearest], self.intrinsics, self.mount)
+                return self._outcome(frame, True, f"decoded marker {nearest}", pose, len(seen))
+        if self.driver.distance > self.limits.max_distance:
+            return self._outcome(frame, False, f"no marker decoded within {self.limits.max_distance:g} m")
+        if frame.t > self.limits.max_time:
+            return self._outcome(frame, False, f"no marker decoded within {self.limits.max_time:g} s")
+        return None
+
+
+def run_markers(
+    config: SessionConfig,
+    site: Site,
+    setup: SimSetup,
+    rng: np.random.Generator,
+    params: MarkerParams | None = None,
+) -> LocalisationOutcome:
+    """One marker-baseline attempt from ``setup.start`` (§4.3): wall following at the control rate
+    until the first image with a decoded tag, whose pose the robot claims (the largest tag in the
+    image if several are decoded at once; ``features`` is the number decoded in that image).
+    Success is not judged here: ``bim-init eval`` compares ``pose`` with ``truth``.
+    """
+    return drive_attempts(config, setup.driver, [MarkerAttempt(config, site, setup, rng, params)])[0]
 
 
 def _apparent_size(corners_px: np.ndarray) -> float:

@@ -3,7 +3,9 @@
 Every method gets a simulator built from the same seed: the same clutter, workers, start pose
 and sensor-noise model, driven by the same wall following. ``bim`` and ``bim+pf`` come from one
 session (the ``bim`` result is the rectified pose at the unique match, §3.3.5; ``bim+pf``
-continues with fine tuning), exactly as two separate runs with the same seed would.
+continues with fine tuning), exactly as two separate runs with the same seed would; ``amcl`` and
+``markers`` share one drive (:func:`initcli.baselines.drive.drive_attempts`), each ending where it
+would have ended alone.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from bimtools.site.load import Site, load_site
+from initcli.baselines.drive import BaselineAttempt, drive_attempts
 from initcli.baselines.outcome import LocalisationOutcome
 from initcli.config import SessionConfig, load_config
 from initcli.core.geometry import Pose2D
@@ -143,19 +146,22 @@ def run_trial(job: TrialJob) -> list[TrialRecord]:
         result = built.session.run()
         both = session_outcomes(result)
         outcomes.extend(both[m] for m in session_methods)
-    if "amcl" in job.methods:
-        from initcli.baselines.amcl import run_amcl
-        from initcli.core.global_localisation import GlobalLocalisationParams
+    attempts: list[BaselineAttempt] = []
+    if any(m in job.methods for m in ("amcl", "markers")):
+        # One drive for both: their wall following does not depend on what they sense.
+        setup = baseline_sim()
+        if "amcl" in job.methods:
+            from initcli.baselines.amcl import AmclAttempt
+            from initcli.core.global_localisation import GlobalLocalisationParams
 
-        params = dataclasses.replace(GlobalLocalisationParams(), **dict(job.amcl))
-        outcomes.append(run_amcl(config, site, baseline_sim(), np.random.default_rng(job.seed + 1), params))
-    if "markers" in job.methods:
-        from initcli.baselines.markers import MarkerParams, run_markers
+            params = dataclasses.replace(GlobalLocalisationParams(), **dict(job.amcl))
+            attempts.append(AmclAttempt(config, site, setup, np.random.default_rng(job.seed + 1), params))
+        if "markers" in job.methods:
+            from initcli.baselines.markers import MarkerAttempt, MarkerParams
 
-        params_m = dataclasses.replace(MarkerParams(), **dict(job.markers))
-        outcomes.append(
-            run_markers(config, site, baseline_sim(), np.random.default_rng(job.seed + 2), params_m)
-        )
+            params_m = dataclasses.replace(MarkerParams(), **dict(job.markers))
+            attempts.append(MarkerAttempt(config, site, setup, np.random.default_rng(job.seed + 2), params_m))
+        outcomes.extend(drive_attempts(config, setup.driver, attempts))
     assert start_pose is not None
     sweep = sweep_label(job.sweep, job.sweep_value)
     order = {m: i for i, m in enumerate(job.methods)}

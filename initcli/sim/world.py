@@ -52,6 +52,9 @@ def box_edges(cx: float, cy: float, half_w: float, half_h: float, yaw: float = 0
     return polygon_edges(rot)
 
 
+# The edges of box_edges(0, 0, 1, 1): a worker's outline is its centre + radius * these.
+SQUARE_EDGES = np.array([[-1, -1, 1, -1], [1, -1, 1, 1], [1, 1, -1, 1], [-1, 1, -1, -1]], dtype=float)
+
 GLASS_ECHO_DEG = 10.0  # a lidar beam returns from glass only this close to the pane's normal
 
 
@@ -134,6 +137,7 @@ class SimWorld:
         self._directions = segment_directions(self.static)
         self._index: dict[tuple[int, int], np.ndarray] = {}
         self._near_cache: dict[tuple[int, int, int, int], np.ndarray] = {}
+        self._lidar_cache: dict[tuple[int, int, int, int], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._worker_cache: tuple[tuple[tuple[float, ...], ...], np.ndarray] | None = None
         if len(self.static) == 0:
             return
@@ -190,20 +194,18 @@ class SimWorld:
         return self.static[ids]
 
     def worker_segments(self, t: float) -> np.ndarray:
-        """The workers' outlines (4 edges each); the last ones are reused while no worker moved (the
-        lidar, the camera and the collision check ask several times per control period)."""
+        """The workers' outlines (4 edges each, axis-aligned squares); the last ones are reused while
+        no worker moved (the lidar, the camera and the collision check ask several times per control
+        period)."""
         if not self.workers:
             return np.zeros((0, 4))
         key = tuple((w.phase, w.radius, w.a[0], w.a[1], w.b[0], w.b[1]) for w in self.workers)
         if self._worker_cache is not None and self._worker_cache[0] == key:
             return self._worker_cache[1]
-        edges = np.concatenate(
-            [
-                box_edges(float(x), float(y), w.radius, w.radius)
-                for w in self.workers
-                for x, y in [w.position(t)]
-            ]
-        )
+        centres = np.array([w.position(t) for w in self.workers], dtype=float)  # (W, 2)
+        r = np.array([w.radius for w in self.workers], dtype=float)[:, None, None]
+        # box_edges' edges, unrotated: (W, 4 edges, from xy + to xy)
+        edges = (np.tile(centres, 2)[:, None, :] + r * SQUARE_EDGES[None, :, :]).reshape(-1, 4)
         self._worker_cache = (key, edges)
         return edges
 
@@ -216,26 +218,36 @@ class SimWorld:
         moving = self.worker_segments(t)
         return np.concatenate([near, moving]) if len(moving) else near
 
+    def _lidar_segments(self, x: float, y: float, radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(opaque static segments, their directions, glazed segments) near a point, cached per block
+        of grid cells as :meth:`ids_near` is."""
+        g0x, g0y = math.floor((x - radius) / self.cell), math.floor((y - radius) / self.cell)
+        g1x, g1y = math.floor((x + radius) / self.cell), math.floor((y + radius) / self.cell)
+        key = (g0x, g0y, g1x, g1y)
+        cached = self._lidar_cache.get(key)
+        if cached is not None:
+            return cached
+        ids = self.ids_near(x, y, radius) if self._index else np.arange(len(self.static))
+        assert self.glass is not None
+        opaque = ids[~self.glass[ids]]
+        found = (self.static[opaque], self._directions[opaque], self.static[ids[self.glass[ids]]])
+        if len(self._lidar_cache) >= NEAR_CACHE_SIZE:
+            self._lidar_cache.pop(next(iter(self._lidar_cache)))
+        self._lidar_cache[key] = found
+        return found
+
     def raycast(self, origin: np.ndarray, angles: np.ndarray, max_range: float, t: float) -> np.ndarray:
         """Range along each ray to the nearest static segment or worker at ``t`` (see
         :func:`initcli.core.raycast.cast_rays`)."""
         origin = np.asarray(origin, dtype=float)
-        ids = (
-            self.ids_near(float(origin[0]), float(origin[1]), max_range)
-            if self._index
-            else np.arange(len(self.static))
-        )
-        assert self.glass is not None
-        glazed = ids[self.glass[ids]]
-        ids = ids[~self.glass[ids]]
-        static, directions = self.static[ids], self._directions[ids]
+        static, directions, glazed = self._lidar_segments(float(origin[0]), float(origin[1]), max_range)
         moving = self.worker_segments(t)
         if len(moving):
             static = np.concatenate([static, moving])
             directions = np.concatenate([directions, segment_directions(moving)])
         ranges = cast_rays(origin, angles, static, max_range, directions)
         if len(glazed):
-            ranges = np.minimum(ranges, glass_echoes(origin, angles, self.static[glazed], max_range))
+            ranges = np.minimum(ranges, glass_echoes(origin, angles, glazed, max_range))
         return ranges
 
     def clearance(self, x: float, y: float, t: float, radius: float = 1.0) -> float:

@@ -31,3 +31,38 @@ def test_explorer_turns_once_on_the_spot_before_following_walls():
     assert turned == pytest.approx(2 * math.pi, abs=0.1) and commands[-1][0] > 0
     config.exploration.initial_look = False
     assert WallFollowingExplorer(config).command(SensorFrame(0.0, Pose2D(0, 0, 0), scan))[0] > 0
+
+
+def test_one_shared_drive_gives_each_baseline_the_outcome_it_has_alone(tmp_path) -> None:
+    """AMCL and the markers on one drive (as bim-init eval runs them) end exactly where and how
+    each ends when it drives alone from the same simulated setup."""
+    import dataclasses
+
+    from initcli.baselines.amcl import AmclAttempt, run_amcl
+    from initcli.baselines.drive import drive_attempts
+    from initcli.baselines.markers import MarkerAttempt, run_markers
+    from initcli.config import load_config
+    from initcli.session.setup import build_sim, choose_storey, prepare_site
+    from tests.helpers import SAMPLES
+
+    config = load_config(SAMPLES / "block_a.site.yaml", reality="construction")
+    config = dataclasses.replace(config, limits=dataclasses.replace(config.limits, max_distance=25.0))
+    site = prepare_site(config, tmp_path / "site")
+    storey, _ = choose_storey(config, site)
+    for seed in (3, 8):
+        alone = [
+            run_amcl(config, site, build_sim(config, site, storey, seed), np.random.default_rng(seed + 1)),
+            run_markers(config, site, build_sim(config, site, storey, seed), np.random.default_rng(seed + 2)),
+        ]
+        setup = build_sim(config, site, storey, seed)
+        shared = drive_attempts(
+            config,
+            setup.driver,
+            [
+                AmclAttempt(config, site, setup, np.random.default_rng(seed + 1)),
+                MarkerAttempt(config, site, setup, np.random.default_rng(seed + 2)),
+            ],
+        )
+        for a, b in zip(alone, shared, strict=True):
+            assert dataclasses.replace(a, wall_seconds=0.0) == dataclasses.replace(b, wall_seconds=0.0)
+        assert alone[0].distance_m != alone[1].distance_m  # they end at different places
