@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TypeVar
 
 import numpy as np
 
@@ -117,6 +118,19 @@ class Worker:
             self.waited, self.giving_way = 0.0, self.give_way
 
 
+_Cached = TypeVar("_Cached")
+
+
+def _remember(
+    cache: dict[tuple[int, int, int, int], _Cached], key: tuple[int, int, int, int], value: _Cached
+) -> _Cached:
+    """Keep ``value`` under ``key``, dropping the oldest entry past NEAR_CACHE_SIZE."""
+    if len(cache) >= NEAR_CACHE_SIZE:
+        cache.pop(next(iter(cache)))
+    cache[key] = value
+    return value
+
+
 @dataclass
 class SimWorld:
     """Static segments (BIM obstacles + clutter) and moving workers, with a coarse grid index."""
@@ -160,18 +174,22 @@ class SimWorld:
         static, glass = world_edges(obstacles, boxes)
         return SimWorld(static=static, clutter=boxes, workers=workers or [], glass=glass)
 
+    def _block(self, x: float, y: float, radius: float) -> tuple[int, int, int, int]:
+        """The grid cells (first x, first y, last x, last y) covering ``radius`` around a point."""
+        g0x, g0y = math.floor((x - radius) / self.cell), math.floor((y - radius) / self.cell)
+        return g0x, g0y, math.floor((x + radius) / self.cell), math.floor((y + radius) / self.cell)
+
     def ids_near(self, x: float, y: float, radius: float) -> np.ndarray:
         """Sorted indices into ``static`` of the segments in the grid cells within ``radius`` of a point.
 
         The answer depends only on the block of cells covered, so it is cached per block (the
         robot stays in the same block for many scans).
         """
-        g0x, g0y = math.floor((x - radius) / self.cell), math.floor((y - radius) / self.cell)
-        g1x, g1y = math.floor((x + radius) / self.cell), math.floor((y + radius) / self.cell)
-        key = (g0x, g0y, g1x, g1y)
+        key = self._block(x, y, radius)
         cached = self._near_cache.get(key)
         if cached is not None:
             return cached
+        g0x, g0y, g1x, g1y = key
         ids = [
             self._index[(gx, gy)]
             for gx in range(g0x, g1x + 1)
@@ -179,10 +197,7 @@ class SimWorld:
             if (gx, gy) in self._index
         ]
         found = np.unique(np.concatenate(ids)) if ids else np.zeros(0, dtype=int)
-        if len(self._near_cache) >= NEAR_CACHE_SIZE:
-            self._near_cache.pop(next(iter(self._near_cache)))
-        self._near_cache[key] = found
-        return found
+        return _remember(self._near_cache, key, found)
 
     def segments_near(self, x: float, y: float, radius: float) -> np.ndarray:
         """Static segments within (roughly) ``radius`` of a point."""
@@ -221,9 +236,7 @@ class SimWorld:
     def _lidar_segments(self, x: float, y: float, radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(opaque static segments, their directions, glazed segments) near a point, cached per block
         of grid cells as :meth:`ids_near` is."""
-        g0x, g0y = math.floor((x - radius) / self.cell), math.floor((y - radius) / self.cell)
-        g1x, g1y = math.floor((x + radius) / self.cell), math.floor((y + radius) / self.cell)
-        key = (g0x, g0y, g1x, g1y)
+        key = self._block(x, y, radius)
         cached = self._lidar_cache.get(key)
         if cached is not None:
             return cached
@@ -231,10 +244,7 @@ class SimWorld:
         assert self.glass is not None
         opaque = ids[~self.glass[ids]]
         found = (self.static[opaque], self._directions[opaque], self.static[ids[self.glass[ids]]])
-        if len(self._lidar_cache) >= NEAR_CACHE_SIZE:
-            self._lidar_cache.pop(next(iter(self._lidar_cache)))
-        self._lidar_cache[key] = found
-        return found
+        return _remember(self._lidar_cache, key, found)
 
     def raycast(self, origin: np.ndarray, angles: np.ndarray, max_range: float, t: float) -> np.ndarray:
         """Range along each ray to the nearest static segment or worker at ``t`` (see
