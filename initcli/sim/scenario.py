@@ -42,6 +42,7 @@ class Circulation:
         closed: Sequence[Obstacle] = (),
         boxes: Sequence[np.ndarray] = (),
         footprint: float = 0.0,
+        min_votes: int = 0,
     ) -> Circulation:
         """The region of the storey map that most features face. ``closed``: obstacles of the simulated
         world that the map leaves open (closed door leaves, hoardings) and ``boxes``: closed (n, 2)
@@ -49,7 +50,9 @@ class Circulation:
         free space is shrunk before it is split into connected regions. The region is then the one a
         robot of that size can actually drive in: rooms behind closed doors, corridor sections closed
         off by hoardings and gaps narrower than the robot are not part of it. ``clearance`` stays the
-        distance to the nearest obstacle."""
+        distance to the nearest obstacle. ``min_votes`` > 0: the region is every connected region
+        that at least that many features face (all corridor sections between closed doors), not
+        only the one most face."""
         grid = storey.grid
         if grid is None:
             raise ValueError(f"storey {storey.name!r} has no occupancy map")
@@ -78,7 +81,9 @@ class Circulation:
             if votes
             else int(np.bincount(labels.ravel())[1:].argmax() + 1)
         )
-        return Circulation(grid, labels == main, clearance, labels)
+        faced = [label for label, n in votes.items() if n >= min_votes] if min_votes > 0 else []
+        region = np.isin(labels, faced) if faced else labels == main
+        return Circulation(grid, region, clearance, labels)
 
     def cells(self, min_clearance: float) -> np.ndarray:
         rows, cols = np.nonzero(self.label & (self.clearance >= min_clearance))

@@ -6,6 +6,8 @@ import io
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from bimtools.site.atomic import write_bytes_atomic
 from initcli.survey.survey import Landmark, StoreySurvey
 
@@ -16,7 +18,12 @@ if TYPE_CHECKING:
 
 
 def _panel(
-    ax: Axes, result: StoreySurvey, title: str, landmarks: list[Landmark], norm: Normalize
+    ax: Axes,
+    result: StoreySurvey,
+    title: str,
+    landmarks: list[Landmark],
+    norm: Normalize,
+    points_per_m: float,
 ) -> PathCollection:
     plan = result.plan
     for x1, y1, x2, y2 in plan.occluders:
@@ -32,7 +39,7 @@ def _panel(
         cmap="viridis_r",
         norm=norm,
         marker="s",
-        s=(size * 2.2) ** 2 * 6,
+        s=(size * points_per_m) ** 2,  # one square per sample position, edge to edge
         linewidths=0,
         zorder=2,
     )
@@ -54,9 +61,17 @@ def _panel(
         ax.scatter(
             f.xy[idx, 0], f.xy[idx, 1], s=16, marker="o", edgecolors="k", linewidths=0.5, zorder=4, label=cls
         )
-    for lm in landmarks:
+    for k, lm in enumerate(landmarks):
         ax.scatter([lm.x], [lm.y], s=110, marker="*", color="orange", edgecolors="k", zorder=5)
-        ax.annotate(lm.cls, (lm.x, lm.y), textcoords="offset points", xytext=(5, 5), fontsize=7)
+        # Numbered, above and below in turn: neighbouring suggestions do not write over each other.
+        ax.annotate(
+            str(k + 1),
+            (lm.x, lm.y),
+            textcoords="offset points",
+            xytext=(4, 6 if k % 2 == 0 else -12),
+            fontsize=8,
+            fontweight="bold",
+        )
     ax.set_aspect("equal")
     ax.set_title(title, fontsize=9)
     ax.set_xlabel("x [m]")
@@ -82,14 +97,28 @@ def survey_png(
     if with_landmarks is not None:
         panels.append((with_landmarks, f"with {len(landmarks or [])} suggested landmark(s)", landmarks or []))
     norm = Normalize(0.0, max(20.0, float(result.position_distance.max(initial=0.0))))
-    fig, axes = plt.subplots(1, len(panels), figsize=(7.5 * len(panels), 6.5), squeeze=False)
-    scatters = [
-        _panel(ax, res, f"{res.plan.name}: {title}", lms, norm)
-        for ax, (res, title, lms) in zip(axes[0], panels, strict=True)
-    ]
-    fig.colorbar(
-        scatters[-1], ax=list(axes[0]), label="m driven to a unique match (mean over headings)", shrink=0.8
+    occ = result.plan.occluders.reshape(-1, 4)
+    width = float(np.ptp(occ[:, [0, 2]])) if len(occ) else 1.0
+    height = float(np.ptp(occ[:, [1, 3]])) if len(occ) else 1.0
+    aspect = max(width, 1.0) / max(height, 1.0)
+    # Wide floors (a corridor block) one above the other, compact ones side by side.
+    stacked = aspect > 1.4 and len(panels) > 1
+    rows, cols = (len(panels), 1) if stacked else (1, len(panels))
+    panel_w = 9.0 if stacked else 6.5
+    panel_h = min(max(panel_w / aspect, 2.2), 7.0) + 0.9
+    fig, axes = plt.subplots(
+        rows, cols, figsize=(panel_w * cols + 1.2, panel_h * rows), squeeze=False, layout="constrained"
     )
+    flat = list(axes.flat)
+    # Data metres to points in each panel (its axes fill about the panel less labels and legend).
+    points_per_m = 72.0 * min((panel_w - 1.0) / (1.05 * width), (panel_h - 1.2) / (1.05 * height))
+    scatters = []
+    for ax, (res, title, lms) in zip(flat, panels, strict=True):
+        mean = float(res.position_distance.mean()) if len(res.position_distance) else float("nan")
+        scatters.append(
+            _panel(ax, res, f"{res.plan.name}: {title} (mean {mean:.1f} m)", lms, norm, points_per_m)
+        )
+    fig.colorbar(scatters[-1], ax=flat, label="m driven to a unique match\n(mean over headings)", shrink=0.9)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
     plt.close(fig)

@@ -20,8 +20,9 @@ from bimtools.site.load import StoreyModel
 from initcli.core.classes import ClassMap
 from initcli.core.visibility import CameraModel, FeatureArrays, visible
 from initcli.eval.executor import Executor, LocalExecutor, map_unordered
+from initcli.sim.as_built import door_leaf
 from initcli.sim.scenario import Circulation
-from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
+from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT, sim_features_from_bim
 from initcli.sim.world import polygon_edges
 from initcli.survey.exploration import Entry, Loop, follow_loops, join_loop, look_round
 from initcli.survey.uniqueness import UniquenessParams, first_unique
@@ -29,6 +30,7 @@ from initcli.survey.uniqueness import UniquenessParams, first_unique
 LANDMARK_CLASS = "landmark"  # each suggested landmark gets its own category: landmark_1, landmark_2
 LANDMARK_HEIGHT = 2.0  # m: a sign whose centre is at the camera's height
 UNIQUE_WITHIN = (5.0, 10.0, 20.0)  # m: the shares of survey.json
+FACED_BY = 1  # features facing a closed-door region that make it circulation area (rooms: none)
 
 
 @dataclass(frozen=True)
@@ -94,8 +96,19 @@ def _cumulative(vis: np.ndarray) -> np.ndarray:
 
 
 def plan_storey(storey: StoreyModel, params: SurveyParams, cmap: ClassMap | None = None) -> StoreyPlan:
-    """Precompute a storey; raises ValueError when it has no occupancy map."""
-    circulation = Circulation.of(storey)
+    """Precompute a storey; raises ValueError when it has no occupancy map.
+
+    The starts and wall-following loops lie in the circulation area with every door leaf closed, as
+    the simulated world has them: the map leaves door openings free, and a room behind a door is
+    not where a session starts or drives. Every region that FACED_BY features face from the
+    front is surveyed (each corridor section between closed doors; ``bim-init eval`` draws its
+    starts in the one most features face)."""
+    leaves = [
+        door_leaf(f)
+        for f, bim in zip(sim_features_from_bim(storey.features, cmap), storey.features, strict=True)
+        if bim.ifc_class == "IfcDoor"
+    ]
+    circulation = Circulation.of(storey, closed=leaves, min_votes=FACED_BY)
     grid = circulation.grid
     features = storey_features(storey, cmap)
     occluders = occluders_of(storey)

@@ -201,3 +201,29 @@ def test_suggested_landmarks_make_an_ambiguous_room_unique() -> None:
     assert landmarks[-1].mean_distance_m <= landmarks[0].mean_distance_m
     assert np.isfinite(after.distance).sum() > 0
     assert landmarks[-1].mean_distance_m == pytest.approx(np.minimum(after.distance, PARAMS.limit_m).mean())
+
+
+def _corridor_and_room() -> StoreyModel:
+    """A 10 m x 2 m corridor (y 0-2) and a 4 m x 3 m room above it (y 2.2-5.2), joined by a 0.8 m
+    door opening that the map leaves free; the 1 m door faces the corridor, as do two lifts."""
+    rows, cols = int(5.4 / RES) + 2, int(10.0 / RES) + 2
+    cells = np.full((rows, cols), OCCUPIED, dtype=np.uint8)
+    cells[1 : int(2.0 / RES) + 1, 1:-1] = FREE  # the corridor
+    cells[int(2.2 / RES) + 1 : int(5.2 / RES) + 1, int(3.0 / RES) + 1 : int(7.0 / RES) + 1] = FREE  # the room
+    cells[int(2.0 / RES) : int(2.3 / RES) + 1, int(4.6 / RES) + 1 : int(5.4 / RES) + 1] = FREE  # the opening
+    grid = OccupancyGrid(np.flipud(cells).copy(), RES, (-RES, -RES, 0.0))  # row 0 is the map's top
+    features = [
+        Feature("d1", "Door", 5.0, 2.0, 0.0, -1.0, 1.0, 2.1, ifc_class="IfcDoor"),
+        Feature("l1", "Lift", 2.0, 0.0, 0.0, 1.0, 1.2, 2.2),
+        Feature("l2", "Lift", 8.0, 0.0, 0.0, 1.0, 1.2, 2.2),
+    ]
+    return StoreyModel("L0", 0.0, features, [], grid=grid)
+
+
+def test_starts_stay_out_of_a_room_behind_a_door_the_map_leaves_open() -> None:
+    """The simulated world closes every door leaf: a session neither starts nor drives in the
+    room, so the survey does not either, though the map's opening joins it to the corridor."""
+    plan = plan_storey(_corridor_and_room(), SurveyParams(spacing=0.5, headings=1))
+    assert len(plan.positions) > 10
+    assert plan.positions[:, 1].max() < 2.0  # all in the corridor
+    assert not plan.circulation.label[plan.circulation.grid.world_to_cell(5.0, 3.5)]  # the room's middle
