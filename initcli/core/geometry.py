@@ -20,6 +20,8 @@ def wrap_angle(angle: float) -> float: ...
 def wrap_angle(angle: np.ndarray) -> np.ndarray: ...
 def wrap_angle(angle: float | np.ndarray) -> float | np.ndarray:
     """Wrap an angle (or an array of angles) to [-pi, pi)."""
+    if isinstance(angle, float | int):  # the same float64 arithmetic, without numpy's call overhead
+        return (angle + math.pi) % (2.0 * math.pi) - math.pi
     wrapped = (np.asarray(angle) + np.pi) % (2.0 * np.pi) - np.pi
     if np.ndim(wrapped) == 0:
         return float(wrapped)

@@ -113,7 +113,7 @@ def _full_turn(angles: np.ndarray) -> tuple[float, float] | None:
 
 
 def _ray_runs(
-    angles: np.ndarray, start: np.ndarray, stop: np.ndarray
+    angles: np.ndarray, start: np.ndarray, stop: np.ndarray, even: tuple[float, float] | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Rays whose angle lies in ``[start, stop]`` (mod 2 pi; each interval shorter than a turn).
 
@@ -121,7 +121,7 @@ def _ray_runs(
     ``rays[len(angles):2 * len(angles)]`` is every ray once.
     """
     n = len(angles)
-    even = _full_turn(angles)
+    even = even if even is not None else _full_turn(angles)
     if even is not None:
         # Rays at a0 + k * inc: index arithmetic, over the ray indices written out twice.
         a0, inc = even
@@ -152,6 +152,7 @@ def cast_rays(
     segments: np.ndarray,
     max_range: float,
     directions: np.ndarray | None = None,
+    even: tuple[float, float] | None = None,
 ) -> np.ndarray:
     """The result of :func:`ray_segment_distances`, without testing every ray against every segment.
 
@@ -160,7 +161,9 @@ def cast_rays(
     index arithmetic for a full turn of evenly spaced rays, the lidar case, else by binary search
     in the sorted ray angles). The tests themselves are :func:`ray_segment_params` on the brute
     force's operands, pair by pair, so the ranges are identical to :func:`ray_segment_distances`'s.
-    ``directions`` may pass precomputed :func:`segment_directions` of ``segments``.
+    ``directions`` may pass precomputed :func:`segment_directions` of ``segments``; ``even`` the
+    (first angle, increment) of rays the caller knows cover one turn evenly (a lidar), which
+    spares checking it.
     """
     origin = np.asarray(origin, dtype=float)
     angles = np.asarray(angles, dtype=float)
@@ -190,7 +193,7 @@ def cast_rays(
     sweep = np.arctan2(aox * by - aoy * bx, aox * bx + aoy * by)
     start = np.arctan2(aoy, aox) + np.minimum(sweep, 0.0) - ANGLE_MARGIN
     stop = start + (np.abs(sweep) + 2.0 * ANGLE_MARGIN)
-    rays, first, last = _ray_runs(angles, start, stop)
+    rays, first, last = _ray_runs(angles, start, stop, even)
     # A segment passing (almost) through the origin subtends about half a turn either way it is
     # computed: test it against every ray, once each.
     near = dist2 < NEAR_SEGMENT * NEAR_SEGMENT

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -44,10 +45,14 @@ class ScanView:
         mask = (self.angles >= lo) & (self.angles <= hi)
         return float(self.ranges[mask].min()) if mask.any() else default
 
+    @cached_property
+    def _xy(self) -> tuple[np.ndarray, np.ndarray]:
+        """The beam end points in the robot frame (the wall follower asks for the front twice)."""
+        return self.ranges * np.cos(self.angles), self.ranges * np.sin(self.angles)
+
     def front(self, half_width: float = 0.35) -> float:
         """Distance ahead within a corridor of ``half_width`` metres (robot width + margin)."""
-        x = self.ranges * np.cos(self.angles)
-        y = self.ranges * np.sin(self.angles)
+        x, y = self._xy
         mask = (x > 0) & (np.abs(y) <= half_width)
         return float(x[mask].min()) if mask.any() else math.inf
 

@@ -14,6 +14,7 @@ import numpy as np
 
 from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.core.raycast import TWO_PI
 from initcli.drivers.base import LaserScan, SensorFrame
 from initcli.io.detection_log import DetectedObject
 from initcli.sim.robot import DiffDriveRobot
@@ -76,6 +77,7 @@ class SimDriver:
         self.t = 0.0
         self.steps = 0
         self._angles = lidar.angle_min + lidar.angle_increment * np.arange(lidar.beams)
+        self._full_turn = abs(lidar.fov - TWO_PI) < 1e-9 and lidar.beams >= 2
 
     @property
     def distance(self) -> float:
@@ -83,7 +85,10 @@ class SimDriver:
 
     def scan(self) -> LaserScan:
         p = self.robot.pose
-        ranges = self.world.raycast(np.array([p.x, p.y]), self._angles + p.yaw, self.lidar.max_range, self.t)
+        angles = self._angles + p.yaw
+        # A full turn of evenly spaced beams: cast_rays need not check it at every scan.
+        even = (float(angles[0]), TWO_PI / len(angles)) if self._full_turn else None
+        ranges = self.world.raycast(np.array([p.x, p.y]), angles, self.lidar.max_range, self.t, even)
         hit = ranges < self.lidar.max_range
         noisy = ranges + self.rng.normal(0.0, self.lidar.noise, len(ranges)) * hit
         noisy = np.where(hit, np.clip(noisy, 0.05, self.lidar.max_range - 1e-3), self.lidar.max_range)
@@ -101,8 +106,8 @@ class SimDriver:
         return self._frame()
 
     def step(self, v: float, w: float) -> SensorFrame:
-        v = float(np.clip(v, -self.max_linear, self.max_linear))
-        w = float(np.clip(w, -self.max_angular, self.max_angular))
+        v = min(max(float(v), -self.max_linear), self.max_linear)
+        w = min(max(float(w), -self.max_angular), self.max_angular)
         dt = 1.0 / CONTROL_RATE
         target = self.robot.proposed(v, w, dt)
         if abs(v) > 1e-9 and self.world.clearance(target.x, target.y, self.t, 1.0) < self.robot.radius:

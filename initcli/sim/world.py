@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TypeVar
 
 import numpy as np
@@ -92,9 +93,9 @@ class Worker:
     waited: float = 0.0
     giving_way: float = 0.0
 
-    @property
+    @cached_property
     def length(self) -> float:
-        return float(np.hypot(*(self.b - self.a))) or 1.0
+        return float(np.hypot(*(self.b - self.a))) or 1.0  # a and b never move
 
     def position(self, t: float = 0.0) -> np.ndarray:
         length = self.length
@@ -107,7 +108,8 @@ class Worker:
             self.giving_way -= dt
             self.phase += self.speed * dt
             return
-        if float(np.hypot(*(self.position() - robot_xy))) > self.yield_distance:
+        here = self.position()
+        if math.hypot(float(here[0] - robot_xy[0]), float(here[1] - robot_xy[1])) > self.yield_distance:
             self.waited = 0.0
             self.phase += self.speed * dt
             return
@@ -151,6 +153,7 @@ class SimWorld:
         self._directions = segment_directions(self.static)
         self._index: dict[tuple[int, int], np.ndarray] = {}
         self._near_cache: dict[tuple[int, int, int, int], np.ndarray] = {}
+        self._segments_cache: dict[tuple[int, int, int, int], np.ndarray] = {}
         self._lidar_cache: dict[tuple[int, int, int, int], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._worker_cache: tuple[tuple[tuple[float, ...], ...], np.ndarray] | None = None
         if len(self.static) == 0:
@@ -203,10 +206,12 @@ class SimWorld:
         """Static segments within (roughly) ``radius`` of a point."""
         if not self._index:
             return self.static
+        key = self._block(x, y, radius)
+        cached = self._segments_cache.get(key)
+        if cached is not None:
+            return cached
         ids = self.ids_near(x, y, radius)
-        if len(ids) == 0:
-            return np.zeros((0, 4))
-        return self.static[ids]
+        return _remember(self._segments_cache, key, self.static[ids] if len(ids) else np.zeros((0, 4)))
 
     def worker_segments(self, t: float) -> np.ndarray:
         """The workers' outlines (4 edges each, axis-aligned squares); the last ones are reused while
@@ -214,7 +219,7 @@ class SimWorld:
         period)."""
         if not self.workers:
             return np.zeros((0, 4))
-        key = tuple((w.phase, w.radius, w.a[0], w.a[1], w.b[0], w.b[1]) for w in self.workers)
+        key = tuple((w.phase, w.radius) for w in self.workers)  # a worker's a and b never change
         if self._worker_cache is not None and self._worker_cache[0] == key:
             return self._worker_cache[1]
         centres = np.array([w.position(t) for w in self.workers], dtype=float)  # (W, 2)
@@ -246,16 +251,23 @@ class SimWorld:
         found = (self.static[opaque], self._directions[opaque], self.static[ids[self.glass[ids]]])
         return _remember(self._lidar_cache, key, found)
 
-    def raycast(self, origin: np.ndarray, angles: np.ndarray, max_range: float, t: float) -> np.ndarray:
+    def raycast(
+        self,
+        origin: np.ndarray,
+        angles: np.ndarray,
+        max_range: float,
+        t: float,
+        even: tuple[float, float] | None = None,
+    ) -> np.ndarray:
         """Range along each ray to the nearest static segment or worker at ``t`` (see
-        :func:`initcli.core.raycast.cast_rays`)."""
+        :func:`initcli.core.raycast.cast_rays`, also for ``even``)."""
         origin = np.asarray(origin, dtype=float)
         static, directions, glazed = self._lidar_segments(float(origin[0]), float(origin[1]), max_range)
         moving = self.worker_segments(t)
         if len(moving):
             static = np.concatenate([static, moving])
             directions = np.concatenate([directions, segment_directions(moving)])
-        ranges = cast_rays(origin, angles, static, max_range, directions)
+        ranges = cast_rays(origin, angles, static, max_range, directions, even)
         if len(glazed):
             ranges = np.minimum(ranges, glass_echoes(origin, angles, glazed, max_range))
         return ranges
