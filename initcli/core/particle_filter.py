@@ -59,15 +59,19 @@ class LikelihoodField:
         self.max_distance = max_distance
         self.rows, self.cols = grid.cells.shape
         self.known = grid.cells != 205
+        # The field with a border of max_distance: a point off the map reads the border (its cell
+        # indices clipped into it), which spares masking every lookup.
+        self._padded = np.pad(self.distance, 1, constant_values=np.float32(max_distance))
 
     def lookup(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """The distance field at world points (max_distance off the map)."""
         res = self.grid.resolution
         col = np.floor((x - self.grid.origin[0]) / res).astype(np.int64)
-        row = self.rows - 1 - np.floor((y - self.grid.origin[1]) / res).astype(np.int64)
-        inside = (row >= 0) & (row < self.rows) & (col >= 0) & (col < self.cols)
-        out = np.full(x.shape, self.max_distance, dtype=np.float32)
-        out[inside] = self.distance[row[inside], col[inside]]
-        return out
+        row = self.rows - np.floor((y - self.grid.origin[1]) / res).astype(np.int64)  # padded row
+        np.clip(row, 0, self.rows + 1, out=row)
+        col += 1
+        np.clip(col, 0, self.cols + 1, out=col)
+        return self._padded[row, col]
 
 
 def sample_motion(

@@ -89,11 +89,13 @@ class SimDriver:
         # A full turn of evenly spaced beams: cast_rays need not check it at every scan.
         even = (float(angles[0]), TWO_PI / len(angles)) if self._full_turn else None
         ranges = self.world.raycast(np.array([p.x, p.y]), angles, self.lidar.max_range, self.t, even)
-        hit = ranges < self.lidar.max_range
-        noisy = ranges + self.rng.normal(0.0, self.lidar.noise, len(ranges)) * hit
-        noisy = np.where(hit, np.clip(noisy, 0.05, self.lidar.max_range - 1e-3), self.lidar.max_range)
+        max_range = self.lidar.max_range
+        missed = ranges >= max_range
+        noisy = ranges + self.rng.normal(0.0, self.lidar.noise, len(ranges))
+        np.clip(noisy, 0.05, max_range - 1e-3, out=noisy)
+        noisy[missed] = max_range  # no return: no noise either
         if self.lidar.dropout > 0:
-            noisy = np.where(self.rng.random(len(noisy)) < self.lidar.dropout, self.lidar.max_range, noisy)
+            noisy[self.rng.random(len(noisy)) < self.lidar.dropout] = max_range
         return LaserScan(self.lidar.angle_min, self.lidar.angle_increment, self.lidar.max_range, noisy)
 
     def _frame(self) -> SensorFrame:
