@@ -29,3 +29,13 @@ def test_pose_compose_inverse_and_apply() -> None:
 def test_wrap_angle() -> None:
     assert wrap_angle(3 * math.pi / 2) == pytest.approx(-math.pi / 2)
     assert np.allclose(wrap_angle(np.array([0.0, 2 * math.pi, -3 * math.pi / 2])), [0.0, 0.0, math.pi / 2])
+
+
+def test_wrap_angle_of_a_scalar_is_the_arrays_arithmetic() -> None:
+    """Scalars take a path without numpy; it must give the array path's float64 result exactly."""
+    rng = np.random.default_rng(3)
+    angles = np.concatenate([rng.uniform(-50.0, 50.0, 500), [math.pi, -math.pi, 0.0, 2 * math.pi, 1e-17]])
+    wrapped = wrap_angle(angles)
+    assert [wrap_angle(float(a)) for a in angles] == wrapped.tolist()
+    assert all(-math.pi <= w < math.pi for w in wrapped)
+    assert isinstance(wrap_angle(np.float64(4.0)), float) and isinstance(wrap_angle(7), float)
