@@ -6,7 +6,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import TypeVar
 
 import numpy as np
 
@@ -120,17 +119,14 @@ class Worker:
             self.waited, self.giving_way = 0.0, self.give_way
 
 
-_Cached = TypeVar("_Cached")
+@dataclass(frozen=True)
+class _Block:
+    """The static segments in one block of grid cells, in the forms their users need."""
 
-
-def _remember(
-    cache: dict[tuple[int, int, int, int], _Cached], key: tuple[int, int, int, int], value: _Cached
-) -> _Cached:
-    """Keep ``value`` under ``key``, dropping the oldest entry past NEAR_CACHE_SIZE."""
-    if len(cache) >= NEAR_CACHE_SIZE:
-        cache.pop(next(iter(cache)))
-    cache[key] = value
-    return value
+    segments: np.ndarray  # all of them
+    opaque: np.ndarray  # the non-glazed ones (the lidar's obstacles) ...
+    directions: np.ndarray  # ... and their direction vectors
+    glazed: np.ndarray  # the glazed ones (echo only near the normal)
 
 
 @dataclass
@@ -152,9 +148,7 @@ class SimWorld:
         )
         self._directions = segment_directions(self.static)
         self._index: dict[tuple[int, int], np.ndarray] = {}
-        self._near_cache: dict[tuple[int, int, int, int], np.ndarray] = {}
-        self._segments_cache: dict[tuple[int, int, int, int], np.ndarray] = {}
-        self._lidar_cache: dict[tuple[int, int, int, int], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._blocks: dict[tuple[int, int, int, int], _Block] = {}
         self._worker_cache: tuple[tuple[tuple[float, ...], ...], np.ndarray] | None = None
         if len(self.static) == 0:
             return
@@ -177,41 +171,34 @@ class SimWorld:
         static, glass = world_edges(obstacles, boxes)
         return SimWorld(static=static, clutter=boxes, workers=workers or [], glass=glass)
 
-    def _block(self, x: float, y: float, radius: float) -> tuple[int, int, int, int]:
-        """The grid cells (first x, first y, last x, last y) covering ``radius`` around a point."""
+    def _near(self, x: float, y: float, radius: float) -> _Block:
+        """The static segments in the grid cells within ``radius`` of a point. The answer depends
+        only on the block of cells covered, so it is cached per block (the robot stays in the same
+        block for many scans), the oldest dropped past NEAR_CACHE_SIZE blocks."""
         g0x, g0y = math.floor((x - radius) / self.cell), math.floor((y - radius) / self.cell)
-        return g0x, g0y, math.floor((x + radius) / self.cell), math.floor((y + radius) / self.cell)
-
-    def ids_near(self, x: float, y: float, radius: float) -> np.ndarray:
-        """Sorted indices into ``static`` of the segments in the grid cells within ``radius`` of a point.
-
-        The answer depends only on the block of cells covered, so it is cached per block (the
-        robot stays in the same block for many scans).
-        """
-        key = self._block(x, y, radius)
-        cached = self._near_cache.get(key)
+        g1x, g1y = math.floor((x + radius) / self.cell), math.floor((y + radius) / self.cell)
+        key = (g0x, g0y, g1x, g1y)
+        cached = self._blocks.get(key)
         if cached is not None:
             return cached
-        g0x, g0y, g1x, g1y = key
-        ids = [
+        found = [
             self._index[(gx, gy)]
             for gx in range(g0x, g1x + 1)
             for gy in range(g0y, g1y + 1)
             if (gx, gy) in self._index
         ]
-        found = np.unique(np.concatenate(ids)) if ids else np.zeros(0, dtype=int)
-        return _remember(self._near_cache, key, found)
+        ids = np.unique(np.concatenate(found)) if found else np.zeros(0, dtype=int)
+        assert self.glass is not None
+        glazed, opaque = ids[self.glass[ids]], ids[~self.glass[ids]]
+        block = _Block(self.static[ids], self.static[opaque], self._directions[opaque], self.static[glazed])
+        if len(self._blocks) >= NEAR_CACHE_SIZE:
+            self._blocks.pop(next(iter(self._blocks)))
+        self._blocks[key] = block
+        return block
 
     def segments_near(self, x: float, y: float, radius: float) -> np.ndarray:
         """Static segments within (roughly) ``radius`` of a point."""
-        if not self._index:
-            return self.static
-        key = self._block(x, y, radius)
-        cached = self._segments_cache.get(key)
-        if cached is not None:
-            return cached
-        ids = self.ids_near(x, y, radius)
-        return _remember(self._segments_cache, key, self.static[ids] if len(ids) else np.zeros((0, 4)))
+        return self._near(x, y, radius).segments
 
     def worker_segments(self, t: float) -> np.ndarray:
         """The workers' outlines (4 edges each, axis-aligned squares); the last ones are reused while
@@ -238,19 +225,6 @@ class SimWorld:
         moving = self.worker_segments(t)
         return np.concatenate([near, moving]) if len(moving) else near
 
-    def _lidar_segments(self, x: float, y: float, radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(opaque static segments, their directions, glazed segments) near a point, cached per block
-        of grid cells as :meth:`ids_near` is."""
-        key = self._block(x, y, radius)
-        cached = self._lidar_cache.get(key)
-        if cached is not None:
-            return cached
-        ids = self.ids_near(x, y, radius) if self._index else np.arange(len(self.static))
-        assert self.glass is not None
-        opaque = ids[~self.glass[ids]]
-        found = (self.static[opaque], self._directions[opaque], self.static[ids[self.glass[ids]]])
-        return _remember(self._lidar_cache, key, found)
-
     def raycast(
         self,
         origin: np.ndarray,
@@ -262,7 +236,8 @@ class SimWorld:
         """Range along each ray to the nearest static segment or worker at ``t`` (see
         :func:`initcli.core.raycast.cast_rays`, also for ``even``)."""
         origin = np.asarray(origin, dtype=float)
-        static, directions, glazed = self._lidar_segments(float(origin[0]), float(origin[1]), max_range)
+        block = self._near(float(origin[0]), float(origin[1]), max_range)
+        static, directions, glazed = block.opaque, block.directions, block.glazed
         moving = self.worker_segments(t)
         if len(moving):
             static = np.concatenate([static, moving])
