@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bimtools.site.load import Site
-from initcli.baselines.drive import drive_attempts
+from initcli.baselines.drive import drive_attempts, limit_passed
 from initcli.baselines.outcome import LocalisationOutcome
 from initcli.config import SessionConfig
 from initcli.core.geometry import Pose2D
@@ -94,11 +94,9 @@ class AmclAttempt:
         return None
 
     def observe(self, frame: SensorFrame, step: int) -> LocalisationOutcome | None:
-        limits = self.config.limits
-        if self.driver.distance > limits.max_distance:
-            return self._outcome(frame, False, f"not converged after {limits.max_distance:g} m")
-        if frame.t > limits.max_time:
-            return self._outcome(frame, False, f"not converged after {limits.max_time:g} s")
+        passed = limit_passed(self.config, self.driver.distance, frame.t)
+        if passed is not None:
+            return self._outcome(frame, False, f"not converged after {passed}")
         assert self.last_update is not None
         moved = motion_delta(self.last_update, frame.odom)
         amcl = self.amcl

@@ -52,6 +52,16 @@ class WallFollowingExplorer:
         return wall_follow(scan, self.side, self.params)
 
 
+def limit_passed(config: SessionConfig, distance: float, t: float) -> str | None:
+    """The session limit a baseline has passed ("150 m", "1200 s"), None while within both."""
+    limits = config.limits
+    if distance > limits.max_distance:
+        return f"{limits.max_distance:g} m"
+    if t > limits.max_time:
+        return f"{limits.max_time:g} s"
+    return None
+
+
 class BaselineAttempt(Protocol):
     """One baseline localising along the shared drive."""
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from bimtools.site.load import Site
-from initcli.baselines.drive import drive_attempts
+from initcli.baselines.drive import drive_attempts, limit_passed
 from initcli.baselines.outcome import LocalisationOutcome
 from initcli.config import SessionConfig
 from initcli.core.geometry import Pose2D
@@ -59,7 +59,7 @@ class MarkerAttempt:
         )
         self.driver = setup.driver
         self.every = max(1, round(self.driver.control_rate / config.detector.rate))
-        self.limits = config.limits
+        self.config = config
 
     def _outcome(
         self, frame: SensorFrame, localised: bool, reason: str, pose: Pose2D | None = None, features: int = 0
@@ -85,10 +85,9 @@ class MarkerAttempt:
                 nearest = max(seen, key=lambda i: (_apparent_size(seen[i]), -i))
                 pose = robot_pose_from_marker(seen[nearest], self.by_id[nearest], self.intrinsics, self.mount)
                 return self._outcome(frame, True, f"decoded marker {nearest}", pose, len(seen))
-        if self.driver.distance > self.limits.max_distance:
-            return self._outcome(frame, False, f"no marker decoded within {self.limits.max_distance:g} m")
-        if frame.t > self.limits.max_time:
-            return self._outcome(frame, False, f"no marker decoded within {self.limits.max_time:g} s")
+        passed = limit_passed(self.config, self.driver.distance, frame.t)
+        if passed is not None:
+            return self._outcome(frame, False, f"no marker decoded within {passed}")
         return None
 
 

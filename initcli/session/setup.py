@@ -20,7 +20,14 @@ from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.drivers.sim import LidarSpec, SimDriver
 from initcli.io.detection_log import DetectedObject
 from initcli.session.runner import Observer, Session
-from initcli.sim.as_built import HOARDING_CLASS, LEAF_CLASS, AsBuiltWorld, derive_as_built, stand_out
+from initcli.sim.as_built import (
+    HOARDING_CLASS,
+    LEAF_CLASS,
+    AsBuiltWorld,
+    derive_as_built,
+    door_ids,
+    stand_out,
+)
 from initcli.sim.camera import CameraNoise, SimulatedDetector
 from initcli.sim.robot import DiffDriveRobot, OdometryNoise
 from initcli.sim.scenario import Circulation, place_clutter, place_workers, random_start
@@ -118,7 +125,7 @@ def build_sim(
     circulation = Circulation.of(model)
     cmap = ClassMap(config.detector.classes)
     design = sim_features_from_bim(model.features, cmap)
-    doors = frozenset(f.id for f in model.features if f.ifc_class == "IfcDoor")
+    doors = door_ids(model.features)
     built = derive_as_built(
         model.obstacles,
         model.walls,

@@ -33,11 +33,12 @@ width.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from bimtools.site.records import UNKNOWN, Obstacle
+from bimtools.site.records import UNKNOWN, Feature, Obstacle
 from initcli.core.raycast import ray_segment_distances
 from initcli.sim.scenario import Circulation
 from initcli.sim.synthetic_log import SimFeature
@@ -109,6 +110,17 @@ def door_leaf(f: SimFeature) -> Obstacle:
     centre = np.array([f.x, f.y]) - (LEAF_THICKNESS / 2 + 0.01) * np.array([f.norm_x, f.norm_y])
     ring = _box(centre, along, max(f.width, 0.6) / 2, LEAF_THICKNESS / 2)
     return Obstacle("", f.id, LEAF_CLASS, tuple(map(tuple, ring[:-1].tolist())))
+
+
+def door_ids(features: Iterable[Feature]) -> frozenset[str]:
+    """Ids of the BIM features that are doors with a leaf (IfcDoor; not lifts, stairs or openings)."""
+    return frozenset(f.id for f in features if f.ifc_class == "IfcDoor")
+
+
+def closed_doors(features: Iterable[SimFeature], doors: frozenset[str]) -> list[Obstacle]:
+    """A closed :func:`door_leaf` for each of ``features`` whose id is in ``doors``: the design's doors
+    as the simulated world has them (the map leaves door openings free)."""
+    return [door_leaf(f) for f in features if f.id in doors]
 
 
 def is_exterior(f: SimFeature, circulation: Circulation) -> bool:
@@ -189,8 +201,7 @@ def derive_as_built(
     its doors closed, and ``rng`` is not drawn from."""
     p = params
     if p == AsBuiltParams():
-        leaves = [door_leaf(f) for f in features if f.id in doors]
-        return AsBuiltWorld(list(obstacles) + leaves, list(features))
+        return AsBuiltWorld(list(obstacles) + closed_doors(features, doors), list(features))
     closed: list[Obstacle] = []
     changes = {"missing_doors": 0, "shifted_doors": 0, "open_doors": 0, "never_seen": 0}
     by_element: dict[str, list[int]] = {}

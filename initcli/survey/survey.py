@@ -20,7 +20,7 @@ from bimtools.site.load import StoreyModel
 from initcli.core.classes import ClassMap
 from initcli.core.visibility import CameraModel, FeatureArrays, visible
 from initcli.eval.executor import Executor, LocalExecutor, map_unordered
-from initcli.sim.as_built import door_leaf
+from initcli.sim.as_built import closed_doors, door_ids
 from initcli.sim.scenario import Circulation
 from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT, sim_features_from_bim
 from initcli.sim.world import polygon_edges
@@ -103,11 +103,7 @@ def plan_storey(storey: StoreyModel, params: SurveyParams, cmap: ClassMap | None
     not where a session starts or drives. Every region that FACED_BY features face from the
     front is surveyed (each corridor section between closed doors; ``bim-init eval`` draws its
     starts in the one most features face)."""
-    leaves = [
-        door_leaf(f)
-        for f, bim in zip(sim_features_from_bim(storey.features, cmap), storey.features, strict=True)
-        if bim.ifc_class == "IfcDoor"
-    ]
+    leaves = closed_doors(sim_features_from_bim(storey.features, cmap), door_ids(storey.features))
     circulation = Circulation.of(storey, closed=leaves, min_votes=FACED_BY)
     grid = circulation.grid
     features = storey_features(storey, cmap)

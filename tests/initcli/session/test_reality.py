@@ -30,6 +30,10 @@ def with_sim(config: SessionConfig, **as_built: float) -> SessionConfig:
     return dataclasses.replace(config, sim=sim)
 
 
+def with_active_exploration(config: SessionConfig, active: bool) -> SessionConfig:
+    return dataclasses.replace(config, exploration=dataclasses.replace(config.exploration, active=active))
+
+
 def assert_never_wrong(result) -> None:
     if result.success:
         assert result.pose is not None and result.truth_pose is not None
@@ -75,7 +79,7 @@ def test_a_claim_with_rivals_sends_the_robot_where_they_disagree(tmp_path_factor
     an outlier has rivals once more outliers are allowed; instead of wall following on, the session
     validates the claim and its rivals (§3.3.4's active exploration), and never claims a wrong pose."""
     config = load_config(SAMPLES / "ntu_hallway.site.yaml", reality="construction")
-    config = dataclasses.replace(config, exploration=dataclasses.replace(config.exploration, active=True))
+    config = with_active_exploration(config, True)
     site = prepare_site(config, tmp_path_factory.mktemp("ntu"))
     built = sim_session(config, site, 26)
     result = built.session.run()
@@ -112,7 +116,7 @@ def test_a_rival_that_passed_the_checks_is_still_looked_for_after_more_features(
     every check. Claims within 10 m of one held back by credible rivals get the wide rival search:
     the session fails honestly instead."""
     config = load_config(SAMPLES / "ntu_hallway.site.yaml", reality="construction")
-    config = dataclasses.replace(config, exploration=dataclasses.replace(config.exploration, active=False))
+    config = with_active_exploration(config, False)
     site = prepare_site(config, tmp_path_factory.mktemp("ntu_doubted"))
     built = sim_session(config, site, 97)
     result = built.session.run()
