@@ -4,8 +4,12 @@ Runs construction sessions (the profile, and twice its door shift and missing do
 samples and records each claim decision: the claim's own checks (missed predictions, lidar fit,
 path), the rivals found with more outliers allowed and whether they pass the same checks, and
 whether the claim was right (within 2 m and 30 degrees of the truth). Prints how the decisions
-split, and for claims held back by rivals the outlier difference to the closest credible rival:
-the margin a rule that ignored rivals with more outliers would have to respect.
+split; for claims held back by rivals the outlier difference to the closest credible rival; and,
+for the rule that lets a claim through when every credible rival trails it by
+``outrank_outliers`` outliers and ``outrank_scan_fit`` in scan fit (``outranks``), how far the
+scan fit of claims at the wrong place beat their credible rivals with that many more outliers:
+the margin ``outrank_scan_fit`` must stay above (right claims, for comparison, beat theirs by up
+to 0.3).
 
     python benchmarks/bench_claims.py [--starts 100] [--sweep-starts 20] [--workers 2]
 
@@ -32,6 +36,7 @@ _SITES: dict[tuple[str, str, float], Any] = {}
 
 
 def _stats(session: Any, frame: Any, hypothesis: Any, rival: bool) -> dict[str, Any]:
+    """Outliers, rightness, checks and scan fit of one hypothesis at ``frame``."""
     truth = frame.truth
     pose = hypothesis.rectified_pose or hypothesis.pose
     check = session._verify(hypothesis.storey, pose * frame.odom.inverse(), rival=rival)
@@ -40,6 +45,7 @@ def _stats(session: Any, frame: Any, hypothesis: Any, rival: bool) -> dict[str, 
         "outliers": hypothesis.n_outliers,
         "right": math.hypot(pose.x - truth.x, pose.y - truth.y) < WRONG_M and yaw < WRONG_DEG,
         "passed": check.passed,
+        "fit": check.scan_fit,
     }
 
 
@@ -60,23 +66,33 @@ def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, 
     seen: dict[str, Any] = {}
     verified, credible = runner.Session._verified, runner.Session._credible
 
-    def spy_credible(self: Any, frame: Any, rivals: int, found: list) -> tuple[int, list]:
+    def spy_credible(self: Any, frame: Any, claim: Any, check: Any, rivals: int, found: list) -> tuple:
         seen["rivals"], seen["found"] = rivals, list(found)
-        return credible(self, frame, rivals, found)
+        return credible(self, frame, claim, check, rivals, found)
 
     def spy_verified(self: Any, frame: Any, report: Any) -> tuple:
         seen.clear()
         out = verified(self, frame, report)
         claim = _stats(self, frame, report.hypotheses[0], rival=False)
-        rivals = [_stats(self, frame, h, rival=True) for h in seen.get("found", [])[: runner.RIVALS_CHECKED]]
+        found = seen.get("found", [])
+        rivals = [_stats(self, frame, h, rival=True) for h in found[: runner.RIVALS_COMPARED]]
         n_rivals = seen.get("rivals", 0)
-        believed = rivals if n_rivals > runner.RIVALS_CHECKED else [r for r in rivals if r["passed"]]
+        checked = rivals[: runner.RIVALS_CHECKED]
+        believed = checked if n_rivals > runner.RIVALS_CHECKED else [r for r in checked if r["passed"]]
+        passing = [r for r in rivals if r["passed"]]
+        complete = len(found) == n_rivals <= runner.RIVALS_COMPARED
+        trailing = [r for r in passing if r["outliers"] >= claim["outliers"] + self.checks.outrank_outliers]
         decisions.append(
             {
                 "claimed": bool(out[0]),
                 "claim": claim,
                 "n_rivals": n_rivals,
                 "margin": min((r["outliers"] - claim["outliers"] for r in believed), default=None),
+                # the claim's scan fit less the best of its credible rivals', when all of them have
+                # outrank_outliers more outliers (None: some has fewer, or they are not all known)
+                "fit_gap": claim["fit"] - max(r["fit"] or 1.0 for r in passing)
+                if complete and passing and len(trailing) == len(passing) and claim["fit"] is not None
+                else None,
             }
         )
         return out
@@ -106,6 +122,7 @@ def main() -> None:
         with multiprocessing.get_context("spawn").Pool(args.workers) as pool:
             decisions = [d for ds in pool.imap_unordered(_session_decisions, jobs) for d in ds]
     split: collections.Counter[tuple[str, str]] = collections.Counter()
+    gaps: dict[str, list[float]] = {"right": [], "wrong": []}
     margins: collections.Counter[tuple[str, str]] = collections.Counter()
     for d in decisions:
         place = "right" if d["claim"]["right"] else "wrong"
@@ -115,6 +132,8 @@ def main() -> None:
             split[(place, "held back by credible rivals")] += 1
             if d["claim"]["passed"]:
                 margins[(place, f"{d['margin']:+d}" if d["margin"] < 3 else ">=+3")] += 1
+        if not d["claimed"] and d["claim"]["passed"] and d["fit_gap"] is not None:
+            gaps[place].append(d["fit_gap"])
         else:
             split[(place, "failed its own checks")] += 1
     print(f"{len(jobs)} sessions, {len(decisions)} claim decisions")
@@ -126,6 +145,13 @@ def main() -> None:
     print("| claim at the | margin | count |\n|---|---|---|")
     for (place, margin), n in sorted(margins.items()):
         print(f"| {place} place | {margin} | {n} |")
+    print("\nheld back although the claim passes its own checks and every credible rival has at least")
+    print("outrank_outliers more outliers: the claim's scan fit less the best such rival's")
+    print("| claim at the | decisions | largest | share above 0.05 |\n|---|---|---|---|")
+    for place, values in gaps.items():
+        top = f"{max(values):+.3f}" if values else "-"
+        share = f"{sum(v > 0.05 for v in values) / len(values):.2f}" if values else "-"
+        print(f"| {place} place | {len(values)} | {top} | {share} |")
     sys.stdout.flush()
 
 

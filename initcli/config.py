@@ -253,6 +253,8 @@ class VerificationSection:
     scan_tolerance: float = _CHECKS.scan_tolerance  # m
     min_claim_inliers: int = _CHECKS.min_claim_inliers  # matched features before a claim
     rival_outliers: int = _CHECKS.rival_outliers  # extra outliers the claim must stay unique under
+    outrank_outliers: int = _CHECKS.outrank_outliers  # a credible rival this many outliers worse ...
+    outrank_scan_fit: float = _CHECKS.outrank_scan_fit  # ... and this much worse a scan fit: no doubt
 
 
 @dataclass

@@ -467,7 +467,9 @@ def match_log(
         if model.walls:
             walls = WallArray.from_segments([(w.x1, w.y1, w.x2, w.y2, *w.normal) for w in model.walls])
             feature_robot = odom_pose.apply_inverse(s_xy[inl[-1]])
-            rect_pose, rect = rectify_pose(pose, walls, opts.d_thre, bim_xy[-1], feature_robot)  # Eq. 17
+            rect_pose, rect = rectify_pose(  # Eq. 17, never turning the pose past beta
+                pose, walls, opts.d_thre, bim_xy[-1], feature_robot, math.radians(opts.beta)
+            )
             moved = rect.moved
         hyps.append(
             Hypothesis(

@@ -40,7 +40,7 @@ from initcli.core.classes import ClassMap
 from initcli.core.confinement import ConfinementWatch
 from initcli.core.frontier import LocalMap
 from initcli.core.geometry import Pose2D, wrap_angle
-from initcli.core.verification import CameraView, Verification, rival_search
+from initcli.core.verification import CameraView, Verification, outranks, rival_search
 from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
 from initcli.io.detection_log import Meta, State
@@ -73,7 +73,8 @@ RIVAL_ALPHA_FACTOR = 1.5
 RIVAL_ALPHA_MAX_INLIERS = 6  # ... for a claim on this many matched features or fewer (more: alpha as is)
 DOUBT_WINDOW_M = 10.0  # m after a claim held back by credible rivals in which claims get the wide search
 RIVAL_SEARCH_FACTOR = 2.0  # a rival's scan fit may shift it this many times farther than a claim's
-RIVALS_CHECKED = 8  # rivals of a claim verified one by one; more count as credible without a check
+RIVALS_CHECKED = 8  # rivals of a claim verified one by one; more count as credible without a check ...
+RIVALS_COMPARED = 64  # ... unless the claim outranks them all, compared one by one up to this many
 AGREE_M = 2.0  # m: a fine pose farther than this from the odometry-carried coarse pose disagrees ...
 AGREE_DEG = 30.0  # ... or turned more than this
 
@@ -398,8 +399,11 @@ class Session:
             math.radians(c.rival_turn_deg),
             RIVAL_ALPHA_FACTOR if inliers <= RIVAL_ALPHA_MAX_INLIERS or self._doubted() else 1.0,
         )
+        pose = hypothesis.rectified_pose or hypothesis.pose
+        check = self._verify(hypothesis.storey, pose * frame.odom.inverse())
+        outranked = 0
         if rivals:
-            credible, found = self._credible(frame, rivals, found)
+            credible, held, outranked = self._credible(frame, hypothesis, check, rivals, found)
             fewest = min((h.n_outliers for h in found), default=None)
             why = f"unique match has {rivals} rival(s) with {extra} more outlier(s) allowed" + (
                 f" (the claim has {hypothesis.n_outliers} outlier(s), the best rival {fewest})"
@@ -409,11 +413,16 @@ class Session:
             if credible:
                 self.doubted_at = self.perception.travel
                 self._note(frame.t, f"{why}: {credible} pass the checks too")
-                return False, None, found
-            self._note(frame.t, f"{why}: none passes the checks")
-        pose = hypothesis.rectified_pose or hypothesis.pose
-        check = self._verify(hypothesis.storey, pose * frame.odom.inverse())
-        self._record_check(frame, "coarse", hypothesis.storey, pose, check)
+                return False, None, held
+            if outranked:
+                self._note(
+                    frame.t,
+                    f"{why}: those that pass the checks trail the claim by {c.outrank_outliers}+ outlier(s)"
+                    f" and {c.outrank_scan_fit:.2f}+ in scan fit",
+                )
+            else:
+                self._note(frame.t, f"{why}: none passes the checks")
+        self._record_check(frame, "coarse", hypothesis.storey, pose, check, outranked_rivals=outranked)
         if check.passed:
             return True, check.aligned, []
         self.result.rejected += 1
@@ -430,21 +439,35 @@ class Session:
         return self.doubted_at is not None and self.perception.travel - self.doubted_at <= DOUBT_WINDOW_M
 
     def _credible(
-        self, frame: SensorFrame, rivals: int, found: list[Hypothesis]
-    ) -> tuple[int, list[Hypothesis]]:
+        self, frame: SensorFrame, claim: Hypothesis, check: Verification, rivals: int, found: list[Hypothesis]
+    ) -> tuple[int, list[Hypothesis], int]:
         """How many of the rivals of a claim pass the checks a claim must pass (negative evidence,
         lidar fit, path through free space): a rival that fails them is no reason to doubt the claim
-        (a mirror-symmetric wing passes them, and keeps the claim out). More than RIVALS_CHECKED
-        rivals, or a search stopped at its cap, count as that many (``found`` kept as it is). Also
-        returns the credible ones."""
-        if rivals > RIVALS_CHECKED or len(found) < rivals:
-            return rivals, found
-        credible = [
-            h
-            for h in found
-            if self._verify(h.storey, (h.rectified_pose or h.pose) * frame.odom.inverse(), rival=True).passed
-        ]
-        return len(credible), credible
+        (a mirror-symmetric wing passes them, and keeps the claim out). None counts when the claim
+        passes its own checks and outranks every rival (``outranks``: each fails the checks or
+        trails the claim by outliers and scan fit; up to RIVALS_COMPARED rivals are compared, the
+        likeliest first, stopping at the first that holds its own). Otherwise more than
+        RIVALS_CHECKED rivals, or a search stopped at its cap, count as that many (``found`` kept as
+        it is). Returns that count, the credible rivals and how many rivals pass the checks yet are
+        outranked (those two counts are never both non-zero)."""
+        checks: dict[int, Verification] = {}
+
+        def rival_check(h: Hypothesis) -> Verification:
+            if id(h) not in checks:
+                checks[id(h)] = self._verify(
+                    h.storey, (h.rectified_pose or h.pose) * frame.odom.inverse(), rival=True
+                )
+            return checks[id(h)]
+
+        complete = len(found) == rivals
+        c = self.checks
+        if complete and check.passed and rivals <= RIVALS_COMPARED:
+            if all(outranks(check, claim.n_outliers, rival_check(h), h.n_outliers, c) for h in found):
+                return 0, [], sum(rival_check(h).passed for h in found)
+        if rivals > RIVALS_CHECKED or not complete:
+            return rivals, found, 0
+        credible = [h for h in found if rival_check(h).passed]
+        return len(credible), credible, 0
 
     def _match(self, t: float) -> MatchReport:
         report = self.perception.match(t, self.site)

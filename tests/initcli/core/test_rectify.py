@@ -54,3 +54,18 @@ def test_rectify_pose_recomputes_heading_with_eq13() -> None:
     assert new.yaw == pytest.approx(math.atan2(-0.5, math.sqrt(6.0)))
     same, rect = rectify_pose(Pose2D(4.0, 1.0, 0.3), WALLS, 0.5, DOOR, feature_robot)
     assert not rect.moved and same == Pose2D(4.0, 1.0, 0.3)
+
+
+def test_a_rectification_that_turns_the_pose_past_max_turn_is_dropped() -> None:
+    # The door seen close behind on the left (robot frame (-0.2, 0.25)) from a pose 0.05 m off the
+    # wall just past it: moved out to the clearance line, the circle of d_o = 0.32 m does not reach
+    # it, the point nearest the door is (6, 0.5), and Eq. 13 there turns the heading by 141 degrees.
+    pose = Pose2D(6.3, 0.05, 0.0)
+    feature_robot = np.array([-0.2, 0.25])
+    turned, rect = rectify_pose(pose, WALLS, 0.5, DOOR, feature_robot)
+    assert rect.moved and abs(turned.yaw_error(pose)) > math.radians(15.0)
+    kept, rect = rectify_pose(pose, WALLS, 0.5, DOOR, feature_robot, max_turn=math.radians(15.0))
+    assert not rect.moved and kept == pose
+    # a small turn stays allowed (-0.2 rad to atan2(-0.5, sqrt(6)), under 1 degree)
+    small, rect = rectify_pose(Pose2D(4.0, 0.2, -0.2), WALLS, 0.5, DOOR, np.array([2.5, 0.0]), 0.26)
+    assert rect.moved and (small.x, small.y) == pytest.approx((6.0 - math.sqrt(6.0), 0.5))

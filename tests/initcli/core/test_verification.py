@@ -14,11 +14,13 @@ from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.core.verification import (
     CameraView,
     ScanSample,
+    Verification,
     VerificationParams,
     best_scan_alignment,
     explained,
     frames_in_view,
     misses_reject,
+    outranks,
     rival_search,
     verify_hypothesis,
 )
@@ -231,3 +233,35 @@ def test_a_noisy_claim_must_stay_unique_up_to_the_outlier_budget() -> None:
     assert rival_search(0, 1, 1, max_outliers=1, budget=3) == 2
     assert rival_search(0, 3, 3, max_outliers=1, budget=3) == 2  # at the budget: still two more
     assert rival_search(0, 0, 1, max_outliers=1, budget=3) == 0  # nothing unexplained: no search
+
+
+def _checked(fit: float | None, passed: bool = True) -> Verification:
+    return Verification(predicted=4, missed_predictions=1, scan_fit=fit, passed=passed)
+
+
+def test_a_rival_that_fails_the_checks_never_holds_a_claim_back() -> None:
+    assert outranks(_checked(0.8), 3, _checked(0.99, passed=False), 0, VerificationParams())
+
+
+@pytest.mark.parametrize(
+    ("rival_outliers", "rival_fit", "expected"),
+    [
+        (2, 0.85, True),  # one outlier more and 0.05 less fit: outranked
+        (4, 0.70, True),
+        (1, 0.50, False),  # as few outliers as the claim: it holds its own however badly it fits
+        (0, 0.50, False),
+        (2, 0.86, False),  # fits within 0.05 of the claim: it holds its own
+        (5, 0.95, False),
+        (2, None, False),  # no scans to compare
+    ],
+)
+def test_a_credible_rival_is_outranked_only_when_it_trails_in_outliers_and_scan_fit(
+    rival_outliers: int, rival_fit: float | None, expected: bool
+) -> None:
+    assert outranks(_checked(0.9), 1, _checked(rival_fit), rival_outliers, VerificationParams()) is expected
+
+
+def test_outranking_is_off_with_a_scan_fit_margin_of_one() -> None:
+    params = VerificationParams(outrank_scan_fit=1.0)
+    assert not outranks(_checked(1.0), 0, _checked(0.66), 5, params)
+    assert not outranks(_checked(None), 0, _checked(0.66), 5, VerificationParams())
