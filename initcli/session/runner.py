@@ -40,6 +40,7 @@ from initcli.core.classes import ClassMap
 from initcli.core.confinement import ConfinementWatch
 from initcli.core.frontier import LocalMap
 from initcli.core.geometry import Pose2D, wrap_angle
+from initcli.core.hypotheses import one_place
 from initcli.core.verification import CameraView, Verification, outranks, rival_search
 from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
@@ -300,7 +301,7 @@ class Session:
         report = self._match(frame.t)
         self.hypotheses = report.n_hypotheses
         self.storeys_left = sorted({h.storey for h in report.hypotheses})
-        if report.n_hypotheses == 1:
+        if report.n_hypotheses == 1 or self._one_place(report):
             verified, aligned, rivals = self._verified(frame, report)
             if verified:
                 self._coarse_done(frame, report, aligned)
@@ -325,6 +326,17 @@ class Session:
         elif self.state != "explore":
             self._set_state(frame.t, "explore", why=report.verdict)
         return False
+
+    def _one_place(self, report: MatchReport) -> bool:
+        """Do all the hypotheses put the robot at one place now (``one_place``, by the poses they
+        report)? The best is then checked as a unique match."""
+        hs = report.hypotheses
+        return report.n_hypotheses <= len(hs) and one_place(
+            [h.storey for h in hs],
+            [h.rectified_pose or h.pose for h in hs],
+            self.options.pose_radius,
+            math.radians(self.options.beta),
+        )
 
     def _evidence_of(self, storey: str) -> StoreyEvidence:
         if storey not in self._evidence:

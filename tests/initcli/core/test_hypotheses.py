@@ -7,7 +7,15 @@ import math
 import numpy as np
 import pytest
 
-from initcli.core.hypotheses import confidences, drop_dominated, pose_groups, rank_order, verdict_text
+from initcli.core.geometry import Pose2D
+from initcli.core.hypotheses import (
+    confidences,
+    drop_dominated,
+    one_place,
+    pose_groups,
+    rank_order,
+    verdict_text,
+)
 
 X = -1  # outlier
 
@@ -72,3 +80,14 @@ def test_confidences() -> None:
     assert c.sum() == pytest.approx(1.0)
     assert c[0] > c[2] > 0 and c[0] > c[1]
     assert confidences(np.array([0.7]), np.array([1])) == pytest.approx([1.0])
+
+
+def test_hypotheses_that_put_the_robot_on_one_spot_are_one_place() -> None:
+    best = Pose2D(10.0, 2.0, 0.5)
+    near = Pose2D(10.6, 2.3, 0.5 + math.radians(10.0))
+    assert one_place(["L1", "L1"], [best, near], 1.0, math.radians(15.0))
+    assert not one_place(["L1"], [best], 1.0, math.radians(15.0))  # one hypothesis: nothing to merge
+    assert not one_place(["L1", "L2"], [best, near], 1.0, math.radians(15.0))  # another storey
+    assert not one_place(["L1", "L1"], [best, Pose2D(11.2, 2.0, 0.5)], 1.0, math.radians(15.0))  # 1.2 m
+    turned = Pose2D(10.0, 2.0, 0.5 + math.radians(20.0))
+    assert not one_place(["L1", "L1", "L1"], [best, near, turned], 1.0, math.radians(15.0))  # 20 degrees
