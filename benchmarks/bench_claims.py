@@ -132,10 +132,10 @@ def main() -> None:
             split[(place, "held back by credible rivals")] += 1
             if d["claim"]["passed"]:
                 margins[(place, f"{d['margin']:+d}" if d["margin"] < 3 else ">=+3")] += 1
-        if not d["claimed"] and d["claim"]["passed"] and d["fit_gap"] is not None:
-            gaps[place].append(d["fit_gap"])
         else:
             split[(place, "failed its own checks")] += 1
+        if not d["claimed"] and d["claim"]["passed"] and d["fit_gap"] is not None:
+            gaps[place].append(d["fit_gap"])
     print(f"{len(jobs)} sessions, {len(decisions)} claim decisions")
     print("| claim at the | decision | count |\n|---|---|---|")
     for (place, what), n in sorted(split.items()):
