@@ -38,7 +38,7 @@ _SITES: dict[tuple[str, str, float], Any] = {}
 def _stats(session: Any, frame: Any, hypothesis: Any, rival: bool) -> dict[str, Any]:
     """Outliers, rightness, checks and scan fit of one hypothesis at ``frame``."""
     truth = frame.truth
-    pose = hypothesis.rectified_pose or hypothesis.pose
+    pose = hypothesis.reported_pose
     check = session._verify(hypothesis.storey, pose * frame.odom.inverse(), rival=rival)
     yaw = abs(math.degrees(math.atan2(math.sin(pose.yaw - truth.yaw), math.cos(pose.yaw - truth.yaw))))
     return {

@@ -337,7 +337,7 @@ def section_accuracy(quick: bool, tmp: Path, extra: list[Path]) -> None:
                 continue
             for m, r in reports.items():
                 h = r.hypotheses[0]
-                rect = h.rectified_pose or h.pose
+                rect = h.reported_pose
                 rows[m].append((*_errors(h.pose, truth), *_errors(rect, truth)))
         for m in ("paper", "rigid"):
             totals[m].extend(rows[m])

@@ -93,7 +93,7 @@ def plot_hypotheses(report: MatchReport, out_path: Path | str, dpi: int = 120) -
                 for (mx, my), bid in zip(mapped, h.matches, strict=False):
                     if bid is not None and bid in ids:
                         ax.plot([mx, ids[bid].x], [my, ids[bid].y], color=c, lw=0.7, ls=":", zorder=4)
-            p = h.rectified_pose or h.pose
+            p = h.reported_pose
             ax.quiver(
                 p.x,
                 p.y,

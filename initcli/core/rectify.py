@@ -121,7 +121,8 @@ def rectify_pose(
     rect = rectify_position(pose.xy, walls, d_thre, feature_bim, d_o)
     if not rect.moved:
         return pose, rect
-    yaw = float(wrap_angle(heading_from_feature(rect.position, feature_bim, feature_robot)))  # Eq. 13
-    if abs(float(wrap_angle(yaw - pose.yaw))) > max_turn:
+    yaw = heading_from_feature(rect.position, feature_bim, feature_robot)  # Eq. 13 at the new position
+    rectified = Pose2D(float(rect.position[0]), float(rect.position[1]), float(wrap_angle(yaw)))
+    if rectified.yaw_error(pose) > max_turn:
         return pose, Rectification(pose.xy.copy(), False, rect.wall, rect.d_wall)
-    return Pose2D(float(rect.position[0]), float(rect.position[1]), yaw), rect
+    return rectified, rect

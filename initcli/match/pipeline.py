@@ -182,6 +182,11 @@ class Hypothesis:
     support: int  # matches merged into this hypothesis
     rectified: bool = False
 
+    @property
+    def reported_pose(self) -> Pose2D:
+        """The pose the hypothesis reports: rectified (Eq. 17) when the storey has walls."""
+        return self.rectified_pose or self.pose
+
 
 @dataclass
 class MatchReport:

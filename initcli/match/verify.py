@@ -181,7 +181,7 @@ def verify_report(
             continue
         if h.storey not in storeys:
             storeys[h.storey] = StoreyEvidence.of(model, cmap)
-        pose = h.rectified_pose or h.pose
+        pose = h.reported_pose
         out.append(
             verify_transform(
                 pose * report.odom_pose.inverse(), storeys[h.storey], path, sightings, view, params

@@ -333,7 +333,7 @@ class Session:
         hs = report.hypotheses
         return report.n_hypotheses <= len(hs) and one_place(
             [h.storey for h in hs],
-            [h.rectified_pose or h.pose for h in hs],
+            [h.reported_pose for h in hs],
             self.options.pose_radius,
             math.radians(self.options.beta),
         )
@@ -411,7 +411,7 @@ class Session:
             math.radians(c.rival_turn_deg),
             RIVAL_ALPHA_FACTOR if inliers <= RIVAL_ALPHA_MAX_INLIERS or self._doubted() else 1.0,
         )
-        pose = hypothesis.rectified_pose or hypothesis.pose
+        pose = hypothesis.reported_pose
         check = self._verify(hypothesis.storey, pose * frame.odom.inverse())
         outranked = 0
         if rivals:
@@ -466,9 +466,7 @@ class Session:
 
         def rival_check(h: Hypothesis) -> Verification:
             if id(h) not in checks:
-                checks[id(h)] = self._verify(
-                    h.storey, (h.rectified_pose or h.pose) * frame.odom.inverse(), rival=True
-                )
+                checks[id(h)] = self._verify(h.storey, h.reported_pose * frame.odom.inverse(), rival=True)
             return checks[id(h)]
 
         complete = len(found) == rivals
@@ -588,7 +586,7 @@ class Session:
         r = self.result
         r.storey = best.storey
         r.coarse_pose = best.pose
-        rectified = best.rectified_pose or best.pose
+        rectified = best.reported_pose
         r.rectified_pose = rectified
         r.truth_at_coarse = frame.truth
         r.distance_coarse_m = round(self.driver.distance, 3)
