@@ -38,6 +38,7 @@ def _hypothesis(storey: str, rank: int, transform: Pose2D) -> SimpleNamespace:
         matches=["d1"],
         pose=transform,
         rectified_pose=None,
+        reported_pose=transform,  # Hypothesis.reported_pose: the rectified pose, else the pose
     )
 
 
