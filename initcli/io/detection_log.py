@@ -128,9 +128,18 @@ class DetectionLog:
     warnings: list[str] = field(default_factory=list)
     skipped_bad: int = 0
     skipped_unknown: dict[str, int] = field(default_factory=dict)
+    # per record type: how many records were sorted and those of the type (a session's log only
+    # grows, and it is matched after every new feature: only the records since are sorted again)
+    _typed: dict[type, tuple[int, list[Any]]] = field(default_factory=dict, repr=False, compare=False)
 
     def of_type(self, kind: type) -> list[Any]:
-        return [r for r in self.records if isinstance(r, kind)]
+        seen, found = self._typed.get(kind, (0, []))
+        if seen > len(self.records):  # records were removed: sort them all again
+            seen, found = 0, []
+        if seen < len(self.records):
+            found = found + [r for r in self.records[seen:] if isinstance(r, kind)]
+            self._typed[kind] = (len(self.records), found)
+        return list(found)
 
     @property
     def odom(self) -> list[Odom]:
