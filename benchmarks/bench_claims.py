@@ -1,4 +1,5 @@
-"""Which claim checks matter: every unique match a session considers claiming, right or wrong.
+"""Which claim checks matter: every unique match a session considers claiming, right or wrong, and
+every set of several hypotheses the lidar along the path is asked to tell apart.
 
 Runs construction sessions (the profile, and twice its door shift and missing doors) on the three
 samples and records each claim decision: the claim's own checks (missed predictions, lidar fit,
@@ -11,10 +12,18 @@ scan fit of claims at the wrong place beat their credible rivals with that many 
 the margin ``outrank_scan_fit`` must stay above (right claims, for comparison, beat theirs by up
 to 0.3).
 
-    python benchmarks/bench_claims.py [--starts 100] [--sweep-starts 20] [--workers 2]
+The lidar along the path (``track_outranks``): for every pair of hypotheses that pass the recent
+checks in one decision (a claim and a rival, or two of several hypotheses), the scans of the path
+fitted window by window for each (``tracked_scan_fit``, from where its recent scans fit best).
+Prints, by whether each is at the right place, how much the one fits its best window better than
+the other, and how often ``track_outranks`` would let a wrong place outrank the right one (the
+count that must stay 0) against how often it lets the right place outrank a wrong one.
 
-It instruments ``Session._verified`` and ``Session._credible`` (private: this script is a
-measurement of the runner, not an API). Takes about 8 minutes on 2 cores with the defaults.
+    python benchmarks/bench_claims.py [--starts 100] [--sweep-starts 20] [--first-seed 1] [--workers 2]
+
+It instruments ``Session._verified``, ``Session._credible`` and ``Session._match`` (private: this
+script is a measurement of the runner, not an API), and computes the path's fit of every rival:
+about 40 minutes on 2 cores with the defaults.
 """
 
 from __future__ import annotations
@@ -28,24 +37,31 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parent.parent
 SITES = ("block_a", "block_b", "ntu_hallway")
 SWEEPS = (("sim.as_built.door_shift", 0.6), ("sim.as_built.missing_doors", 0.4))
 WRONG_M, WRONG_DEG = 2.0, 30.0
+TRACKED_RIVALS = 24  # rivals of a claim whose path fit is recorded
 _SITES: dict[tuple[str, str, float], Any] = {}
 
 
 def _stats(session: Any, frame: Any, hypothesis: Any, rival: bool) -> dict[str, Any]:
-    """Outliers, rightness, checks and scan fit of one hypothesis at ``frame``."""
+    """Outliers, rightness, checks, scan fit and the path's fit of one hypothesis at ``frame``."""
     truth = frame.truth
     pose = hypothesis.reported_pose
     check = session._verify(hypothesis.storey, pose * frame.odom.inverse(), rival=rival)
     yaw = abs(math.degrees(math.atan2(math.sin(pose.yaw - truth.yaw), math.cos(pose.yaw - truth.yaw))))
     return {
         "outliers": hypothesis.n_outliers,
+        "inliers": sum(m is not None for m in hypothesis.matches),
         "right": math.hypot(pose.x - truth.x, pose.y - truth.y) < WRONG_M and yaw < WRONG_DEG,
+        "error": (round(math.hypot(pose.x - truth.x, pose.y - truth.y), 2), round(yaw, 1)),
         "passed": check.passed,
         "fit": check.scan_fit,
+        "track": session._track(frame, hypothesis, check),
+        "wide": session._track(frame, hypothesis, check, wide=True),
     }
 
 
@@ -64,11 +80,14 @@ def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, 
     site = _SITES[(name, key, value)]
     decisions: list[dict[str, Any]] = []
     seen: dict[str, Any] = {}
-    verified, credible = runner.Session._verified, runner.Session._credible
+    where = f"{name} seed {seed}" + (f" {key}={value}" if key else "")
+    verified, credible, match = runner.Session._verified, runner.Session._credible, runner.Session._match
 
-    def spy_credible(self: Any, frame: Any, claim: Any, check: Any, rivals: int, found: list) -> tuple:
+    def spy_credible(
+        self: Any, frame: Any, check: Any, track: Any, claim: Any, rivals: int, found: list
+    ) -> tuple:  # noqa: E501
         seen["rivals"], seen["found"] = rivals, list(found)
-        return credible(self, frame, claim, check, rivals, found)
+        return credible(self, frame, check, track, claim, rivals, found)
 
     def spy_verified(self: Any, frame: Any, report: Any) -> tuple:
         seen.clear()
@@ -84,9 +103,13 @@ def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, 
         trailing = [r for r in passing if r["outliers"] >= claim["outliers"] + self.checks.outrank_outliers]
         decisions.append(
             {
+                "kind": "claim",
+                "where": where,
+                "t": frame.t,
                 "claimed": bool(out[0]),
                 "claim": claim,
                 "n_rivals": n_rivals,
+                "rivals": rivals[:TRACKED_RIVALS],
                 "margin": min((r["outliers"] - claim["outliers"] for r in believed), default=None),
                 # the claim's scan fit less the best of its credible rivals', when all of them have
                 # outrank_outliers more outliers (None: some has fewer, or they are not all known)
@@ -97,34 +120,83 @@ def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, 
         )
         return out
 
+    def spy_match(self: Any, t: float) -> Any:
+        report = match(self, t)
+        frame = seen.get("frame")
+        several = 1 < report.n_hypotheses <= min(len(report.hypotheses), runner.TRACK_HYPOTHESES)
+        if frame is not None and several:
+            hs = [_stats(self, frame, h, rival=True) for h in report.hypotheses]
+            decisions.append({"kind": "several", "hypotheses": hs, "where": where, "t": t})
+        return report
+
+    perceive = runner.Session._perceive
+
+    def spy_perceive(self: Any, frame: Any) -> bool:
+        seen["frame"] = frame
+        return perceive(self, frame)
+
     runner.Session._verified, runner.Session._credible = spy_verified, spy_credible  # type: ignore[method-assign]
+    runner.Session._match, runner.Session._perceive = spy_match, spy_perceive  # type: ignore[method-assign]
     try:
         sim_session(config, site, seed).session.run()
     finally:
         runner.Session._verified, runner.Session._credible = verified, credible  # type: ignore[method-assign]
+        runner.Session._match, runner.Session._perceive = match, perceive  # type: ignore[method-assign]
     return decisions
 
 
+def _track_pairs(decisions: list[dict[str, Any]]) -> dict[tuple[bool, bool], list[tuple[float, float, bool]]]:
+    """(A right, B right) -> for every ordered pair of hypotheses that pass the recent checks in one
+    decision (a claim and each of its rivals, any two of several hypotheses): how much A fits its
+    best window better than B, how much B fits its best window better than A, and whether
+    ``track_outranks(A, B)`` holds with B's path fitted both from where its recent scans fit best
+    and searched wide (as the session compares them)."""
+    from initcli.core.verification import VerificationParams, track_outranks
+
+    params = VerificationParams()
+    pairs: dict[tuple[bool, bool], list[tuple[float, float, bool]]] = collections.defaultdict(list)
+    for d in decisions:
+        hs = [d["claim"], *d["rivals"]] if d["kind"] == "claim" else d["hypotheses"]
+        hs = [h for h in hs if h["passed"] and len(h["track"])]
+        for a in hs:
+            for b in hs:
+                n = min(len(a["track"]), len(b["track"]))
+                if a is b or n == 0 or (d["kind"] == "claim" and a is not d["claim"] and b is not d["claim"]):
+                    continue
+                lead = np.asarray(a["track"][:n]) - np.asarray(b["track"][:n])
+                wins = track_outranks(a["track"], b["track"], params) and track_outranks(
+                    a["track"], b["wide"], params
+                )
+                pairs[(a["right"], b["right"])].append((float(lead.max()), float(-lead.min()), wins))
+                if wins and not a["right"] and b["right"]:
+                    print(
+                        f"  unsafe: {d['where']} t={d['t']:.1f} ({d['kind']}): A {a['error']} "
+                        f"{np.round(a['track'], 2)}, B {b['error']} {np.round(b['track'], 2)}"
+                    )
+    return pairs
+
+
 def main() -> None:
+    from initcli.core.verification import VerificationParams
+
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--starts", type=int, default=100, help="construction-profile starts per sample")
     ap.add_argument("--sweep-starts", type=int, default=20, help="starts per sample at each doubled key")
+    ap.add_argument("--first-seed", type=int, default=1, help="seed of the first start")
     ap.add_argument("--workers", type=int, default=2)
     args = ap.parse_args()
+    seeds = range(args.first_seed, args.first_seed + args.starts)
+    sweep_seeds = range(args.first_seed, args.first_seed + args.sweep_starts)
     with tempfile.TemporaryDirectory() as work:
-        jobs = [(s, "", 0.0, seed, work) for s in SITES for seed in range(1, args.starts + 1)]
-        jobs += [
-            (s, k, v, seed, work)
-            for k, v in SWEEPS
-            for s in SITES
-            for seed in range(1, args.sweep_starts + 1)
-        ]
+        jobs = [(s, "", 0.0, seed, work) for s in SITES for seed in seeds]
+        jobs += [(s, k, v, seed, work) for k, v in SWEEPS for s in SITES for seed in sweep_seeds]
         with multiprocessing.get_context("spawn").Pool(args.workers) as pool:
             decisions = [d for ds in pool.imap_unordered(_session_decisions, jobs) for d in ds]
+    claims = [d for d in decisions if d["kind"] == "claim"]
     split: collections.Counter[tuple[str, str]] = collections.Counter()
     gaps: dict[str, list[float]] = {"right": [], "wrong": []}
     margins: collections.Counter[tuple[str, str]] = collections.Counter()
-    for d in decisions:
+    for d in claims:
         place = "right" if d["claim"]["right"] else "wrong"
         if d["claimed"]:
             split[(place, "claimed")] += 1
@@ -136,7 +208,8 @@ def main() -> None:
             split[(place, "failed its own checks")] += 1
         if not d["claimed"] and d["claim"]["passed"] and d["fit_gap"] is not None:
             gaps[place].append(d["fit_gap"])
-    print(f"{len(jobs)} sessions, {len(decisions)} claim decisions")
+    several = len(decisions) - len(claims)
+    print(f"{len(jobs)} sessions, {len(claims)} claim decisions, {several} sets of several hypotheses")
     print("| claim at the | decision | count |\n|---|---|---|")
     for (place, what), n in sorted(split.items()):
         print(f"| {place} place | {what} | {n} |")
@@ -152,6 +225,37 @@ def main() -> None:
         top = f"{max(values):+.3f}" if values else "-"
         share = f"{sum(v > 0.05 for v in values) / len(values):.2f}" if values else "-"
         print(f"| {place} place | {len(values)} | {top} | {share} |")
+    params = VerificationParams()
+    tracks: list[tuple[bool, np.ndarray]] = []
+    for d in decisions:
+        for h in [d["claim"], *d["rivals"]] if d["kind"] == "claim" else d["hypotheses"]:
+            if h["passed"] and len(h["track"]):
+                tracks.append((h["right"], h["track"]))
+    print("\nthe lidar along the path: each hypothesis that passes the recent checks, its worst window")
+    print("| place | hypotheses | 1st percentile | 5th percentile | median |\n|---|---|---|---|---|")
+    for right in (True, False):
+        worst = [float(np.min(t)) for r, t in tracks if r is right]
+        if worst:
+            p1, p5, p50 = np.percentile(worst, [1, 5, 50])
+            print(f"| {'right' if right else 'wrong'} | {len(worst)} | {p1:.3f} | {p5:.3f} | {p50:.3f} |")
+    print("\npairs of hypotheses that both pass the recent checks (A, B): A's best lead over B in a")
+    print("window, B's best lead over A; and how often track_outranks(A, B) holds (lead")
+    print(
+        f"{params.track_lead}, slack {params.track_slack}, A's worst window at least {params.min_track_fit})"
+    )
+    print("| A | B | pairs | A's lead: median / largest | B's lead: median / largest | A outranks B |")
+    print("|---|---|---|---|---|---|")
+    pairs = _track_pairs(decisions)
+    for (a, b), values in sorted(pairs.items(), reverse=True):
+        lead = np.array([v[0] for v in values])
+        back = np.array([v[1] for v in values])
+        print(
+            f"| {'right' if a else 'wrong'} | {'right' if b else 'wrong'} | {len(values)} | "
+            f"{np.median(lead):+.3f} / {lead.max():+.3f} | {np.median(back):+.3f} / {back.max():+.3f} | "
+            f"{sum(v[2] for v in values)} |"
+        )
+    unsafe = sum(v[2] for v in pairs.get((False, True), []))
+    print(f"\na wrong place outranking the right one by the lidar along the path: {unsafe} (must be 0)")
     sys.stdout.flush()
 
 

@@ -24,14 +24,25 @@ from initcli.match.pipeline import EXIT_BAD_INPUT, MatchOptions, MatchReport, ru
 
 
 def _verifications(log_path: Path, site_path: Path, report: MatchReport, skip_bad: bool) -> list | None:
-    """Negative evidence and scan fit of each hypothesis (initcli.match.verify), for --json."""
+    """Negative evidence, scan fit and the lidar along the path of each hypothesis
+    (initcli.match.verify), for --json; with several hypotheses, a note naming the one the lidar
+    along the path favours (a session checks that one as a unique match)."""
     from bimtools.site.load import load_site
     from initcli.io.detection_log import read_log
     from initcli.match.pipeline import site_class_map
-    from initcli.match.verify import verify_report
+    from initcli.match.verify import track_favoured_in_report, verify_report
 
     site = load_site(site_path)
-    return verify_report(read_log(log_path, skip_bad=skip_bad), site, report, site_class_map(site))
+    log = read_log(log_path, skip_bad=skip_bad)
+    checks = verify_report(log, site, report, site_class_map(site))
+    if report.n_hypotheses > 1:
+        favoured = track_favoured_in_report(log, site, report, checks)
+        if favoured is not None:
+            report.notes.append(
+                f"the lidar along the path favours hypothesis {report.hypotheses[favoured].rank}: a session"
+                " checks it as a unique match"
+            )
+    return checks
 
 
 def _fail(message: str) -> typer.Exit:

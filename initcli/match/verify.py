@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -25,17 +25,26 @@ from initcli.core.verification import (
     ScanSample,
     Verification,
     VerificationParams,
+    judge,
+    track_favoured,
+    tracked_alignment,
+    tracked_scan_fit,
     verify_hypothesis,
 )
 from initcli.io.detection_log import DetectionLog, Detections, Odom, Scan
-from initcli.match.pipeline import MatchReport
+from initcli.match.pipeline import MatchReport, site_class_map
 from initcli.match.sightings import sightings_from_log
 
 SCAN_BEAM_STEP = 3  # every third beam is enough for a fit share
 RECENT_SCANS_M = 8.0  # m of the latest travel whose scans are fitted (older ones carry odometry drift)
 MAX_SCANS = 16  # scans fitted at most, the latest first
 PATH_WINDOW_M = 60.0  # m of the latest travel whose images predict features
-PATH_CHECK_M = 30.0  # m of the latest travel that must lie in the BIM's free space
+PATH_CHECK_M = 30.0  # m of the latest travel that must lie in the BIM's free space ...
+PATH_RETRY = 0.2  # ... placed window by window by the lidar along the path when one transform leaves
+# it at most this much short
+TRACK_STEP_M = 0.5  # m of travel between the scans kept for the lidar along the path ...
+TRACK_BEAM_STEP = 2  # ... with every second of their beams
+TRACK_KEPT_M = 100.0  # m of travel whose scans are kept for it (the check reads track_m of them)
 
 
 @dataclass
@@ -75,6 +84,9 @@ class PathEvidence:
     image_travel: list[float] = field(default_factory=list)  # odometry distance at each image, m
     scans: list[ScanSample] = field(default_factory=list)
     scan_travel: list[float] = field(default_factory=list)
+    # one scan every TRACK_STEP_M of travel over the last TRACK_KEPT_M: the lidar along the path
+    track: list[ScanSample] = field(default_factory=list)
+    track_travel: list[float] = field(default_factory=list)
 
     def recent(self, window_m: float, scan_window_m: float) -> tuple[list[Pose2D], list[ScanSample]]:
         now = max(
@@ -101,6 +113,23 @@ class PathEvidence:
         if len(self.scans) > 4 * MAX_SCANS:
             del self.scans[: -2 * MAX_SCANS]
             del self.scan_travel[: -2 * MAX_SCANS]
+        if not self.track_travel or travel - self.track_travel[-1] >= TRACK_STEP_M:
+            s = self.scans[-1]
+            k = TRACK_BEAM_STEP
+            self.track.append(ScanSample(s.odom, s.angles[::k], s.ranges[::k], s.range_max))
+            self.track_travel.append(travel)
+            old = next((i for i, d in enumerate(self.track_travel) if travel - d <= TRACK_KEPT_M), 0)
+            if old:
+                del self.track[:old]
+                del self.track_travel[:old]
+
+    def along(self, track_m: float) -> tuple[list[ScanSample], list[float]]:
+        """The scans kept for the lidar along the path, over the last ``track_m`` of travel."""
+        if not self.track_travel:
+            return [], []
+        now = self.track_travel[-1]
+        first = next(i for i, d in enumerate(self.track_travel) if now - d <= track_m)
+        return self.track[first:], self.track_travel[first:]
 
     @staticmethod
     def of_log(log: DetectionLog) -> PathEvidence:
@@ -137,7 +166,7 @@ def verify_transform(
     ``RECENT_SCANS_M`` m."""
     poses, scans = path.recent(PATH_WINDOW_M, RECENT_SCANS_M)
     recent_path, _ = path.recent(PATH_CHECK_M, 0.0)
-    return verify_hypothesis(
+    check = verify_hypothesis(
         transform,
         storey.ids,
         storey.xy,
@@ -155,6 +184,121 @@ def verify_transform(
         storey.free,
         recent_path,
     )
+    free = check.path_free
+    if (
+        free is not None
+        and params.min_path_free - PATH_RETRY <= free < params.min_path_free
+        and params.track_m > 0
+    ):
+        along = path_free_along(check.aligned or transform, storey, path, params)
+        if along is not None and along > free:
+            check = judge(replace(check, path_free=along), params)
+    return check
+
+
+def path_free_along(
+    transform: Pose2D, storey: StoreyEvidence, path: PathEvidence, params: VerificationParams
+) -> float | None:
+    """The share of the last PATH_CHECK_M of the path on free BIM cells, each image pose placed by
+    the transform of its window of the lidar along the path (``tracked_alignment`` from
+    ``transform``), not by one transform for all: odometry drift over a long straight wall (a
+    rotation of a degree or two) puts a right place's path through that wall (a car park's 30 m
+    perimeter wall: 0.85 of the path on free cells). None without a map or scans."""
+    scans, travel = path.along(params.track_m)
+    if storey.field_ is None or storey.free is None or not scans or not path.image_travel:
+        return None
+    track = tracked_alignment(
+        transform,
+        scans,
+        travel,
+        storey.field_,
+        params.scan_tolerance,
+        params.track_window_m,
+        params.track_search_xy,
+        math.radians(params.track_search_yaw_deg),
+    )
+    if track is None:
+        return None
+    now = path.image_travel[-1]
+    placed = [
+        track.at(d).apply(np.array([[p.x, p.y]]))[0]
+        for p, d in zip(path.image_poses, path.image_travel, strict=True)
+        if now - d <= PATH_CHECK_M
+    ]
+    return storey.free.share_free(np.array(placed)) if placed else None
+
+
+def track_transform(
+    transform: Pose2D,
+    storey: StoreyEvidence,
+    path: PathEvidence,
+    params: VerificationParams,
+    wide: bool = False,
+) -> np.ndarray:
+    """The lidar's fit along the last ``track_m`` of the path for ``transform`` (odom -> BIM; start it
+    from a verification's ``aligned`` transform), window by window, newest first
+    (:func:`initcli.core.verification.tracked_scan_fit`); ``wide``: the newest window searched over
+    ``track_rival_xy`` / ``track_rival_yaw_deg`` first (a place about to be outranked). Empty
+    without a map or scans."""
+    scans, travel = path.along(params.track_m)
+    if storey.field_ is None or not scans or params.track_m <= 0:
+        return np.zeros(0)
+    return tracked_scan_fit(
+        transform,
+        scans,
+        travel,
+        storey.field_,
+        params.scan_tolerance,
+        params.track_window_m,
+        params.track_search_xy,
+        math.radians(params.track_search_yaw_deg),
+        params.track_rival_xy if wide else 0.0,
+        math.radians(params.track_rival_yaw_deg) if wide else 0.0,
+    )
+
+
+def track_favoured_in_report(
+    log: DetectionLog,
+    site: Site,
+    report: MatchReport,
+    checks: Sequence[Verification | None],
+    params: VerificationParams | None = None,
+) -> int | None:
+    """The index of the hypothesis of ``report`` that the lidar along the path plainly favours among
+    those that pass ``checks`` (:func:`verify_report`'s, with their ``track_fit``), as a session
+    decides it (:func:`initcli.core.verification.track_favoured`); None when none stands out or the
+    report lists fewer hypotheses than it counts."""
+    params = params or VerificationParams()
+    hs = report.hypotheses
+    if report.odom_pose is None or report.n_hypotheses > len(hs) or params.track_m <= 0:
+        return None
+    passing = [
+        (i, check)
+        for i, check in enumerate(checks)
+        if check is not None and check.passed and check.track_fit is not None
+    ]
+    if len(passing) < 2:
+        return None
+    path = PathEvidence.of_log(log)
+    cmap = site_class_map(site)
+    storeys: dict[str, StoreyEvidence] = {}
+
+    def wide(k: int) -> np.ndarray:
+        i, check = passing[k]
+        h = hs[i]
+        if h.storey not in storeys:
+            storeys[h.storey] = StoreyEvidence.of(site.storeys[h.storey], cmap)
+        start = check.aligned if check.aligned is not None else h.reported_pose * report.odom_pose.inverse()
+        return track_transform(start, storeys[h.storey], path, params, wide=True)
+
+    found = track_favoured(
+        [hs[i].n_outliers for i, _ in passing],
+        [sum(m is not None for m in hs[i].matches) for i, _ in passing],
+        [np.asarray(check.track_fit) for _, check in passing],
+        wide,
+        params,
+    )
+    return None if found is None else passing[found][0]
 
 
 def verify_report(
@@ -165,7 +309,8 @@ def verify_report(
     params: VerificationParams | None = None,
 ) -> list[Verification | None]:
     """The checks for each hypothesis of ``report`` (a ``bim-init match`` of ``log``), at the log's
-    last odom pose; None for a hypothesis whose storey has no map or features."""
+    last odom pose, with the lidar along the path (``track_fit``); None for a hypothesis whose
+    storey has no map or features."""
     params = params or VerificationParams()
     if report.odom_pose is None:
         return [None for _ in report.hypotheses]
@@ -181,10 +326,9 @@ def verify_report(
             continue
         if h.storey not in storeys:
             storeys[h.storey] = StoreyEvidence.of(model, cmap)
-        pose = h.reported_pose
-        out.append(
-            verify_transform(
-                pose * report.odom_pose.inverse(), storeys[h.storey], path, sightings, view, params
-            )
-        )
+        transform = h.reported_pose * report.odom_pose.inverse()
+        check = verify_transform(transform, storeys[h.storey], path, sightings, view, params)
+        start = check.aligned if check.aligned is not None else transform
+        track = track_transform(start, storeys[h.storey], path, params)
+        out.append(replace(check, track_fit=tuple(float(f) for f in track)) if len(track) else check)
     return out

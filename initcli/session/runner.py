@@ -41,12 +41,19 @@ from initcli.core.confinement import ConfinementWatch
 from initcli.core.frontier import LocalMap
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.hypotheses import one_place
-from initcli.core.verification import CameraView, Verification, outranks, rival_search
+from initcli.core.verification import (
+    CameraView,
+    Verification,
+    outranks,
+    rival_search,
+    track_favoured,
+    track_outranks,
+)
 from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
 from initcli.io.detection_log import Meta, State
 from initcli.match.pipeline import Hypothesis, MatchReport
-from initcli.match.verify import StoreyEvidence, verify_transform
+from initcli.match.verify import StoreyEvidence, track_transform, verify_transform
 from initcli.session.exploration import ActiveExploration
 from initcli.session.fine_tuning import FineLost, FineTuning, FineTuningHooks, matched_pairs
 from initcli.session.perception import Perception
@@ -76,6 +83,7 @@ DOUBT_WINDOW_M = 10.0  # m after a claim held back by credible rivals in which c
 RIVAL_SEARCH_FACTOR = 2.0  # a rival's scan fit may shift it this many times farther than a claim's
 RIVALS_CHECKED = 8  # rivals of a claim verified one by one; more count as credible without a check ...
 RIVALS_COMPARED = 64  # ... unless the claim outranks them all, compared one by one up to this many
+TRACK_HYPOTHESES = 12  # several hypotheses are compared by the lidar along the path up to this many
 AGREE_M = 2.0  # m: a fine pose farther than this from the odometry-carried coarse pose disagrees ...
 AGREE_DEG = 30.0  # ... or turned more than this
 
@@ -301,17 +309,19 @@ class Session:
         report = self._match(frame.t)
         self.hypotheses = report.n_hypotheses
         self.storeys_left = sorted({h.storey for h in report.hypotheses})
-        if report.n_hypotheses == 1 or self._one_place(report):
-            verified, aligned, rivals = self._verified(frame, report)
+        unique = report.n_hypotheses == 1 or self._one_place(report)
+        claim = report if unique else self._lidar_unique(frame, report)
+        if claim is not None:
+            verified, aligned, rivals = self._verified(frame, claim)
             if verified:
-                self._coarse_done(frame, report, aligned)
+                self._coarse_done(frame, claim, aligned)
                 return True
             if self.state == "look":
                 return False  # the look turns all the way round first: what is behind costs no distance
             if rivals and self._active_below(len(rivals)):
                 # Rivals with a few more outliers: go and look where the claim and they disagree,
                 # as with several hypotheses (§3.3.4), the claim first.
-                self.exploration.validate([report.hypotheses[0], *rivals])
+                self.exploration.validate([claim.hypotheses[0], *rivals])
                 if self._next_target(frame):
                     return False
             if self.state != "explore":
@@ -337,6 +347,55 @@ class Session:
             self.options.pose_radius,
             math.radians(self.options.beta),
         )
+
+    def _lidar_unique(self, frame: SensorFrame, report: MatchReport) -> MatchReport | None:
+        """Several hypotheses, one of which the lidar along the path plainly favours (beyond the
+        paper; ``track_favoured`` among those that pass the checks a claim must pass): that one, to
+        be checked as a unique match (its rival search included). A periodic corridor seen from its
+        middle leaves several places alike in the recent scans, but the path's turns into a lobby or
+        a corridor end fit only the right one. None when no hypothesis stands out so, when there are
+        more than TRACK_HYPOTHESES or the lidar along the path is off."""
+        hs = report.hypotheses
+        c = self.checks
+        if not c.enabled or c.track_m <= 0 or report.n_hypotheses > len(hs) or len(hs) > TRACK_HYPOTHESES:
+            return None
+        passing = []
+        for h in hs:
+            check = self._verify(h.storey, h.reported_pose * frame.odom.inverse(), rival=True)
+            if check.passed:
+                passing.append((h, check))
+        if len(passing) < 2:
+            return None
+        tracks = [self._track(frame, h, check) for h, check in passing]
+        favoured = track_favoured(
+            [h.n_outliers for h, _ in passing],
+            [sum(m is not None for m in h.matches) for h, _ in passing],
+            tracks,
+            lambda k: self._track(frame, passing[k][0], passing[k][1], wide=True),
+            c,
+        )
+        if favoured is None:
+            return None
+        best = passing[favoured][0]
+        self._note(
+            frame.t,
+            f"{report.n_hypotheses} hypotheses, {len(passing)} pass the checks: the lidar along the path"
+            f" favours hypothesis {best.rank} (its worst window {float(np.min(tracks[favoured])):.2f})",
+        )
+        return dataclasses.replace(
+            report,
+            hypotheses=[best],
+            n_hypotheses=1,
+            verdict=f"unique match by the lidar along the path ({report.verdict})",
+        )
+
+    def _track(
+        self, frame: SensorFrame, h: Hypothesis, check: Verification, wide: bool = False
+    ) -> np.ndarray:
+        """The lidar's fit along the path for hypothesis ``h`` (``check`` its verification now),
+        from where its recent scans fit best (``wide``: searched as a place about to be outranked)."""
+        start = check.aligned if check.aligned is not None else h.reported_pose * frame.odom.inverse()
+        return track_transform(start, self._evidence_of(h.storey), self.perception.path, self.checks, wide)
 
     def _evidence_of(self, storey: str) -> StoreyEvidence:
         if storey not in self._evidence:
@@ -413,9 +472,16 @@ class Session:
         )
         pose = hypothesis.reported_pose
         check = self._verify(hypothesis.storey, pose * frame.odom.inverse())
+        tracked: list[np.ndarray] = []  # the claim's lidar along the path, once it is needed
+
+        def claim_track() -> np.ndarray:
+            if not tracked:
+                tracked.append(self._track(frame, hypothesis, check))
+            return tracked[0]
+
         outranked = 0
         if rivals:
-            credible, held, outranked = self._credible(frame, hypothesis, check, rivals, found)
+            credible, held, outranked = self._credible(frame, check, claim_track, hypothesis, rivals, found)
             fewest = min((h.n_outliers for h in found), default=None)
             why = f"unique match has {rivals} rival(s) with {extra} more outlier(s) allowed" + (
                 f" (the claim has {hypothesis.n_outliers} outlier(s), the best rival {fewest})"
@@ -430,11 +496,14 @@ class Session:
                 self._note(
                     frame.t,
                     f"{why}: those that pass the checks trail the claim by {c.outrank_outliers}+ outlier(s)"
-                    f" and {c.outrank_scan_fit:.2f}+ in scan fit",
+                    f" and {c.outrank_scan_fit:.2f}+ in scan fit, or by the lidar along the path",
                 )
             else:
                 self._note(frame.t, f"{why}: none passes the checks")
-        self._record_check(frame, "coarse", hypothesis.storey, pose, check, outranked_rivals=outranked)
+        along = {"track_fit": [round(float(f), 4) for f in tracked[0]]} if tracked else {}
+        self._record_check(
+            frame, "coarse", hypothesis.storey, pose, check, outranked_rivals=outranked, **along
+        )
         if check.passed:
             return True, check.aligned, []
         self.result.rejected += 1
@@ -451,28 +520,52 @@ class Session:
         return self.doubted_at is not None and self.perception.travel - self.doubted_at <= DOUBT_WINDOW_M
 
     def _credible(
-        self, frame: SensorFrame, claim: Hypothesis, check: Verification, rivals: int, found: list[Hypothesis]
+        self,
+        frame: SensorFrame,
+        check: Verification,
+        claim_track: Callable[[], np.ndarray],
+        claim: Hypothesis,
+        rivals: int,
+        found: list[Hypothesis],
     ) -> tuple[int, list[Hypothesis], int]:
         """How many of the rivals of a claim pass the checks a claim must pass (negative evidence,
         lidar fit, path through free space): a rival that fails them is no reason to doubt the claim
         (a mirror-symmetric wing passes them, and keeps the claim out). None counts when the claim
         passes its own checks and outranks every rival (``outranks``: each fails the checks or
-        trails the claim by outliers and scan fit; up to RIVALS_COMPARED rivals are compared, the
-        likeliest first, stopping at the first that holds its own). Otherwise more than
+        trails the claim by outliers and scan fit; or ``track_outranks``: the scans along the path,
+        ``claim_track`` for the claim, plainly favour the claim; up to RIVALS_COMPARED rivals are
+        compared, the likeliest first, stopping at the first that holds its own). Otherwise more than
         RIVALS_CHECKED rivals, or a search stopped at its cap, count as that many (``found`` kept as
         it is). Returns that count, the credible rivals and how many rivals pass the checks yet are
         outranked (those two counts are never both non-zero)."""
         checks: dict[int, Verification] = {}
+        c = self.checks
 
         def rival_check(h: Hypothesis) -> Verification:
             if id(h) not in checks:
                 checks[id(h)] = self._verify(h.storey, h.reported_pose * frame.odom.inverse(), rival=True)
             return checks[id(h)]
 
+        def beaten(h: Hypothesis) -> bool:
+            """Does the claim outrank rival ``h``: by outliers and recent scan fit, or by the lidar
+            along the path (the claim's track computed once, the rival's only when needed)?"""
+            theirs = rival_check(h)
+            if outranks(check, claim.n_outliers, theirs, h.n_outliers, c):
+                return True
+            if c.track_m <= 0:
+                return False
+            # h may be the true place found imprecisely (doors built off their place): it is outranked
+            # only if it still trails with its newest window searched wide (in the point-symmetric
+            # ntu_hallway, doors 0.6 m off, a turned place fitted the path better than the true one
+            # 1.8 m off until that search).
+            mine = claim_track()
+            return track_outranks(mine, self._track(frame, h, theirs), c) and track_outranks(
+                mine, self._track(frame, h, theirs, wide=True), c
+            )
+
         complete = len(found) == rivals
-        c = self.checks
         if complete and check.passed and rivals <= RIVALS_COMPARED:
-            if all(outranks(check, claim.n_outliers, rival_check(h), h.n_outliers, c) for h in found):
+            if all(beaten(h) for h in found):
                 return 0, [], sum(rival_check(h).passed for h in found)
         if rivals > RIVALS_CHECKED or not complete:
             return rivals, found, 0

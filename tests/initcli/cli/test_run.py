@@ -186,3 +186,25 @@ def test_starts_that_once_failed_now_initialise(tmp_path, name, seed):
     assert result.exit_code == 0, summary and summary["reason"]
     assert summary["error_translation_m"]["fine"] < 0.3
     assert summary["error_rotation_deg"]["fine"] < 5.0  # block_b 38 keeps the rectified heading: 3.5 deg
+
+
+def test_a_claim_by_the_lidar_along_the_path_replays_as_a_note_of_match(tmp_path):
+    """block_b under construction, seed 56: the session claims one of 11 hypotheses because the
+    scans along its path fit only that one. ``bim-init match --json`` on the session's log keeps
+    Algorithm 1's verdict (several hypotheses, exit 3) and names the same hypothesis in a note,
+    with each hypothesis' ``track_fit``."""
+    config = write_config(tmp_path, "block_b", sim={"reality": "construction"})
+    result, doc = run(tmp_path, config, "--seed", "56")
+    assert result.exit_code == 0, result.output
+    assert doc["success"]
+    out = tmp_path / "out"
+    match = runner.invoke(
+        app, ["match", str(out / "session.jsonl"), "--site", str(out / "site"), "--json", "--top", "20"]
+    )
+    assert match.exit_code == 3, match.output
+    report = json.loads(match.stdout)
+    (note,) = [n for n in report["notes"] if "lidar along the path favours" in n]
+    rank = int(note.split("hypothesis ")[1].split(":")[0])
+    favoured = next(h for h in report["hypotheses"] if h["rank"] == rank)
+    assert favoured["matches"] == doc["matched_ids"]
+    assert all(h["verification"]["track_fit"] for h in report["hypotheses"])

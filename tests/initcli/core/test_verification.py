@@ -22,6 +22,9 @@ from initcli.core.verification import (
     misses_reject,
     outranks,
     rival_search,
+    track_favoured,
+    track_outranks,
+    tracked_scan_fit,
     verify_hypothesis,
 )
 
@@ -265,3 +268,127 @@ def test_outranking_is_off_with_a_scan_fit_margin_of_one() -> None:
     params = VerificationParams(outrank_scan_fit=1.0)
     assert not outranks(_checked(1.0), 0, _checked(0.66), 5, params)
     assert not outranks(_checked(None), 0, _checked(0.66), 5, VerificationParams())
+
+
+# -- the lidar along the path ----------------------------------------------------------------------
+# An L of corridors 2 m wide: A along x (y in [0, 2], open far to the west), B along y (x in [40, 42])
+# from A's east end. Seen from A's middle every place along A looks alike to a 12 m lidar; only the
+# scans from B, where the robot came from, tell a place one bay along A from the right one.
+ELL = np.array(
+    [[-30.0, 0.0, 42.0, 0.0], [-30.0, 2.0, 40.0, 2.0], [40.0, 2.0, 40.0, 30.0], [42.0, 0.0, 42.0, 30.0]]
+)
+
+
+def ell_grid() -> OccupancyGrid:
+    res = 0.05
+    x0, y0, w, h = -31.0, -1.0, 1500, 640  # x in [-31, 44), y in [-1, 31)
+    cells = np.full((h, w), FREE, dtype=np.uint8)
+    for x1, y1, x2, y2 in ELL:
+        n = int(max(abs(x2 - x1), abs(y2 - y1)) / res) + 1
+        cols = np.floor((np.linspace(x1, x2, n) - x0) / res).astype(int)
+        rows = h - 1 - np.floor((np.linspace(y1, y2, n) - y0) / res).astype(int)
+        cells[rows, cols] = OCCUPIED
+    return OccupancyGrid(cells, res, (x0, y0, 0.0))
+
+
+def ell_drive(scale: float = 1.0) -> tuple[list[ScanSample], list[float]]:
+    """Scans every 0.5 m down B from y = 15 to A, then west along A to x = 20 (ranges cast in the
+    true world), with odometry counting ``scale`` times the true distance (a wheel-radius error)."""
+    from initcli.core.raycast import ray_segment_distances
+
+    truth = [Pose2D(41.0, float(y), -math.pi / 2) for y in np.arange(15.0, 1.0, -0.5)]
+    truth += [Pose2D(float(x), 1.0, math.pi) for x in np.arange(41.0, 19.9, -0.5)]
+    angles = np.linspace(-math.pi, math.pi, 120, endpoint=False)
+    scans, travel = [], []
+    odom, distance = truth[0], 0.0
+    for i, pose in enumerate(truth):
+        if i:
+            step = truth[i - 1].inverse() * pose
+            odom = odom * Pose2D(scale * step.x, scale * step.y, step.yaw)
+            distance += scale * math.hypot(step.x, step.y)
+        ranges = ray_segment_distances(np.array([pose.x, pose.y]), angles - (-pose.yaw), ELL, 12.0)
+        ranges = np.where(ranges < 12.0, ranges, np.inf)
+        scans.append(ScanSample(odom, angles, ranges, 12.0))
+        travel.append(distance)
+    return scans, travel
+
+
+def _track(transform: Pose2D, scans: list[ScanSample], travel: list[float]) -> np.ndarray:
+    field = LikelihoodField(ell_grid())
+    return tracked_scan_fit(transform, scans, travel, field, 0.25, 5.0, 0.3, math.radians(6.0))
+
+
+def test_the_path_scans_fit_the_right_place_at_every_window_and_a_bay_off_only_recently() -> None:
+    scans, travel = ell_drive()
+    right = _track(Pose2D.identity(), scans, travel)
+    bay_off = _track(Pose2D(-4.0, 0.0, 0.0), scans, travel)  # the robot placed 4 m farther west
+    assert len(right) == len(bay_off) == 8  # 35 m of travel in windows of 5 m, newest first
+    assert right.min() > 0.9
+    assert bay_off[0] > 0.9  # from A's middle the two look alike ...
+    assert bay_off[-1] < 0.5  # ... but not in B, where the path began
+    params = VerificationParams()
+    assert track_outranks(right, bay_off, params)
+    assert not track_outranks(bay_off, right, params)
+
+
+def test_the_path_scans_follow_odometry_drift_back_along_the_path() -> None:
+    """With a 3 % wheel-scale error the odometry puts B 1 m off after 35 m: a single alignment of
+    the whole path cannot fit both of its ends, the window-by-window track does."""
+    scans, travel = ell_drive(scale=1.03)
+    transform = Pose2D(20.0, 1.0, math.pi) * scans[-1].odom.inverse()  # right where the robot is now
+    track = _track(transform, scans, travel)
+    assert track.min() > 0.9
+    whole = path_scan_fit(transform, scans, LikelihoodField(ell_grid()), 0.25, search_xy=0.3)
+    assert whole is not None and whole < track.min() - 0.1
+
+
+@pytest.mark.parametrize(
+    ("track", "other", "expected"),
+    [
+        ([0.9, 0.9, 0.9], [0.9, 0.9, 0.5], True),  # some window 0.4 better, none worse
+        ([0.9, 0.9, 0.9], [0.9, 0.95, 0.5], True),  # one window 0.05 worse: within the slack
+        ([0.9, 0.9, 0.9], [0.9, 0.97, 0.5], False),  # 0.07 worse somewhere: the other holds its own
+        ([0.9, 0.9, 0.9], [0.85, 0.8, 0.8], False),  # never 0.2 better: no lead
+        ([0.6, 0.9, 0.9], [0.3, 0.5, 0.5], False),  # its own worst window below min_track_fit
+        ([0.9, 0.9], [0.9, 0.9, 0.1], False),  # compared over the common windows only
+        ([], [0.5], False),
+    ],
+)
+def test_one_place_outranks_another_by_the_path_scans_only_plainly(
+    track: list[float], other: list[float], expected: bool
+) -> None:
+    assert track_outranks(np.array(track), np.array(other), VerificationParams()) is expected
+
+
+GOOD, BAY_OFF, TURNED = np.array([0.9, 0.9, 0.9]), np.array([0.9, 0.9, 0.4]), np.array([0.9, 0.85, 0.9])
+
+
+def test_of_several_hypotheses_the_one_the_path_scans_plainly_favour_is_found() -> None:
+    asked: list[int] = []
+
+    def wide(k: int) -> np.ndarray:
+        asked.append(k)
+        return [GOOD, BAY_OFF, BAY_OFF][k]
+
+    params = VerificationParams()
+    assert track_favoured([1, 1, 2], [6, 6, 5], [GOOD, BAY_OFF, BAY_OFF], wide, params) == 0
+    assert sorted(asked) == [1, 2]  # the others searched wide before they count as outranked
+
+
+@pytest.mark.parametrize(
+    ("outliers", "inliers", "tracks", "widened"),
+    [
+        ([1, 1], [6, 6], [GOOD, TURNED], None),  # the other fits every window about as well
+        ([2, 1], [6, 6], [GOOD, BAY_OFF], None),  # the best fit explains fewer detections
+        ([1, 1], [3, 6], [GOOD, BAY_OFF], None),  # too few matched features to claim
+        ([1], [6], [GOOD], None),  # one hypothesis: nothing to tell apart here
+        ([1, 1], [6, 6], [GOOD, BAY_OFF], GOOD),  # searched wide the other fits as well: no winner
+    ],
+)
+def test_no_hypothesis_is_favoured_unless_it_plainly_stands_out(
+    outliers: list[int], inliers: list[int], tracks: list[np.ndarray], widened: np.ndarray | None
+) -> None:
+    found = track_favoured(
+        outliers, inliers, tracks, lambda k: tracks[k] if widened is None else widened, VerificationParams()
+    )
+    assert found is None

@@ -12,7 +12,7 @@ from initcli.core.projection import CameraIntrinsics
 from initcli.core.verification import VerificationParams
 from initcli.io.detection_log import read_log, write_log
 from initcli.match.pipeline import MatchOptions, run_match, site_class_map
-from initcli.match.verify import PathEvidence, verify_report
+from initcli.match.verify import PathEvidence, StoreyEvidence, verify_report
 from initcli.sim.synthetic_floor import write_site_folder
 from initcli.sim.synthetic_log import SimFeature, SyntheticParams, make_log, path_from_waypoints
 
@@ -65,3 +65,88 @@ def test_path_evidence_of_a_log_has_its_images_and_scans(tmp_path: Path) -> None
     assert len(evidence.image_poses) == len(t)
     assert evidence.image_travel[-1] > 8.5
     assert evidence.image_travel == sorted(evidence.image_travel)
+
+
+def test_the_path_keeps_a_scan_every_half_metre_for_its_last_hundred_metres() -> None:
+    from initcli.core.geometry import Pose2D
+    from initcli.match.verify import TRACK_KEPT_M, TRACK_STEP_M
+
+    evidence = PathEvidence()
+    angles = np.linspace(-np.pi, np.pi, 360, endpoint=False)
+    for k in range(1500):  # 150 m at 0.1 m between scans
+        travel = 0.1 * k
+        evidence.add_scan(Pose2D(travel, 0.0, 0.0), travel, angles, np.full(360, 3.0), 20.0)
+    gaps = np.diff(evidence.track_travel)
+    assert gaps.min() >= TRACK_STEP_M - 1e-9 and gaps.max() < TRACK_STEP_M + 0.1 + 1e-9
+    assert evidence.track_travel[-1] - evidence.track_travel[0] <= TRACK_KEPT_M
+    assert evidence.track_travel[0] >= 149.9 - TRACK_KEPT_M - TRACK_STEP_M
+    scans, travel = evidence.along(20.0)
+    assert len(scans) == len(travel) and 20.0 - TRACK_STEP_M <= travel[-1] - travel[0] <= 20.0
+    assert len(scans[0].angles) == 60  # every third beam kept for the recent scans, every second of those
+    assert evidence.along(1000.0)[0] == evidence.track
+    assert PathEvidence().along(20.0) == ([], [])
+
+
+def _corridor_storey() -> StoreyEvidence:
+    """A closed corridor 1.6 m wide and 40 m long (x in [0, 40], y in [0, 1.6]); outside is unknown."""
+    from bimtools.site.records import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
+    from initcli.core.particle_filter import LikelihoodField
+    from initcli.core.verification import FreeSpace
+
+    res, x0, y0 = 0.05, -2.0, -2.0
+    cells = np.full((int(5.6 / res), int(44.0 / res)), UNKNOWN, dtype=np.uint8)
+    rows = cells.shape[0]
+
+    def row(y: float) -> int:
+        return rows - 1 - int((y - y0) / res)
+
+    def col(x: float) -> int:
+        return int((x - x0) / res)
+
+    cells[row(1.6) : row(0.0) + 1, col(0.0) : col(40.0) + 1] = FREE
+    cells[row(0.0), col(0.0) : col(40.0) + 1] = OCCUPIED
+    cells[row(1.6), col(0.0) : col(40.0) + 1] = OCCUPIED
+    cells[row(1.6) : row(0.0) + 1, col(0.0)] = OCCUPIED
+    cells[row(1.6) : row(0.0) + 1, col(40.0)] = OCCUPIED
+    grid = OccupancyGrid(cells, res, (x0, y0, 0.0))
+    empty = np.zeros((0, 2))
+    return StoreyEvidence(
+        [], empty, empty, np.zeros(0), [], np.zeros((0, 4)), LikelihoodField(grid), FreeSpace(grid, 0.3)
+    )
+
+
+def test_a_long_wall_drive_with_odometry_drift_stays_in_free_space_placed_window_by_window() -> None:
+    """Odometry that turns 0.2 degrees per metre too much puts the right place's path of the last
+    30 m through the corridor wall when one transform places all of it; placed window by window as
+    the lidar along the path aligns it, the path lies in the corridor. A place across the wall gains
+    nothing from that."""
+    from initcli.core.geometry import Pose2D
+    from initcli.core.projection import CameraMount
+    from initcli.core.raycast import ray_segment_distances
+    from initcli.core.verification import CameraView
+    from initcli.match.verify import verify_transform
+
+    storey = _corridor_storey()
+    segments = np.array(
+        [[0.0, 0.0, 40.0, 0.0], [0.0, 1.6, 40.0, 1.6], [0.0, 0.0, 0.0, 1.6], [40.0, 0.0, 40.0, 1.6]]
+    )
+    angles = np.linspace(-np.pi, np.pi, 360, endpoint=False)
+    evidence = PathEvidence()
+    odom, bias = Pose2D(1.0, 0.8, 0.0), np.radians(0.2)
+    for k, x in enumerate(np.arange(1.0, 39.0, 0.25)):
+        if k:
+            odom = odom * Pose2D(0.25, 0.0, 0.25 * bias)  # the true step is straight on
+        ranges = ray_segment_distances(np.array([x, 0.8]), angles, segments, 12.0)
+        travel = x - 1.0
+        evidence.add_scan(odom, travel, angles, np.where(ranges < 12.0, ranges, np.inf), 12.0)
+        evidence.add_image(odom, travel)
+    right = Pose2D(38.75, 0.8, 0.0) * odom.inverse()
+    view = CameraView(CAMERA, CameraMount(0.2, 0.0, 1.0, 0.0, 0.0, 0.0))
+    params = VerificationParams()
+    check = verify_transform(right, storey, evidence, [], view, params)
+    assert check.passed, check.reasons
+    assert check.path_free is not None and check.path_free >= params.min_path_free
+    single = verify_transform(right, storey, evidence, [], view, VerificationParams(track_m=0.0))
+    assert not single.passed and single.path_free is not None and single.path_free < params.min_path_free
+    across = Pose2D(0.0, 1.7, 0.0) * right  # the same drive placed beside the corridor
+    assert not verify_transform(across, storey, evidence, [], view, params).passed

@@ -124,3 +124,46 @@ def test_a_rival_that_passed_the_checks_is_still_looked_for_after_more_features(
     assert built.session.doubted_at is not None, (
         "no claim held back by a credible rival any more: pick another seed"
     )
+
+
+def without_track(config: SessionConfig) -> SessionConfig:
+    """The same session without the lidar along the path (``verification.track_m: 0``)."""
+    return dataclasses.replace(config, verification=dataclasses.replace(config.verification, track_m=0.0))
+
+
+def _notes(session) -> list[str]:
+    return [str(r.data.get("why", "")) for r in session.perception.log.records if isinstance(r, State)]
+
+
+def test_rivals_a_corridor_bay_off_are_outranked_by_the_scans_along_the_path(tmp_path_factory) -> None:
+    """ntu_hallway under construction, seed 29: from 9 features on, a unique match that needed an
+    outlier has dozens of rivals one corridor bay or more along the periodic corridors, each with one
+    outlier more and passing every recent check (the last 8 m of scans fit them as well). The scans
+    of the path back to where the robot came round the corridor's end fit only the claim: the
+    session claims the right place. Without the lidar along the path the rivals keep it out for the
+    whole 150 m."""
+    config = load_config(SAMPLES / "ntu_hallway.site.yaml", reality="construction")
+    site = prepare_site(config, tmp_path_factory.mktemp("ntu_track"))
+    built = sim_session(config, site, 29)
+    result = built.session.run()
+    assert result.success, result.reason
+    assert_never_wrong(result)
+    assert any("or by the lidar along the path" in n for n in _notes(built.session))
+    alone = sim_session(without_track(config), site, 29).session.run()
+    assert not alone.success and "without a unique match" in alone.reason
+
+
+def test_one_of_several_hypotheses_is_claimed_when_only_its_path_scans_fit(tmp_path_factory) -> None:
+    """block_b under construction, seed 56: after 96 s, 11 hypotheses, 5 of which pass the recent
+    checks; the scans along the path fit every window of one of them and plainly not the others. It
+    is checked as a unique match (rival search included) and claimed, right. Without the lidar along
+    the path the session ends after 150 m with several hypotheses left."""
+    config = load_config(SAMPLES / "block_b.site.yaml", reality="construction")
+    site = prepare_site(config, tmp_path_factory.mktemp("block_b_track"))
+    built = sim_session(config, site, 56)
+    result = built.session.run()
+    assert result.success, result.reason
+    assert_never_wrong(result)
+    assert any("the lidar along the path favours hypothesis" in n for n in _notes(built.session))
+    alone = sim_session(without_track(config), site, 56).session.run()
+    assert not alone.success and "hypotheses" in alone.reason
