@@ -354,7 +354,7 @@ def best_scan_alignment(
 
 @dataclass(frozen=True)
 class PathTrack:
-    """The lidar along the path (:func:`tracked_alignment`): per window of travel, newest first,
+    """The lidar along the path (:func:`tracked_scan_fit`): per window of travel, newest first,
     its fit and the transform (odom -> BIM) that aligns it."""
 
     fits: np.ndarray
@@ -370,7 +370,7 @@ class PathTrack:
         return self.transforms[max(i, 0)]
 
 
-def tracked_alignment(
+def tracked_scan_fit(
     transform: Pose2D,
     scans: list[ScanSample],
     travel: list[float],
@@ -435,28 +435,9 @@ def tracked_alignment(
     return PathTrack(np.array(fits), tuple(transforms), tuple(sorted(windows)), now, window_m)
 
 
-def tracked_scan_fit(
-    transform: Pose2D,
-    scans: list[ScanSample],
-    travel: list[float],
-    field_: LikelihoodField,
-    tolerance: float,
-    window_m: float,
-    search_xy: float,
-    search_yaw: float,
-    first_xy: float = 0.0,
-    first_yaw: float = 0.0,
-) -> np.ndarray:
-    """The fits of :func:`tracked_alignment`, newest window first (empty without scans)."""
-    track = tracked_alignment(
-        transform, scans, travel, field_, tolerance, window_m, search_xy, search_yaw, first_xy, first_yaw
-    )
-    return np.zeros(0) if track is None else track.fits
-
-
 def track_outranks(track: np.ndarray, other: np.ndarray, params: VerificationParams) -> bool:
     """Do the scans along the path plainly favour ``track``'s hypothesis over ``other``'s (both from
-    :func:`tracked_scan_fit` over the same scans)? True when ``track`` fits none of its windows below
+    :func:`tracked_scan_fit` fits over the same scans)? True when ``track`` fits none of its windows below
     ``min_track_fit``, fits some window at least ``track_lead`` better than ``other`` and no window
     more than ``track_slack`` worse. In 300 construction sessions of the three samples
     (``benchmarks/bench_claims.py``), a right place never fitted a window more than 0.035 worse than

@@ -22,12 +22,12 @@ from initcli.core.particle_filter import LikelihoodField
 from initcli.core.verification import (
     CameraView,
     FreeSpace,
+    PathTrack,
     ScanSample,
     Verification,
     VerificationParams,
     judge,
     track_favoured,
-    tracked_alignment,
     tracked_scan_fit,
     verify_hypothesis,
 )
@@ -200,24 +200,12 @@ def path_free_along(
     transform: Pose2D, storey: StoreyEvidence, path: PathEvidence, params: VerificationParams
 ) -> float | None:
     """The share of the last PATH_CHECK_M of the path on free BIM cells, each image pose placed by
-    the transform of its window of the lidar along the path (``tracked_alignment`` from
+    the transform of its window of the lidar along the path (:func:`path_track` from
     ``transform``), not by one transform for all: odometry drift over a long straight wall (a
     rotation of a degree or two) puts a right place's path through that wall (a car park's 30 m
     perimeter wall: 0.85 of the path on free cells). None without a map or scans."""
-    scans, travel = path.along(params.track_m)
-    if storey.field_ is None or storey.free is None or not scans or not path.image_travel:
-        return None
-    track = tracked_alignment(
-        transform,
-        scans,
-        travel,
-        storey.field_,
-        params.scan_tolerance,
-        params.track_window_m,
-        params.track_search_xy,
-        math.radians(params.track_search_yaw_deg),
-    )
-    if track is None:
+    track = path_track(transform, storey, path, params)
+    if track is None or storey.free is None or not path.image_travel:
         return None
     now = path.image_travel[-1]
     placed = [
@@ -228,21 +216,21 @@ def path_free_along(
     return storey.free.share_free(np.array(placed)) if placed else None
 
 
-def track_transform(
+def path_track(
     transform: Pose2D,
     storey: StoreyEvidence,
     path: PathEvidence,
     params: VerificationParams,
     wide: bool = False,
-) -> np.ndarray:
-    """The lidar's fit along the last ``track_m`` of the path for ``transform`` (odom -> BIM; start it
-    from a verification's ``aligned`` transform), window by window, newest first
-    (:func:`initcli.core.verification.tracked_scan_fit`); ``wide``: the newest window searched over
-    ``track_rival_xy`` / ``track_rival_yaw_deg`` first (a place about to be outranked). Empty
-    without a map or scans."""
+) -> PathTrack | None:
+    """The lidar along the last ``track_m`` of the path for ``transform`` (odom -> BIM; start it from
+    a verification's ``aligned`` transform): :func:`initcli.core.verification.tracked_scan_fit` with
+    the ``params``; ``wide``: the newest window searched over ``track_rival_xy`` /
+    ``track_rival_yaw_deg`` first (a place about to be outranked). None without a map or scans, or
+    with ``track_m`` 0."""
     scans, travel = path.along(params.track_m)
     if storey.field_ is None or not scans or params.track_m <= 0:
-        return np.zeros(0)
+        return None
     return tracked_scan_fit(
         transform,
         scans,
@@ -255,6 +243,18 @@ def track_transform(
         params.track_rival_xy if wide else 0.0,
         math.radians(params.track_rival_yaw_deg) if wide else 0.0,
     )
+
+
+def track_transform(
+    transform: Pose2D,
+    storey: StoreyEvidence,
+    path: PathEvidence,
+    params: VerificationParams,
+    wide: bool = False,
+) -> np.ndarray:
+    """The fits of :func:`path_track`, newest window first (empty without one)."""
+    track = path_track(transform, storey, path, params, wide)
+    return np.zeros(0) if track is None else track.fits
 
 
 def track_favoured_in_report(

@@ -314,8 +314,11 @@ def ell_drive(scale: float = 1.0) -> tuple[list[ScanSample], list[float]]:
 
 
 def _track(transform: Pose2D, scans: list[ScanSample], travel: list[float]) -> np.ndarray:
-    field = LikelihoodField(ell_grid())
-    return tracked_scan_fit(transform, scans, travel, field, 0.25, 5.0, 0.3, math.radians(6.0))
+    track = tracked_scan_fit(
+        transform, scans, travel, LikelihoodField(ell_grid()), 0.25, 5.0, 0.3, math.radians(6.0)
+    )
+    assert track is not None
+    return track.fits
 
 
 def test_the_path_scans_fit_the_right_place_at_every_window_and_a_bay_off_only_recently() -> None:
