@@ -439,9 +439,10 @@ def track_outranks(track: np.ndarray, other: np.ndarray, params: VerificationPar
     """Do the scans along the path plainly favour ``track``'s hypothesis over ``other``'s (both from
     :func:`tracked_scan_fit` fits over the same scans)? True when ``track`` fits none of its windows below
     ``min_track_fit``, fits some window at least ``track_lead`` better than ``other`` and no window
-    more than ``track_slack`` worse. In 300 construction sessions of the three samples
-    (``benchmarks/bench_claims.py``), a right place never fitted a window more than 0.035 worse than
-    a wrong rival, while wrong ones fitted some window up to 0.9 worse than the right place."""
+    more than ``track_slack`` worse. In 210 construction sessions of the three samples
+    (``benchmarks/bench_claims.py``: 1,445 pairs of a right and a wrong place that both pass the
+    recent checks, the wrong one searched wide), the right place outranked the wrong one 652 times
+    and never the reverse."""
     n = min(len(track), len(other))
     if n == 0 or float(np.min(track)) < params.min_track_fit:
         return False
