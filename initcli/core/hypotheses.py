@@ -138,6 +138,25 @@ def one_place(storeys: list[str], poses: list[Pose2D], radius: float, yaw_tolera
     )
 
 
+def distinct_places(
+    storeys: list[str], poses: list[Pose2D], radius: float, yaw_tolerance: float
+) -> list[int]:
+    """Indices of the hypotheses (their storeys and the poses they report, best first) that are not
+    within ``radius`` (m) and ``yaw_tolerance`` (rad) of a better one on the same storey: one per
+    place (rule 3 groups matches by the rigid fit over all their features, which odometry drift can
+    split while the pose they report is one)."""
+    kept: list[int] = []
+    for i, (storey, pose) in enumerate(zip(storeys, poses, strict=True)):
+        if not any(
+            storeys[k] == storey
+            and pose.distance_to(poses[k]) <= radius
+            and pose.yaw_error(poses[k]) <= yaw_tolerance
+            for k in kept
+        ):
+            kept.append(i)
+    return kept
+
+
 def confidences(cost: np.ndarray, n_out: np.ndarray, tau: float = 0.5, eps: float = 0.1) -> np.ndarray:
     """Rule 5: normalised exp(-J/tau) * eps^outliers over the given hypotheses."""
     cost = np.asarray(cost, dtype=float)

@@ -18,6 +18,7 @@ from bimtools.site.load import Site, StoreyModel
 from initcli.core.classes import ClassMap
 from initcli.core.detection_filter import Sighting
 from initcli.core.geometry import Pose2D
+from initcli.core.hypotheses import distinct_places
 from initcli.core.particle_filter import LikelihoodField
 from initcli.core.verification import (
     CameraView,
@@ -272,9 +273,15 @@ def track_favoured_in_report(
     hs = report.hypotheses
     if report.odom_pose is None or report.n_hypotheses > len(hs) or params.track_m <= 0:
         return None
+    places = distinct_places(
+        [h.storey for h in hs],
+        [h.reported_pose for h in hs],
+        report.options.pose_radius,
+        math.radians(report.options.beta),
+    )
     passing = [
         (i, check)
-        for i, check in enumerate(checks)
+        for i, check in ((i, checks[i]) for i in places)
         if check is not None and check.passed and check.track_fit is not None
     ]
     if len(passing) < 2:

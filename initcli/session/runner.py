@@ -40,7 +40,7 @@ from initcli.core.classes import ClassMap
 from initcli.core.confinement import ConfinementWatch
 from initcli.core.frontier import LocalMap
 from initcli.core.geometry import Pose2D, wrap_angle
-from initcli.core.hypotheses import one_place
+from initcli.core.hypotheses import distinct_places, one_place
 from initcli.core.verification import (
     CameraView,
     Verification,
@@ -84,6 +84,7 @@ RIVAL_SEARCH_FACTOR = 2.0  # a rival's scan fit may shift it this many times far
 RIVALS_CHECKED = 8  # rivals of a claim verified one by one; more count as credible without a check ...
 RIVALS_COMPARED = 64  # ... unless the claim outranks them all, compared one by one up to this many
 TRACK_HYPOTHESES = 12  # several hypotheses are compared by the lidar along the path up to this many
+REDECIDE_M = 10.0  # m of travel after which hypotheses left undecided are matched and judged again
 AGREE_M = 2.0  # m: a fine pose farther than this from the odometry-carried coarse pose disagrees ...
 AGREE_DEG = 30.0  # ... or turned more than this
 
@@ -136,6 +137,7 @@ class Session:
         self.last_feature_t = 0.0  # s: when the last new feature was confirmed
         self.turned = 0.0  # rad turned since the look or recovery rotation began
         self.hypotheses = 0  # of the last match step
+        self.decided_at = 0.0  # m of travel at the last match step
         self.storeys_left: list[str] = []  # storeys the last match step's hypotheses lie on
         self.checks = verification_params(config)
         # m of travel when a claim was last held back by rivals that pass the checks: claims soon
@@ -295,8 +297,17 @@ class Session:
         return 0.0, turn_in_place_speed(self.config)
 
     def _perceive(self, frame: SensorFrame) -> bool:
-        """Confirm new features and match after each; True once the session is over."""
-        if frame.detections is None or not self.perception.new_features():
+        """Confirm new features and match after each (and again every REDECIDE_M of travel while a
+        match step left hypotheses undecided); True once the session is over."""
+        if frame.detections is None:
+            return False
+        if not self.perception.new_features():
+            # No new feature, but the path goes on: its scans may now tell the hypotheses left apart
+            # (the robot came round a corridor end since the last feature; with the lidar along the
+            # path on).
+            undecided = 1 <= self.hypotheses <= TRACK_HYPOTHESES and self.checks.track_m > 0
+            if undecided and self.perception.travel - self.decided_at >= REDECIDE_M:
+                return self._decide(frame)
             return False
         confirmed = self.perception.confirmed
         self.last_feature_t = frame.t
@@ -306,6 +317,12 @@ class Session:
             if self.state == "recovery":
                 self._set_state(frame.t, "explore", why="new feature")
             return False
+        return self._decide(frame)
+
+    def _decide(self, frame: SensorFrame) -> bool:
+        """Match the features so far (Algorithm 1) and act on the hypotheses: claim a unique match
+        that passes verification, or explore on; True once the session is over."""
+        self.decided_at = self.perception.travel
         report = self._match(frame.t)
         self.hypotheses = report.n_hypotheses
         self.storeys_left = sorted({h.storey for h in report.hypotheses})
@@ -350,7 +367,8 @@ class Session:
 
     def _lidar_unique(self, frame: SensorFrame, report: MatchReport) -> MatchReport | None:
         """Several hypotheses, one of which the lidar along the path plainly favours (beyond the
-        paper; ``track_favoured`` among those that pass the checks a claim must pass): that one, to
+        paper; ``track_favoured`` among those that pass the checks a claim must pass, one hypothesis
+        per place): that one, to
         be checked as a unique match (its rival search included). A periodic corridor seen from its
         middle leaves several places alike in the recent scans, but the path's turns into a lobby or
         a corridor end fit only the right one. None when no hypothesis stands out so, when there are
@@ -359,8 +377,14 @@ class Session:
         c = self.checks
         if not c.enabled or c.track_m <= 0 or report.n_hypotheses > len(hs) or len(hs) > TRACK_HYPOTHESES:
             return None
+        places = distinct_places(
+            [h.storey for h in hs],
+            [h.reported_pose for h in hs],
+            self.options.pose_radius,
+            math.radians(self.options.beta),
+        )
         passing = []
-        for h in hs:
+        for h in (hs[i] for i in places):  # one per place: the same place cannot outrank itself
             check = self._verify(h.storey, h.reported_pose * frame.odom.inverse(), rival=True)
             if check.passed:
                 passing.append((h, check))

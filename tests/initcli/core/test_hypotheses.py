@@ -91,3 +91,18 @@ def test_hypotheses_that_put_the_robot_on_one_spot_are_one_place() -> None:
     assert not one_place(["L1", "L1"], [best, Pose2D(11.2, 2.0, 0.5)], 1.0, math.radians(15.0))  # 1.2 m
     turned = Pose2D(10.0, 2.0, 0.5 + math.radians(20.0))
     assert not one_place(["L1", "L1", "L1"], [best, near, turned], 1.0, math.radians(15.0))  # 20 degrees
+
+
+def test_one_hypothesis_per_place_is_kept_best_first() -> None:
+    from initcli.core.hypotheses import distinct_places
+
+    poses = [
+        Pose2D(10.0, 5.0, 0.0),
+        Pose2D(25.0, 5.0, 0.0),  # another place
+        Pose2D(10.4, 5.3, math.radians(5.0)),  # the first place again (split by rule 3's fit)
+        Pose2D(10.0, 5.0, math.radians(90.0)),  # the first place turned: another pose
+        Pose2D(10.0, 5.0, 0.0),  # the same pose on another storey
+    ]
+    storeys = ["L1", "L1", "L1", "L1", "L2"]
+    assert distinct_places(storeys, poses, 1.0, math.radians(15.0)) == [0, 1, 3, 4]
+    assert distinct_places([], [], 1.0, 0.3) == []

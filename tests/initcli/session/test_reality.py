@@ -167,3 +167,20 @@ def test_one_of_several_hypotheses_is_claimed_when_only_its_path_scans_fit(tmp_p
     assert any("the lidar along the path favours hypothesis" in n for n in _notes(built.session))
     alone = sim_session(without_track(config), site, 56).session.run()
     assert not alone.success and "hypotheses" in alone.reason
+
+
+def test_hypotheses_left_undecided_are_judged_again_as_the_path_goes_on(tmp_path_factory) -> None:
+    """ntu_hallway under construction, seed 97: after the 14th feature two hypotheses are left and
+    the scans of the path cannot yet tell them apart; no feature follows for 30 m. Matched and judged
+    again every 10 m of travel, the pair is decided once the path has come past a corridor end: the
+    right one is claimed on the same 14 features."""
+    config = load_config(SAMPLES / "ntu_hallway.site.yaml", reality="construction")
+    site = prepare_site(config, tmp_path_factory.mktemp("ntu_again"))
+    built = sim_session(config, site, 97)
+    result = built.session.run()
+    assert result.success, result.reason
+    assert_never_wrong(result)
+    steps = [(m.t, m.features) for m in result.match_steps]
+    again = [t for (t, n), (_, before) in zip(steps[1:], steps, strict=False) if n == before]
+    assert again, steps  # match steps without a new feature
+    assert result.match_steps[-1].features == result.match_steps[-2].features  # claimed at one of them
