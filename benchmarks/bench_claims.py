@@ -146,22 +146,26 @@ def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, 
 
 
 def _track_pairs(decisions: list[dict[str, Any]]) -> dict[tuple[bool, bool], list[tuple[float, float, bool]]]:
-    """(A right, B right) -> for every ordered pair of hypotheses that pass the recent checks in one
-    decision (a claim and each of its rivals, any two of several hypotheses): how much A fits its
-    best window better than B, how much B fits its best window better than A, and whether
-    ``track_outranks(A, B)`` holds with B's path fitted both from where its recent scans fit best
-    and searched wide (as the session compares them)."""
+    """(A right, B right) -> for every ordered pair of hypotheses in one decision that the session
+    compares by the lidar along the path (a claim that passes the recent checks and each rival that
+    does too, either way round; of several hypotheses one that passes them and any other, passing
+    or not): how much A fits its best window better than B, how much B fits its best window better
+    than A, and whether ``track_outranks(A, B)`` holds with B's path fitted both from where its
+    recent scans fit best and searched wide (as the session compares them)."""
     from initcli.core.verification import VerificationParams, track_outranks
 
     params = VerificationParams()
     pairs: dict[tuple[bool, bool], list[tuple[float, float, bool]]] = collections.defaultdict(list)
     for d in decisions:
-        hs = [d["claim"], *d["rivals"]] if d["kind"] == "claim" else d["hypotheses"]
-        hs = [h for h in hs if h["passed"] and len(h["track"])]
+        several = d["kind"] != "claim"
+        hs = d["hypotheses"] if several else [d["claim"], *d["rivals"]]
+        hs = [h for h in hs if len(h["track"]) and (several or h["passed"])]
         for a in hs:
             for b in hs:
                 n = min(len(a["track"]), len(b["track"]))
-                if a is b or n == 0 or (d["kind"] == "claim" and a is not d["claim"] and b is not d["claim"]):
+                if a is b or n == 0 or not a["passed"]:
+                    continue
+                if not several and a is not d["claim"] and b is not d["claim"]:
                     continue
                 lead = np.asarray(a["track"][:n]) - np.asarray(b["track"][:n])
                 wins = track_outranks(a["track"], b["track"], params) and track_outranks(
@@ -238,7 +242,8 @@ def main() -> None:
         if worst:
             p1, p5, p50 = np.percentile(worst, [1, 5, 50])
             print(f"| {'right' if right else 'wrong'} | {len(worst)} | {p1:.3f} | {p5:.3f} | {p50:.3f} |")
-    print("\npairs of hypotheses that both pass the recent checks (A, B): A's best lead over B in a")
+    print("\npairs of hypotheses compared by the lidar along the path (A passing the recent checks, B a")
+    print("claim's rival passing them too, or any other of several hypotheses): A's best lead over B in a")
     print("window, B's best lead over A; and how often track_outranks(A, B) holds (lead")
     print(
         f"{params.track_lead}, slack {params.track_slack}, A's worst window at least {params.min_track_fit})"

@@ -451,26 +451,32 @@ def track_outranks(track: np.ndarray, other: np.ndarray, params: VerificationPar
 
 
 def track_favoured(
+    passed: Sequence[bool],
     outliers: Sequence[int],
     inliers: Sequence[int],
     tracks: Sequence[np.ndarray],
     wide: Callable[[int], np.ndarray],
     params: VerificationParams,
 ) -> int | None:
-    """Of several hypotheses that all pass the checks a claim must pass (their ``outliers``, matched
-    ``inliers`` and lidar along the path ``tracks``), the index of the one the scans of the path
-    plainly favour (beyond the paper): at least two of them, the one with ``min_claim_inliers``
-    matches and no more outliers than any other that ``track_outranks`` every other, each other
-    also with its newest window searched wide (``wide(i)``: the track of hypothesis ``i`` so
-    searched, asked for only then). None when no hypothesis stands out so."""
+    """Of several hypotheses, one per place (whether each ``passed`` the checks a claim must pass,
+    their ``outliers``, matched ``inliers`` and lidar along the path ``tracks``), the index of the
+    one the scans of the path plainly favour (beyond the paper): at least two of them pass the
+    checks, and the one that does with ``min_claim_inliers`` matches and no more outliers than any
+    hypothesis ``track_outranks`` every other, each other also with its newest window searched wide
+    (``wide(i)``: the track of hypothesis ``i`` so searched, asked for only then). A hypothesis that
+    fails the recent checks must be outranked too: it may be the true place found imprecisely (1.5 m
+    off, its recent scans fit 0.53) beside a turned place of a symmetric corridor that fits them
+    well (block_b, hoardings twice the construction profile, seed 5). None when no hypothesis stands
+    out so."""
     n = len(tracks)
-    if n < 2:
+    if sum(passed) < 2:
         return None
     fewest = min(outliers)
     winners = [
         i
         for i in range(n)
-        if outliers[i] == fewest
+        if passed[i]
+        and outliers[i] == fewest
         and inliers[i] >= params.min_claim_inliers
         and all(track_outranks(tracks[i], tracks[j], params) for j in range(n) if j != i)
     ]

@@ -265,10 +265,10 @@ def track_favoured_in_report(
     checks: Sequence[Verification | None],
     params: VerificationParams | None = None,
 ) -> int | None:
-    """The index of the hypothesis of ``report`` that the lidar along the path plainly favours among
-    those that pass ``checks`` (:func:`verify_report`'s, with their ``track_fit``), as a session
-    decides it (:func:`initcli.core.verification.track_favoured`); None when none stands out or the
-    report lists fewer hypotheses than it counts."""
+    """The index of the hypothesis of ``report`` that the lidar along the path plainly favours, one
+    hypothesis per place, judged by ``checks`` (:func:`verify_report`'s, with their ``track_fit``)
+    as a session decides it (:func:`initcli.core.verification.track_favoured`); None when none
+    stands out or the report lists fewer hypotheses than it counts."""
     params = params or VerificationParams()
     hs = report.hypotheses
     if report.odom_pose is None or report.n_hypotheses > len(hs) or params.track_m <= 0:
@@ -279,19 +279,16 @@ def track_favoured_in_report(
         report.options.pose_radius,
         math.radians(report.options.beta),
     )
-    passing = [
-        (i, check)
-        for i, check in ((i, checks[i]) for i in places)
-        if check is not None and check.passed and check.track_fit is not None
-    ]
-    if len(passing) < 2:
+    candidates = [(i, checks[i]) for i in places]
+    if any(check is None or check.track_fit is None for _, check in candidates):
         return None
     path = PathEvidence.of_log(log)
     cmap = site_class_map(site)
     storeys: dict[str, StoreyEvidence] = {}
 
     def wide(k: int) -> np.ndarray:
-        i, check = passing[k]
+        i, check = candidates[k]
+        assert check is not None
         h = hs[i]
         if h.storey not in storeys:
             storeys[h.storey] = StoreyEvidence.of(site.storeys[h.storey], cmap)
@@ -299,13 +296,14 @@ def track_favoured_in_report(
         return track_transform(start, storeys[h.storey], path, params, wide=True)
 
     found = track_favoured(
-        [hs[i].n_outliers for i, _ in passing],
-        [sum(m is not None for m in hs[i].matches) for i, _ in passing],
-        [np.asarray(check.track_fit) for _, check in passing],
+        [check is not None and check.passed for _, check in candidates],
+        [hs[i].n_outliers for i, _ in candidates],
+        [sum(m is not None for m in hs[i].matches) for i, _ in candidates],
+        [np.asarray(check.track_fit if check is not None else ()) for _, check in candidates],
         wide,
         params,
     )
-    return None if found is None else passing[found][0]
+    return None if found is None else candidates[found][0]
 
 
 def verify_report(

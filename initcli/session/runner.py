@@ -367,8 +367,8 @@ class Session:
 
     def _lidar_unique(self, frame: SensorFrame, report: MatchReport) -> MatchReport | None:
         """Several hypotheses, one of which the lidar along the path plainly favours (beyond the
-        paper; ``track_favoured`` among those that pass the checks a claim must pass, one hypothesis
-        per place): that one, to
+        paper; ``track_favoured`` over one hypothesis per place, each verified: the favoured one
+        passes the checks a claim must pass and outranks every other, passing or not): that one, to
         be checked as a unique match (its rival search included). A periodic corridor seen from its
         middle leaves several places alike in the recent scans, but the path's turns into a lobby or
         a corridor end fit only the right one. None when no hypothesis stands out so, when there are
@@ -383,27 +383,29 @@ class Session:
             self.options.pose_radius,
             math.radians(self.options.beta),
         )
-        passing = []
-        for h in (hs[i] for i in places):  # one per place: the same place cannot outrank itself
-            check = self._verify(h.storey, h.reported_pose * frame.odom.inverse(), rival=True)
-            if check.passed:
-                passing.append((h, check))
-        if len(passing) < 2:
+        # one per place: the same place cannot outrank itself
+        places_checked = [
+            (hs[i], self._verify(hs[i].storey, hs[i].reported_pose * frame.odom.inverse(), rival=True))
+            for i in places
+        ]
+        if sum(check.passed for _, check in places_checked) < 2:
             return None
-        tracks = [self._track(frame, h, check) for h, check in passing]
+        tracks = [self._track(frame, h, check) for h, check in places_checked]
         favoured = track_favoured(
-            [h.n_outliers for h, _ in passing],
-            [sum(m is not None for m in h.matches) for h, _ in passing],
+            [check.passed for _, check in places_checked],
+            [h.n_outliers for h, _ in places_checked],
+            [sum(m is not None for m in h.matches) for h, _ in places_checked],
             tracks,
-            lambda k: self._track(frame, passing[k][0], passing[k][1], wide=True),
+            lambda k: self._track(frame, places_checked[k][0], places_checked[k][1], wide=True),
             c,
         )
         if favoured is None:
             return None
-        best = passing[favoured][0]
+        best = places_checked[favoured][0]
+        passing = sum(check.passed for _, check in places_checked)
         self._note(
             frame.t,
-            f"{report.n_hypotheses} hypotheses, {len(passing)} pass the checks: the lidar along the path"
+            f"{report.n_hypotheses} hypotheses, {passing} pass the checks: the lidar along the path"
             f" favours hypothesis {best.rank} (its worst window {float(np.min(tracks[favoured])):.2f})",
         )
         return dataclasses.replace(

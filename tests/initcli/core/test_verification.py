@@ -374,24 +374,40 @@ def test_of_several_hypotheses_the_one_the_path_scans_plainly_favour_is_found() 
         return [GOOD, BAY_OFF, BAY_OFF][k]
 
     params = VerificationParams()
-    assert track_favoured([1, 1, 2], [6, 6, 5], [GOOD, BAY_OFF, BAY_OFF], wide, params) == 0
+    tracks = [GOOD, BAY_OFF, BAY_OFF]
+    assert track_favoured([True, True, True], [1, 1, 2], [6, 6, 5], tracks, wide, params) == 0
     assert sorted(asked) == [1, 2]  # the others searched wide before they count as outranked
+    # one that fails the recent checks must be outranked as well (searched wide: here it still trails)
+    assert track_favoured([True, True, False], [1, 1, 0], [6, 6, 5], tracks, wide, params) is None
+    assert track_favoured([True, True, False], [1, 1, 1], [6, 6, 5], tracks, wide, params) == 0
 
 
 @pytest.mark.parametrize(
-    ("outliers", "inliers", "tracks", "widened"),
+    ("passed", "outliers", "inliers", "tracks", "widened"),
     [
-        ([1, 1], [6, 6], [GOOD, TURNED], None),  # the other fits every window about as well
-        ([2, 1], [6, 6], [GOOD, BAY_OFF], None),  # the best fit explains fewer detections
-        ([1, 1], [3, 6], [GOOD, BAY_OFF], None),  # too few matched features to claim
-        ([1], [6], [GOOD], None),  # one hypothesis: nothing to tell apart here
-        ([1, 1], [6, 6], [GOOD, BAY_OFF], GOOD),  # searched wide the other fits as well: no winner
+        ([True, True], [1, 1], [6, 6], [GOOD, TURNED], None),  # the other fits every window as well
+        ([True, True], [2, 1], [6, 6], [GOOD, BAY_OFF], None),  # the best fit explains fewer detections
+        ([True, True], [1, 1], [3, 6], [GOOD, BAY_OFF], None),  # too few matched features to claim
+        ([True], [1], [6], [GOOD], None),  # one hypothesis: nothing to tell apart here
+        ([True, True], [1, 1], [6, 6], [GOOD, BAY_OFF], GOOD),  # searched wide the other fits as well
+        ([True, False], [1, 1], [6, 6], [GOOD, BAY_OFF], None),  # one place alone passes the checks
+        # the true place found 1.5 m off fails the recent checks; searched wide it fits as well
+        ([True, True, False], [0, 1, 0], [6, 6, 6], [GOOD, BAY_OFF, BAY_OFF], GOOD),
     ],
 )
 def test_no_hypothesis_is_favoured_unless_it_plainly_stands_out(
-    outliers: list[int], inliers: list[int], tracks: list[np.ndarray], widened: np.ndarray | None
+    passed: list[bool],
+    outliers: list[int],
+    inliers: list[int],
+    tracks: list[np.ndarray],
+    widened: np.ndarray | None,
 ) -> None:
     found = track_favoured(
-        outliers, inliers, tracks, lambda k: tracks[k] if widened is None else widened, VerificationParams()
+        passed,
+        outliers,
+        inliers,
+        tracks,
+        lambda k: tracks[k] if widened is None else widened,
+        VerificationParams(),
     )
     assert found is None
