@@ -35,7 +35,9 @@ from initcli.core.detection_filter import (
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.hypotheses import (
     confidences,
+    distinct_places,
     drop_dominated,
+    one_place,
     pose_groups,
     rank_order,
     verdict_text,
@@ -208,6 +210,24 @@ class MatchReport:
     site_model: Site | None = field(default=None, repr=False)
     outliers_allowed: int = 0  # the outlier budget the hypotheses were found with (grown: outlier_share)
     overflow: bool = False  # matching stopped at the partial-match cap (far too ambiguous)
+
+    def _storeys_poses(self) -> tuple[list[str], list[Pose2D], float, float]:
+        hs = self.hypotheses
+        return (
+            [h.storey for h in hs],
+            [h.reported_pose for h in hs],
+            self.options.pose_radius,
+            math.radians(self.options.beta),
+        )
+
+    def one_place(self) -> bool:
+        """Do all the hypotheses (every one counted is listed) put the robot at one place now, within
+        ``pose_radius`` and ``beta`` of the best by the poses they report (``one_place``)?"""
+        return self.n_hypotheses <= len(self.hypotheses) and one_place(*self._storeys_poses())
+
+    def places(self) -> list[int]:
+        """Indices of the listed hypotheses, one per place (``distinct_places``)."""
+        return distinct_places(*self._storeys_poses())
 
 
 # --- inputs ----------------------------------------------------------------------------------------

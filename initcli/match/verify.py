@@ -18,7 +18,6 @@ from bimtools.site.load import Site, StoreyModel
 from initcli.core.classes import ClassMap
 from initcli.core.detection_filter import Sighting
 from initcli.core.geometry import Pose2D
-from initcli.core.hypotheses import distinct_places
 from initcli.core.particle_filter import LikelihoodField
 from initcli.core.verification import (
     CameraView,
@@ -273,13 +272,7 @@ def track_favoured_in_report(
     hs = report.hypotheses
     if report.odom_pose is None or report.n_hypotheses > len(hs) or params.track_m <= 0:
         return None
-    places = distinct_places(
-        [h.storey for h in hs],
-        [h.reported_pose for h in hs],
-        report.options.pose_radius,
-        math.radians(report.options.beta),
-    )
-    candidates = [(i, checks[i]) for i in places]
+    candidates = [(i, checks[i]) for i in report.places()]
     if any(check is None or check.track_fit is None for _, check in candidates):
         return None
     path = PathEvidence.of_log(log)

@@ -40,7 +40,6 @@ from initcli.core.classes import ClassMap
 from initcli.core.confinement import ConfinementWatch
 from initcli.core.frontier import LocalMap
 from initcli.core.geometry import Pose2D, wrap_angle
-from initcli.core.hypotheses import distinct_places, one_place
 from initcli.core.verification import (
     CameraView,
     Verification,
@@ -326,7 +325,7 @@ class Session:
         report = self._match(frame.t)
         self.hypotheses = report.n_hypotheses
         self.storeys_left = sorted({h.storey for h in report.hypotheses})
-        unique = report.n_hypotheses == 1 or self._one_place(report)
+        unique = report.n_hypotheses == 1 or report.one_place()
         claim = report if unique else self._lidar_unique(frame, report)
         if claim is not None:
             verified, aligned, rivals = self._verified(frame, claim)
@@ -354,17 +353,6 @@ class Session:
             self._set_state(frame.t, "explore", why=report.verdict)
         return False
 
-    def _one_place(self, report: MatchReport) -> bool:
-        """Do all the hypotheses put the robot at one place now (``one_place``, by the poses they
-        report)? The best is then checked as a unique match."""
-        hs = report.hypotheses
-        return report.n_hypotheses <= len(hs) and one_place(
-            [h.storey for h in hs],
-            [h.reported_pose for h in hs],
-            self.options.pose_radius,
-            math.radians(self.options.beta),
-        )
-
     def _lidar_unique(self, frame: SensorFrame, report: MatchReport) -> MatchReport | None:
         """Several hypotheses, one of which the lidar along the path plainly favours (beyond the
         paper; ``track_favoured`` over one hypothesis per place, each verified: the favoured one
@@ -377,16 +365,10 @@ class Session:
         c = self.checks
         if not c.enabled or c.track_m <= 0 or report.n_hypotheses > len(hs) or len(hs) > TRACK_HYPOTHESES:
             return None
-        places = distinct_places(
-            [h.storey for h in hs],
-            [h.reported_pose for h in hs],
-            self.options.pose_radius,
-            math.radians(self.options.beta),
-        )
         # one per place: the same place cannot outrank itself
         places_checked = [
             (hs[i], self._verify(hs[i].storey, hs[i].reported_pose * frame.odom.inverse(), rival=True))
-            for i in places
+            for i in report.places()
         ]
         if sum(check.passed for _, check in places_checked) < 2:
             return None

@@ -25,6 +25,23 @@ def block_a(tmp_path_factory: pytest.TempPathFactory) -> tuple[SessionConfig, Si
     return config, prepare_site(config, tmp_path_factory.mktemp("block_a"))
 
 
+def _construction(name: str, tmp_path_factory: pytest.TempPathFactory) -> tuple[SessionConfig, Site]:
+    config = load_config(SAMPLES / f"{name}.site.yaml", reality="construction")
+    return config, prepare_site(config, tmp_path_factory.mktemp(name))
+
+
+@pytest.fixture(scope="module")
+def ntu_construction(tmp_path_factory: pytest.TempPathFactory) -> tuple[SessionConfig, Site]:
+    """ntu_hallway under the construction profile, its site prepared once for the module."""
+    return _construction("ntu_hallway", tmp_path_factory)
+
+
+@pytest.fixture(scope="module")
+def block_b_construction(tmp_path_factory: pytest.TempPathFactory) -> tuple[SessionConfig, Site]:
+    """block_b under the construction profile, its site prepared once for the module."""
+    return _construction("block_b", tmp_path_factory)
+
+
 def with_sim(config: SessionConfig, **as_built: float) -> SessionConfig:
     sim = dataclasses.replace(config.sim, as_built=dataclasses.replace(config.sim.as_built, **as_built))
     return dataclasses.replace(config, sim=sim)
@@ -74,13 +91,12 @@ def test_a_poster_seen_as_a_door_right_beside_a_real_door(block_a) -> None:
     assert_never_wrong(result)
 
 
-def test_a_claim_with_rivals_sends_the_robot_where_they_disagree(tmp_path_factory) -> None:
+def test_a_claim_with_rivals_sends_the_robot_where_they_disagree(ntu_construction) -> None:
     """ntu_hallway under construction, seed 26 (a start where it happens): a unique match that needed
     an outlier has rivals once more outliers are allowed; instead of wall following on, the session
     validates the claim and its rivals (§3.3.4's active exploration), and never claims a wrong pose."""
-    config = load_config(SAMPLES / "ntu_hallway.site.yaml", reality="construction")
+    config, site = ntu_construction
     config = with_active_exploration(config, True)
-    site = prepare_site(config, tmp_path_factory.mktemp("ntu"))
     built = sim_session(config, site, 26)
     result = built.session.run()
     assert_never_wrong(result)
@@ -96,28 +112,26 @@ def test_a_claim_with_rivals_sends_the_robot_where_they_disagree(tmp_path_factor
     assert all(states[i + 1]["state"] == "active" for i in validated)
 
 
-def test_a_turned_lobby_is_not_claimed_when_doors_are_far_off_their_place(tmp_path_factory) -> None:
+def test_a_turned_lobby_is_not_claimed_when_doors_are_far_off_their_place(ntu_construction) -> None:
     """ntu_hallway under construction with doors built sigma 0.6 m off their place (twice the
     profile's), seed 16: five features fit the point-symmetric lift lobby turned 177 degrees within
     Eq. 8's tolerance while the true place, 0.66 m and 9 degrees from where the match puts it, falls
     outside it. A claim must stay unique with alpha 1.5 times wider, its rivals' scans may move them
     twice as far: the session fails honestly instead of claiming the turned lobby."""
-    config = load_config(SAMPLES / "ntu_hallway.site.yaml", reality="construction")
-    site = prepare_site(config, tmp_path_factory.mktemp("ntu_shifted"))
+    config, site = ntu_construction
     built = sim_session(with_sim(config, door_shift=0.6), site, 16)
     assert_never_wrong(built.session.run())
 
 
-def test_a_rival_that_passed_the_checks_is_still_looked_for_after_more_features(tmp_path_factory) -> None:
+def test_a_rival_that_passed_the_checks_is_still_looked_for_after_more_features(ntu_construction) -> None:
     """ntu_hallway under construction without active exploration, seed 97: a claim on 6 features is
     held back by the true place as a rival that passes the checks; one feature later the claim has 7
     matched features, so alpha is no longer widened for its rival search, and the true place (doors
     built off their place) drops out of it. The claim, 10 m along the periodic corridor, would pass
     every check. Claims within 10 m of one held back by credible rivals get the wide rival search:
     the session fails honestly instead."""
-    config = load_config(SAMPLES / "ntu_hallway.site.yaml", reality="construction")
+    config, site = ntu_construction
     config = with_active_exploration(config, False)
-    site = prepare_site(config, tmp_path_factory.mktemp("ntu_doubted"))
     built = sim_session(config, site, 97)
     result = built.session.run()
     assert_never_wrong(result)
@@ -135,47 +149,46 @@ def _notes(session) -> list[str]:
     return [str(r.data.get("why", "")) for r in session.perception.log.records if isinstance(r, State)]
 
 
-def test_rivals_a_corridor_bay_off_are_outranked_by_the_scans_along_the_path(tmp_path_factory) -> None:
-    """ntu_hallway under construction, seed 29: from 9 features on, a unique match that needed an
-    outlier has dozens of rivals one corridor bay or more along the periodic corridors, each with one
-    outlier more and passing every recent check (the last 8 m of scans fit them as well). The scans
-    of the path back to where the robot came round the corridor's end fit only the claim: the
-    session claims the right place. Without the lidar along the path the rivals keep it out for the
-    whole 150 m."""
-    config = load_config(SAMPLES / "ntu_hallway.site.yaml", reality="construction")
-    site = prepare_site(config, tmp_path_factory.mktemp("ntu_track"))
-    built = sim_session(config, site, 29)
+@pytest.mark.parametrize(
+    ("sample", "seed", "note", "failure"),
+    [
+        pytest.param("ntu", 29, "or by the lidar along the path", "without a unique match", id="rivals"),
+        pytest.param(
+            "block_b", 56, "the lidar along the path favours hypothesis", "hypotheses", id="several"
+        ),
+    ],
+)
+def test_the_scans_along_the_path_decide_what_the_recent_scans_cannot(
+    request: pytest.FixtureRequest, sample: str, seed: int, note: str, failure: str
+) -> None:
+    """Two starts under construction that only the lidar along the path decides; without it (the
+    session as it was) each drives 150 m and fails.
+
+    - ``rivals``, ntu_hallway seed 29: from 9 features on, a unique match that needed an outlier has
+      dozens of rivals one corridor bay or more along the periodic corridors, each with one outlier
+      more and passing every recent check (the last 8 m of scans fit them as well). The scans of the
+      path back to where the robot came round the corridor's end fit only the claim, which outranks
+      them: the session claims the right place.
+    - ``several``, block_b seed 56: after 96 s, 11 hypotheses, 5 of which pass the recent checks; the
+      scans along the path fit every window of one of them and plainly not the others. It is checked
+      as a unique match (rival search included) and claimed, right.
+    """
+    config, site = request.getfixturevalue(f"{sample}_construction")
+    built = sim_session(config, site, seed)
     result = built.session.run()
     assert result.success, result.reason
     assert_never_wrong(result)
-    assert any("or by the lidar along the path" in n for n in _notes(built.session))
-    alone = sim_session(without_track(config), site, 29).session.run()
-    assert not alone.success and "without a unique match" in alone.reason
+    assert any(note in n for n in _notes(built.session))
+    alone = sim_session(without_track(config), site, seed).session.run()
+    assert not alone.success and failure in alone.reason
 
 
-def test_one_of_several_hypotheses_is_claimed_when_only_its_path_scans_fit(tmp_path_factory) -> None:
-    """block_b under construction, seed 56: after 96 s, 11 hypotheses, 5 of which pass the recent
-    checks; the scans along the path fit every window of one of them and plainly not the others. It
-    is checked as a unique match (rival search included) and claimed, right. Without the lidar along
-    the path the session ends after 150 m with several hypotheses left."""
-    config = load_config(SAMPLES / "block_b.site.yaml", reality="construction")
-    site = prepare_site(config, tmp_path_factory.mktemp("block_b_track"))
-    built = sim_session(config, site, 56)
-    result = built.session.run()
-    assert result.success, result.reason
-    assert_never_wrong(result)
-    assert any("the lidar along the path favours hypothesis" in n for n in _notes(built.session))
-    alone = sim_session(without_track(config), site, 56).session.run()
-    assert not alone.success and "hypotheses" in alone.reason
-
-
-def test_hypotheses_left_undecided_are_judged_again_as_the_path_goes_on(tmp_path_factory) -> None:
+def test_hypotheses_left_undecided_are_judged_again_as_the_path_goes_on(ntu_construction) -> None:
     """ntu_hallway under construction, seed 97: after the 14th feature two hypotheses are left and
     the scans of the path cannot yet tell them apart; no feature follows for 30 m. Matched and judged
     again every 10 m of travel, the pair is decided once the path has come past a corridor end: the
     right one is claimed on the same 14 features."""
-    config = load_config(SAMPLES / "ntu_hallway.site.yaml", reality="construction")
-    site = prepare_site(config, tmp_path_factory.mktemp("ntu_again"))
+    config, site = ntu_construction
     built = sim_session(config, site, 97)
     result = built.session.run()
     assert result.success, result.reason
@@ -187,15 +200,14 @@ def test_hypotheses_left_undecided_are_judged_again_as_the_path_goes_on(tmp_path
 
 
 def test_a_true_place_failing_the_recent_checks_keeps_a_turned_place_from_being_favoured(
-    tmp_path_factory,
+    block_b_construction,
 ) -> None:
     """block_b under construction with hoardings twice the profile's, seed 5: after 90 s without a
     new feature four hypotheses are left; the true place is found 1.5 m off its pose and fails the
     recent scan fit (0.53), the place turned 179 degrees 7 m away fits the scans along the path
     best of those that pass. Judged only against those that pass, the turned place was claimed. The
     true place, its newest window searched wide, keeps it out: the session claims right, later."""
-    config = load_config(SAMPLES / "block_b.site.yaml", reality="construction")
-    site = prepare_site(config, tmp_path_factory.mktemp("block_b_h2"))
+    config, site = block_b_construction
     result = sim_session(with_sim(config, hoarding=2.0), site, 5).session.run()
     assert_never_wrong(result)
     assert result.success, result.reason
