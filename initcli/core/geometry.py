@@ -110,8 +110,11 @@ def poses_to_array(poses: list[Pose2D]) -> np.ndarray:
 
 
 def transform_poses(transform: Pose2D, poses: np.ndarray) -> np.ndarray:
-    """Apply a rigid transform to an (N, 3) array of poses (x, y, yaw)."""
+    """Apply a rigid transform to an (N, 3) array of poses (x, y, yaw): ``transform * pose`` for
+    each, the same float64 arithmetic as :meth:`Pose2D.compose`."""
     poses = np.asarray(poses, dtype=float).reshape(-1, 3)
-    xy = transform.apply(poses[:, :2])
-    yaw = wrap_angle(poses[:, 2] + transform.yaw)
-    return np.column_stack([xy, np.asarray(yaw).reshape(-1)])
+    c, s = math.cos(transform.yaw), math.sin(transform.yaw)
+    x, y = poses[:, 0], poses[:, 1]
+    return np.column_stack(
+        [transform.x + c * x - s * y, transform.y + s * x + c * y, wrap_angle(transform.yaw + poses[:, 2])]
+    )

@@ -62,16 +62,31 @@ class LikelihoodField:
         # The field with a border of max_distance: a point off the map reads the border (its cell
         # indices clipped into it), which spares masking every lookup.
         self._padded = np.pad(self.distance, 1, constant_values=np.float32(max_distance))
+        self._near: dict[float, np.ndarray] = {}
 
     def lookup(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """The distance field at world points (max_distance off the map)."""
-        res = self.grid.resolution
-        col = np.floor((x - self.grid.origin[0]) / res).astype(np.int64)
-        row = self.rows - np.floor((y - self.grid.origin[1]) / res).astype(np.int64)  # padded row
-        np.clip(row, 0, self.rows + 1, out=row)
+        return self._padded[self.padded_row(y), self.padded_col(x)]
+
+    def padded_col(self, x: np.ndarray) -> np.ndarray:
+        """The column of the padded field holding each world ``x`` (the border off the map)."""
+        col = np.floor((x - self.grid.origin[0]) / self.grid.resolution).astype(np.int64)
         col += 1
-        np.clip(col, 0, self.cols + 1, out=col)
-        return self._padded[row, col]
+        np.maximum(col, 0, out=col)  # np.clip on integers costs more than the two bounds
+        return np.minimum(col, self.cols + 1, out=col)
+
+    def padded_row(self, y: np.ndarray) -> np.ndarray:
+        """The row of the padded field holding each world ``y`` (the border off the map)."""
+        row = self.rows - np.floor((y - self.grid.origin[1]) / self.grid.resolution).astype(np.int64)
+        np.maximum(row, 0, out=row)
+        return np.minimum(row, self.rows + 1, out=row)
+
+    def near_walls(self, tolerance: float) -> np.ndarray:
+        """The padded field's cells within ``tolerance`` (m) of a wall, as a flat boolean array
+        (index ``row * (cols + 2) + col``); kept per tolerance."""
+        if tolerance not in self._near:
+            self._near[tolerance] = (self._padded < tolerance).ravel()
+        return self._near[tolerance]
 
 
 def sample_motion(

@@ -27,6 +27,7 @@ Everything here is pure numpy on arrays; the session and ``bim-init match`` gath
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
@@ -35,7 +36,7 @@ import cv2
 import numpy as np
 
 from bimtools.site.records import FREE, OccupancyGrid
-from initcli.core.geometry import Pose2D
+from initcli.core.geometry import Pose2D, poses_to_array, transform_poses
 from initcli.core.particle_filter import LikelihoodField
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.core.visibility import CameraModel, FeatureArrays, visible
@@ -139,15 +140,16 @@ def frames_in_view(
     feature_xy: np.ndarray,
     feature_normals: np.ndarray,
     feature_heights: np.ndarray,
-    robot_poses: list[Pose2D],
+    robot_poses: list[Pose2D] | np.ndarray,
     view: CameraView,
     walls: np.ndarray,
     params: VerificationParams,
 ) -> np.ndarray:
-    """Per BIM feature (F,), the number of ``robot_poses`` (BIM frame) whose image shows it (the
-    camera model of :mod:`initcli.core.visibility` with the prediction's tighter limits)."""
+    """Per BIM feature (F,), the number of ``robot_poses`` (BIM frame; Pose2D or (P, 3) rows) whose
+    image shows it (the camera model of :mod:`initcli.core.visibility` with the prediction's
+    tighter limits)."""
     xy = np.asarray(feature_xy, dtype=float).reshape(-1, 2)
-    if len(xy) == 0 or not robot_poses:
+    if len(xy) == 0 or len(robot_poses) == 0:
         return np.zeros(len(xy), dtype=int)
     model = CameraModel(
         view.camera,
@@ -163,7 +165,11 @@ def frames_in_view(
         np.asarray(feature_heights, dtype=float),
         (),
     )
-    poses = np.array([p.as_tuple() for p in robot_poses], dtype=float)
+    poses = (
+        np.asarray(robot_poses, dtype=float).reshape(-1, 3)
+        if isinstance(robot_poses, np.ndarray)
+        else np.array([p.as_tuple() for p in robot_poses], dtype=float)
+    )
     return np.asarray(
         visible(poses, features, np.asarray(walls, dtype=float).reshape(-1, 4), model).sum(axis=0)
     )
@@ -277,18 +283,17 @@ def outranks(
 @dataclass(frozen=True)
 class BeamEnds:
     """Every valid beam end point of some scans once, in the frame of the robot at the last scan,
-    with the scan each belongs to: what :func:`best_scan_alignment` moves around."""
+    scan after scan: what :func:`best_scan_alignment` moves around."""
 
     last: Pose2D  # odom pose of the last scan
-    xy: np.ndarray  # (N, 2) end points in the last scan's robot frame
-    per_scan: np.ndarray  # (N, scans) 1 where the point belongs to the scan
+    xy: np.ndarray  # (N, 2) end points in the last scan's robot frame, the scans' points one after another
     valid: np.ndarray  # (scans,) valid beams per scan
 
     @staticmethod
     def of(scans: list[ScanSample]) -> BeamEnds:
         last = scans[-1].odom
         back = last.inverse()
-        points, owner = [], []
+        points = []
         valid = np.zeros(len(scans))
         for i, scan in enumerate(scans):
             ok = np.isfinite(scan.ranges) & (scan.ranges < scan.range_max) & (scan.ranges > 0.05)
@@ -296,12 +301,49 @@ class BeamEnds:
             heading = rel.yaw + scan.angles[ok]
             r = scan.ranges[ok]
             points.append(np.column_stack([rel.x + r * np.cos(heading), rel.y + r * np.sin(heading)]))
-            owner.append(np.full(len(r), i))
             valid[i] = len(r)
-        xy, scan_of = np.vstack(points), np.concatenate(owner)
-        per_scan = np.zeros((len(xy), len(scans)))
-        per_scan[np.arange(len(xy)), scan_of] = 1.0
-        return BeamEnds(last, xy, per_scan, valid)
+        return BeamEnds(last, np.vstack(points), valid)
+
+    @functools.cached_property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each scan's first and one-past-last point index in ``xy``."""
+        stop = np.cumsum(self.valid.astype(np.intp))
+        return stop - self.valid.astype(np.intp), stop
+
+
+@dataclass(frozen=True)
+class AlignmentMoves:
+    """The moves :func:`best_scan_alignment` tries, nearest first (so that a tie keeps the smallest
+    correction): each a turn and an x and y shift, and their indices in ``turns`` and ``shifts``."""
+
+    turns: np.ndarray
+    shifts: np.ndarray
+    moves: tuple[tuple[float, float, float], ...]  # (turn, dx, dy)
+    turn: np.ndarray  # (moves,) index into turns
+    ix: np.ndarray  # (moves,) index of dx into shifts
+    iy: np.ndarray
+
+
+@functools.lru_cache(maxsize=64)
+def _alignment_moves(
+    search_xy: float, search_yaw: float, shift_steps: int, turn_step_deg: float
+) -> AlignmentMoves:
+    shifts = np.linspace(-search_xy, search_xy, shift_steps) if search_xy > 0 else np.zeros(1)
+    steps = 2 * math.ceil(search_yaw / math.radians(turn_step_deg)) + 1
+    turns = np.linspace(-search_yaw, search_yaw, steps) if search_yaw > 0 else np.zeros(1)
+    grid = [
+        ((float(a), float(dx), float(dy)), (t, i, j))
+        for t, a in enumerate(turns)
+        for i, dx in enumerate(shifts)
+        for j, dy in enumerate(shifts)
+    ]
+    grid.sort(
+        key=lambda m: (
+            abs(m[0][0]) / max(search_yaw, 1e-9) + math.hypot(m[0][1], m[0][2]) / max(search_xy, 1e-9)
+        )
+    )
+    at = np.array([index for _, index in grid], dtype=np.intp).reshape(-1, 3)
+    return AlignmentMoves(turns, shifts, tuple(move for move, _ in grid), at[:, 0], at[:, 1], at[:, 2])
 
 
 def best_scan_alignment(
@@ -323,32 +365,30 @@ def best_scan_alignment(
         return None
     ends = scans if isinstance(scans, BeamEnds) else BeamEnds.of(scans)
     here = transform * ends.last
-    shifts = np.linspace(-search_xy, search_xy, shift_steps) if search_xy > 0 else np.zeros(1)
-    steps = 2 * math.ceil(search_yaw / math.radians(turn_step_deg)) + 1
-    turns = np.linspace(-search_yaw, search_yaw, steps) if search_yaw > 0 else np.zeros(1)
-    # Nearest moves first, so that a tie keeps the smallest correction.
-    moves = sorted(
-        ((float(a), float(dx), float(dy)) for a in turns for dx in shifts for dy in shifts),
-        key=lambda m: (abs(m[0]) / max(search_yaw, 1e-9)) + math.hypot(m[1], m[2]) / max(search_xy, 1e-9),
-    )
-    # A move turns and shifts the end points all together; all the shifts of one turn are looked
-    # up at once.
-    xy, valid = ends.xy, ends.valid[None, :]
-    fits = np.empty(len(moves))
-    by_turn: dict[float, list[int]] = {}
-    for k, move in enumerate(moves):
-        by_turn.setdefault(move[0], []).append(k)
-    for dyaw, ks in by_turn.items():
-        c, s_ = math.cos(here.yaw + dyaw), math.sin(here.yaw + dyaw)
-        ex, ey = here.x + c * xy[:, 0] - s_ * xy[:, 1], here.y + s_ * xy[:, 0] + c * xy[:, 1]
-        shift_x = np.array([moves[k][1] for k in ks])[:, None]
-        shift_y = np.array([moves[k][2] for k in ks])[:, None]
-        on_wall = field_.lookup(ex[None, :] + shift_x, ey[None, :] + shift_y) < tolerance  # (shifts, points)
-        hits = on_wall.astype(float) @ ends.per_scan  # (shifts, scans)
-        share = np.divide(hits, valid, out=np.zeros_like(hits), where=valid > 0)
-        fits[ks] = share.mean(axis=1)
+    moves = _alignment_moves(search_xy, search_yaw, shift_steps, turn_step_deg)
+    # A move turns and shifts the end points all together. A shift moves every point's column (x)
+    # or row (y) alone: each is found once per turn and shift value, and all the moves' cells are
+    # looked up at once in the boolean map of cells within the tolerance.
+    xy = ends.xy
+    c = np.array([math.cos(here.yaw + a) for a in moves.turns])[:, None]
+    s_ = np.array([math.sin(here.yaw + a) for a in moves.turns])[:, None]
+    ex, ey = here.x + c * xy[:, 0] - s_ * xy[:, 1], here.y + s_ * xy[:, 0] + c * xy[:, 1]  # (turns, points)
+    cols = field_.padded_col(ex[:, None, :] + moves.shifts[None, :, None])  # (turns, shift values, points)
+    rows = field_.padded_row(ey[:, None, :] + moves.shifts[None, :, None]) * (field_.cols + 2)
+    on_wall = field_.near_walls(tolerance)[rows[moves.turn, moves.iy] + cols[moves.turn, moves.ix]]
+    # Beams on walls per move and scan: a running count along each move's points, read at the scans'
+    # bounds (whole numbers: exact; a matrix product would do the same through a threaded BLAS).
+    running = np.zeros((len(on_wall), len(xy) + 1), dtype=np.int32)
+    np.cumsum(on_wall, axis=1, dtype=np.int32, out=running[:, 1:])
+    first, stop = ends.bounds
+    # (moves, scans), C order as the mean below must sum each row as it always has (column indexing
+    # returns Fortran order: its row sums round differently)
+    hits = np.ascontiguousarray(running[:, stop] - running[:, first], dtype=float)
+    valid = ends.valid[None, :]
+    share = np.divide(hits, valid, out=np.zeros_like(hits), where=valid > 0)
+    fits = share.mean(axis=1)
     k = int(np.argmax(fits))  # the first of the best: the nearest move
-    dyaw, dx, dy = moves[k]
+    dyaw, dx, dy = moves.moves[k]
     return float(fits[k]), Pose2D(here.x + dx, here.y + dy, here.yaw + dyaw) * ends.last.inverse()
 
 
@@ -510,7 +550,7 @@ def verify_hypothesis(
 
     ``camera_odom_poses`` are the robot's odom poses at the images the detector ran on;
     ``sighting_odom_xy`` every detection's odom point (Eq. 1-2), confirmed or not."""
-    poses = [transform * p for p in camera_odom_poses]
+    poses = transform_poses(transform, poses_to_array(camera_odom_poses))
     in_view = frames_in_view(feature_xy, feature_normals, feature_heights, poses, view, walls, params)
     predicted = in_view >= params.min_frames
     s_bim = transform.apply(np.asarray(sighting_odom_xy, dtype=float).reshape(-1, 2))

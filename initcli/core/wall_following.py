@@ -64,9 +64,7 @@ def wall_follow(scan: ScanView, side: int, p: WallFollowParams) -> tuple[float, 
         return 0.0, -side * p.max_turn
     phi = side * scan.angles  # bearing measured toward the followed side
     mask = (phi > -math.radians(20)) & (phi < math.radians(170))
-    speed = p.speed * float(
-        np.clip((front - p.front_stop) / max(p.slow_down - p.front_stop, 1e-6), 0.25, 1.0)
-    )
+    speed = p.speed * min(max((front - p.front_stop) / max(p.slow_down - p.front_stop, 1e-6), 0.25), 1.0)
     if not mask.any() or scan.ranges[mask].min() > p.lost:
         # Lost the wall (outer corner or open space): arc toward the followed side.
         return speed * 0.6, side * min(p.max_turn, 0.6 * speed / max(p.distance, 0.1))
@@ -79,7 +77,7 @@ def wall_follow(scan: ScanView, side: int, p: WallFollowParams) -> tuple[float, 
     if across.any():
         distance = min(distance, 0.5 * (d + float(scan.ranges[across].min())))
     turn = p.k_angle * (bearing - math.pi / 2) + p.k_distance * (d - distance)
-    w = float(np.clip(side * turn, -p.max_turn, p.max_turn))
+    w = min(max(side * turn, -p.max_turn), p.max_turn)
     v = speed * max(0.3, 1.0 - abs(w) / (2 * p.max_turn))
     return v, w
 

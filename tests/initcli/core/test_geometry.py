@@ -39,3 +39,14 @@ def test_wrap_angle_of_a_scalar_is_the_arrays_arithmetic() -> None:
     assert [wrap_angle(float(a)) for a in angles] == wrapped.tolist()
     assert all(-math.pi <= w < math.pi for w in wrapped)
     assert isinstance(wrap_angle(np.float64(4.0)), float) and isinstance(wrap_angle(7), float)
+
+
+def test_transform_poses_is_compose_for_each_pose_bit_for_bit() -> None:
+    """The array form gives exactly the float64 results of ``transform * pose`` (the verification's
+    predicted views depend on it)."""
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        transform = Pose2D(*rng.uniform(-30.0, 30.0, 2), float(rng.uniform(-4.0, 4.0)))
+        poses = np.column_stack([rng.uniform(-50.0, 50.0, (100, 2)), rng.uniform(-4.0, 4.0, 100)])
+        expected = np.array([(transform * Pose2D(*p)).as_tuple() for p in poses])
+        assert np.array_equal(transform_poses(transform, poses), expected)

@@ -106,3 +106,28 @@ def test_open_obstacle_rings_are_closed() -> None:
     assert len(world.static) == 4
     # the closing edge (0, 1) -> (0, 0) is there: a ray from the left hits x = 0
     assert world.raycast(np.array([-1.0, 0.5]), np.array([0.0]), 5.0, 0.0)[0] == pytest.approx(1.0)
+
+
+def _segment_distance(p: np.ndarray, seg: np.ndarray) -> float:
+    """Distance from ``p`` to one segment, written out on its own."""
+    a, b = seg[0:2], seg[2:4]
+    ab = b - a
+    s = 0.0 if float(ab @ ab) == 0.0 else min(max(float((p - a) @ ab) / float(ab @ ab), 0.0), 1.0)
+    return float(np.hypot(*(a + s * ab - p)))
+
+
+def test_clearance_is_the_distance_to_the_nearest_wall_or_worker() -> None:
+    """The clearance (the collision check) against the plain definition: the nearest of the walls
+    near the point and the workers' outlines at that time, capped at the radius."""
+    rng = np.random.default_rng(3)
+    walls = [
+        Obstacle("", f"w{i}", "IfcWall", tuple(map(tuple, c + rng.uniform(-0.3, 0.3, (4, 2)))))
+        for i, c in enumerate(rng.uniform(-6.0, 6.0, (25, 1, 2)))
+    ]
+    world = SimWorld.from_obstacles(walls)
+    world.workers.append(Worker(np.array([-2.0, 0.0]), np.array([2.0, 0.0]), phase=1.3))
+    for x, y in rng.uniform(-6.0, 6.0, (200, 2)):
+        p = np.array([x, y])
+        segments = world.segments_at(x, y, 1.5, 0.0)
+        expected = min([1.5, *(_segment_distance(p, s) for s in segments)])
+        assert world.clearance(x, y, 0.0, 1.5) == pytest.approx(expected, abs=1e-12)
