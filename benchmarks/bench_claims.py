@@ -55,7 +55,7 @@ def _stats(session: Any, frame: Any, hypothesis: Any, rival: bool) -> dict[str, 
     yaw = abs(math.degrees(math.atan2(math.sin(pose.yaw - truth.yaw), math.cos(pose.yaw - truth.yaw))))
     return {
         "outliers": hypothesis.n_outliers,
-        "inliers": sum(m is not None for m in hypothesis.matches),
+        "inliers": hypothesis.n_inliers,
         "right": math.hypot(pose.x - truth.x, pose.y - truth.y) < WRONG_M and yaw < WRONG_DEG,
         "error": (round(math.hypot(pose.x - truth.x, pose.y - truth.y), 2), round(yaw, 1)),
         "passed": check.passed,
@@ -85,7 +85,7 @@ def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, 
 
     def spy_credible(
         self: Any, frame: Any, check: Any, track: Any, claim: Any, rivals: int, found: list
-    ) -> tuple:  # noqa: E501
+    ) -> tuple:
         seen["rivals"], seen["found"] = rivals, list(found)
         return credible(self, frame, check, track, claim, rivals, found)
 

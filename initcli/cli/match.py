@@ -30,18 +30,17 @@ def _verifications(log_path: Path, site_path: Path, report: MatchReport, skip_ba
     from bimtools.site.load import load_site
     from initcli.io.detection_log import read_log
     from initcli.match.pipeline import site_class_map
-    from initcli.match.verify import track_favoured_in_report, verify_report
+    from initcli.match.verify import verify_and_favour
 
     site = load_site(site_path)
-    log = read_log(log_path, skip_bad=skip_bad)
-    checks = verify_report(log, site, report, site_class_map(site))
-    if report.n_hypotheses > 1:
-        favoured = track_favoured_in_report(log, site, report, checks)
-        if favoured is not None:
-            report.notes.append(
-                f"the lidar along the path favours hypothesis {report.hypotheses[favoured].rank}: a session"
-                " checks it as a unique match"
-            )
+    checks, favoured = verify_and_favour(
+        read_log(log_path, skip_bad=skip_bad), site, report, site_class_map(site)
+    )
+    if favoured is not None:
+        report.notes.append(
+            f"the lidar along the path favours hypothesis {report.hypotheses[favoured].rank}: a session"
+            " checks it as a unique match"
+        )
     return checks
 
 

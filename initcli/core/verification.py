@@ -121,6 +121,11 @@ class Verification:
     aligned: Pose2D | None = None  # the hypothesis (odom -> BIM) moved to where the scans fit best
     track_fit: tuple[float, ...] | None = None  # the lidar along the path, newest window first
 
+    def aligned_or(self, transform: Pose2D) -> Pose2D:
+        """Where the recent scans fit best (``aligned``), or ``transform`` when they were not fitted:
+        where the lidar along the path starts."""
+        return self.aligned if self.aligned is not None else transform
+
     def as_dict(self) -> dict[str, object]:
         doc: dict[str, object] = {
             "predicted": self.predicted,
@@ -140,16 +145,17 @@ def frames_in_view(
     feature_xy: np.ndarray,
     feature_normals: np.ndarray,
     feature_heights: np.ndarray,
-    robot_poses: list[Pose2D] | np.ndarray,
+    robot_poses: np.ndarray,
     view: CameraView,
     walls: np.ndarray,
     params: VerificationParams,
 ) -> np.ndarray:
-    """Per BIM feature (F,), the number of ``robot_poses`` (BIM frame; Pose2D or (P, 3) rows) whose
+    """Per BIM feature (F,), the number of ``robot_poses`` ((P, 3) rows x, y, yaw, BIM frame) whose
     image shows it (the camera model of :mod:`initcli.core.visibility` with the prediction's
     tighter limits)."""
     xy = np.asarray(feature_xy, dtype=float).reshape(-1, 2)
-    if len(xy) == 0 or len(robot_poses) == 0:
+    poses = np.asarray(robot_poses, dtype=float).reshape(-1, 3)
+    if len(xy) == 0 or len(poses) == 0:
         return np.zeros(len(xy), dtype=int)
     model = CameraModel(
         view.camera,
@@ -164,11 +170,6 @@ def frames_in_view(
         np.asarray(feature_normals, dtype=float).reshape(-1, 2),
         np.asarray(feature_heights, dtype=float),
         (),
-    )
-    poses = (
-        np.asarray(robot_poses, dtype=float).reshape(-1, 3)
-        if isinstance(robot_poses, np.ndarray)
-        else np.array([p.as_tuple() for p in robot_poses], dtype=float)
     )
     return np.asarray(
         visible(poses, features, np.asarray(walls, dtype=float).reshape(-1, 4), model).sum(axis=0)

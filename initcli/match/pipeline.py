@@ -189,6 +189,11 @@ class Hypothesis:
         """The pose the hypothesis reports: rectified (Eq. 17) when the storey has walls."""
         return self.rectified_pose or self.pose
 
+    @property
+    def n_inliers(self) -> int:
+        """Confirmed features matched to a BIM feature (not declared outliers)."""
+        return sum(m is not None for m in self.matches)
+
 
 @dataclass
 class MatchReport:

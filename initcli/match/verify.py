@@ -32,7 +32,7 @@ from initcli.core.verification import (
     verify_hypothesis,
 )
 from initcli.io.detection_log import DetectionLog, Detections, Odom, Scan
-from initcli.match.pipeline import MatchReport, site_class_map
+from initcli.match.pipeline import MatchReport
 from initcli.match.sightings import sightings_from_log
 
 SCAN_BEAM_STEP = 3  # every third beam is enough for a fit share
@@ -190,7 +190,7 @@ def verify_transform(
         and params.min_path_free - PATH_RETRY <= free < params.min_path_free
         and params.track_m > 0
     ):
-        along = path_free_along(check.aligned or transform, storey, path, params)
+        along = path_free_along(check.aligned_or(transform), storey, path, params)
         if along is not None and along > free:
             check = judge(replace(check, path_free=along), params)
     return check
@@ -257,48 +257,6 @@ def track_transform(
     return np.zeros(0) if track is None else track.fits
 
 
-def track_favoured_in_report(
-    log: DetectionLog,
-    site: Site,
-    report: MatchReport,
-    checks: Sequence[Verification | None],
-    params: VerificationParams | None = None,
-) -> int | None:
-    """The index of the hypothesis of ``report`` that the lidar along the path plainly favours, one
-    hypothesis per place, judged by ``checks`` (:func:`verify_report`'s, with their ``track_fit``)
-    as a session decides it (:func:`initcli.core.verification.track_favoured`); None when none
-    stands out or the report lists fewer hypotheses than it counts."""
-    params = params or VerificationParams()
-    hs = report.hypotheses
-    if report.odom_pose is None or report.n_hypotheses > len(hs) or params.track_m <= 0:
-        return None
-    candidates = [(i, checks[i]) for i in report.places()]
-    if any(check is None or check.track_fit is None for _, check in candidates):
-        return None
-    path = PathEvidence.of_log(log)
-    cmap = site_class_map(site)
-    storeys: dict[str, StoreyEvidence] = {}
-
-    def wide(k: int) -> np.ndarray:
-        i, check = candidates[k]
-        assert check is not None
-        h = hs[i]
-        if h.storey not in storeys:
-            storeys[h.storey] = StoreyEvidence.of(site.storeys[h.storey], cmap)
-        start = check.aligned if check.aligned is not None else h.reported_pose * report.odom_pose.inverse()
-        return track_transform(start, storeys[h.storey], path, params, wide=True)
-
-    found = track_favoured(
-        [check is not None and check.passed for _, check in candidates],
-        [hs[i].n_outliers for i, _ in candidates],
-        [sum(m is not None for m in hs[i].matches) for i, _ in candidates],
-        [np.asarray(check.track_fit if check is not None else ()) for _, check in candidates],
-        wide,
-        params,
-    )
-    return None if found is None else candidates[found][0]
-
-
 def verify_report(
     log: DetectionLog,
     site: Site,
@@ -309,9 +267,34 @@ def verify_report(
     """The checks for each hypothesis of ``report`` (a ``bim-init match`` of ``log``), at the log's
     last odom pose, with the lidar along the path (``track_fit``); None for a hypothesis whose
     storey has no map or features."""
+    return _check_report(log, site, report, cmap, params or VerificationParams())[0]
+
+
+def verify_and_favour(
+    log: DetectionLog,
+    site: Site,
+    report: MatchReport,
+    cmap: ClassMap,
+    params: VerificationParams | None = None,
+) -> tuple[list[Verification | None], int | None]:
+    """:func:`verify_report`'s checks and, with several hypotheses, the index of the one the lidar
+    along the path plainly favours, one hypothesis per place, as a session decides it
+    (:func:`initcli.core.verification.track_favoured`); None when none stands out or the report
+    lists fewer hypotheses than it counts."""
     params = params or VerificationParams()
+    checks, path, storeys = _check_report(log, site, report, cmap, params)
+    if path is None or report.n_hypotheses < 2:
+        return checks, None
+    return checks, _favoured(report, checks, path, storeys, params)
+
+
+def _check_report(
+    log: DetectionLog, site: Site, report: MatchReport, cmap: ClassMap, params: VerificationParams
+) -> tuple[list[Verification | None], PathEvidence | None, dict[str, StoreyEvidence]]:
+    """The checks of :func:`verify_report`, and the log's path and the storeys' evidence they were
+    made from (no path without an odom pose)."""
     if report.odom_pose is None:
-        return [None for _ in report.hypotheses]
+        return [None for _ in report.hypotheses], None, {}
     path = PathEvidence.of_log(log)
     sightings = sightings_from_log(log, cmap, report.options.edge_margin)
     view = CameraView(log.meta.camera, log.meta.camera_pose, report.options.min_depth)
@@ -326,7 +309,40 @@ def verify_report(
             storeys[h.storey] = StoreyEvidence.of(model, cmap)
         transform = h.reported_pose * report.odom_pose.inverse()
         check = verify_transform(transform, storeys[h.storey], path, sightings, view, params)
-        start = check.aligned if check.aligned is not None else transform
-        track = track_transform(start, storeys[h.storey], path, params)
+        track = track_transform(check.aligned_or(transform), storeys[h.storey], path, params)
         out.append(replace(check, track_fit=tuple(float(f) for f in track)) if len(track) else check)
-    return out
+    return out, path, storeys
+
+
+def _favoured(
+    report: MatchReport,
+    checks: Sequence[Verification | None],
+    path: PathEvidence,
+    storeys: dict[str, StoreyEvidence],
+    params: VerificationParams,
+) -> int | None:
+    """The favoured hypothesis of :func:`verify_and_favour`, from the evidence the checks used."""
+    hs = report.hypotheses
+    odom = report.odom_pose
+    if odom is None or report.n_hypotheses > len(hs) or params.track_m <= 0:
+        return None
+    candidates = [(i, checks[i]) for i in report.places()]
+    if any(check is None or check.track_fit is None for _, check in candidates):
+        return None
+
+    def wide(k: int) -> np.ndarray:
+        i, check = candidates[k]
+        assert check is not None  # a checked hypothesis: its storey's evidence is in storeys
+        h = hs[i]
+        start = check.aligned_or(h.reported_pose * odom.inverse())
+        return track_transform(start, storeys[h.storey], path, params, wide=True)
+
+    found = track_favoured(
+        [check is not None and check.passed for _, check in candidates],
+        [hs[i].n_outliers for i, _ in candidates],
+        [hs[i].n_inliers for i, _ in candidates],
+        [np.asarray(check.track_fit if check is not None else ()) for _, check in candidates],
+        wide,
+        params,
+    )
+    return None if found is None else candidates[found][0]

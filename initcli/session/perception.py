@@ -98,7 +98,7 @@ class Perception:
         found = [
             h
             for h in wider.hypotheses
-            if sum(m is not None for m in h.matches) >= self.options.min_inliers
+            if h.n_inliers >= self.options.min_inliers
             and (
                 h.pose.distance_to(hypothesis.pose) > apart_m or h.pose.yaw_error(hypothesis.pose) > apart_rad
             )

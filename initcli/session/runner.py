@@ -376,7 +376,7 @@ class Session:
         favoured = track_favoured(
             [check.passed for _, check in places_checked],
             [h.n_outliers for h, _ in places_checked],
-            [sum(m is not None for m in h.matches) for h, _ in places_checked],
+            [h.n_inliers for h, _ in places_checked],
             tracks,
             lambda k: self._track(frame, places_checked[k][0], places_checked[k][1], wide=True),
             c,
@@ -402,7 +402,7 @@ class Session:
     ) -> np.ndarray:
         """The lidar's fit along the path for hypothesis ``h`` (``check`` its verification now),
         from where its recent scans fit best (``wide``: searched as a place about to be outranked)."""
-        start = check.aligned if check.aligned is not None else h.reported_pose * frame.odom.inverse()
+        start = check.aligned_or(h.reported_pose * frame.odom.inverse())
         return track_transform(start, self._evidence_of(h.storey), self.perception.path, self.checks, wide)
 
     def _evidence_of(self, storey: str) -> StoreyEvidence:
@@ -454,7 +454,7 @@ class Session:
         if not self.checks.enabled:
             return True, None, []
         hypothesis = report.hypotheses[0]
-        inliers = sum(m is not None for m in hypothesis.matches)
+        inliers = hypothesis.n_inliers
         if inliers < self.checks.min_claim_inliers:
             self._note(
                 frame.t, f"unique match on {inliers} features: waiting for {self.checks.min_claim_inliers}"

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from bimtools.site.records import FREE, OCCUPIED, OccupancyGrid
-from initcli.core.geometry import Pose2D
+from initcli.core.geometry import Pose2D, poses_to_array
 from initcli.core.particle_filter import LikelihoodField
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.core.verification import (
@@ -43,7 +43,7 @@ def path_along(x0: float, x1: float, yaw: float = math.radians(60.0)) -> list[Po
 
 
 def test_frames_in_view_counts_only_features_in_front_and_in_range() -> None:
-    poses = path_along(0.0, 10.0)
+    poses = poses_to_array(path_along(0.0, 10.0))
     counts = frames_in_view(DOOR_XY, DOOR_N, DOOR_H, poses, VIEW, WALLS, VerificationParams())
     assert counts[0] > 0 and counts[1] > 0  # doors at x = 2 and 6 pass the camera
     assert counts[-1] == 0  # the door at x = 38 is far ahead
@@ -52,7 +52,7 @@ def test_frames_in_view_counts_only_features_in_front_and_in_range() -> None:
 
 
 def test_a_wall_between_camera_and_feature_hides_it() -> None:
-    poses = path_along(0.0, 4.0)
+    poses = poses_to_array(path_along(0.0, 4.0))
     clear = frames_in_view(DOOR_XY[:1], DOOR_N[:1], DOOR_H[:1], poses, VIEW, WALLS, VerificationParams())
     screen = np.vstack([WALLS, [[0.0, 1.5, 5.0, 1.5]]])  # a hoarding along the corridor
     hidden = frames_in_view(DOOR_XY[:1], DOOR_N[:1], DOOR_H[:1], poses, VIEW, screen, VerificationParams())
