@@ -1,5 +1,6 @@
 """Rays against line segments: the one ray/segment intersection routine of the simulated lidar, the
-renderer and the simulated cameras, the lidar's fast cast built on it, and a line-of-sight test.
+renderer and the simulated cameras, the lidar's fast cast built on it, a line-of-sight test, and
+the distance from a point to the nearest segment (the simulated robot's collision check).
 
 The maths. A ray ``p + t d`` (``t >= 0``) and a segment ``a + u e`` (``0 <= u <= 1``, ``e = b - a``)
 meet where ``p + t d = a + u e``. With the 2-D cross product ``x × y = x_x y_y - x_y y_x`` and
@@ -19,6 +20,8 @@ import math
 
 import numpy as np
 
+from initcli.core.jit import compiled
+
 EPS = 1e-9  # |d × e| below this: parallel, no hit (the lidar's rule)
 TWO_PI = 2.0 * math.pi
 
@@ -32,7 +35,6 @@ SIGHT_END = 1e-6  # crossings this close (as a fraction of the way) to the eye o
 ANGLE_MARGIN = 1e-7  # rad added on both sides of a segment's angular interval
 NEAR_SEGMENT = 1e-3  # m: segments closer than this to the origin are tested against every ray
 RANGE_MARGIN = 1e-3  # m: segments farther than max_range + this cannot shorten a ray
-BRUTE_FORCE_PAIRS = 4096  # at most this many ray x segment pairs, the brute force is quicker
 EVEN_TOLERANCE = 1e-9  # rad: how far angles may stray from a0 + k * inc for the index arithmetic
 
 
@@ -112,40 +114,6 @@ def _full_turn(angles: np.ndarray) -> tuple[float, float] | None:
     return a0, inc
 
 
-def _ray_runs(
-    angles: np.ndarray, start: np.ndarray, stop: np.ndarray, even: tuple[float, float] | None = None
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Rays whose angle lies in ``[start, stop]`` (mod 2 pi; each interval shorter than a turn).
-
-    Returns ``(rays, first, last)``: the rays of interval ``i`` are ``rays[first[i]:last[i]]``, and
-    ``rays[len(angles):2 * len(angles)]`` is every ray once.
-    """
-    n = len(angles)
-    even = even if even is not None else _full_turn(angles)
-    if even is not None:
-        # Rays at a0 + k * inc: index arithmetic, over the ray indices written out twice.
-        a0, inc = even
-        first = np.ceil(np.mod(start - a0, TWO_PI) / inc).astype(np.intp)
-        last = first + (np.floor((stop - start) / inc).astype(np.intp) + 2)
-        # ``last`` above may overshoot by one or two rays: harmless (pairs are tested exactly) but
-        # kept below a turn so that no ray appears twice for one segment.
-        np.minimum(last, first + n, out=last)
-        rays = np.arange(2 * n) % n
-        return rays, first, last
-    # Any angles: sorted in [0, 2 pi), written out one turn below, at and above, so that every
-    # interval (start in [-margin, 2 pi]) is one contiguous run.
-    phi = np.mod(angles, TWO_PI)
-    order = np.argsort(phi, kind="stable")
-    sorted_phi = phi[order]
-    ext_phi = np.concatenate([sorted_phi - TWO_PI, sorted_phi, sorted_phi + TWO_PI])
-    width = stop - start
-    start = np.mod(start, TWO_PI)
-    stop = start + width
-    first = np.searchsorted(ext_phi, start, side="left")
-    last = np.searchsorted(ext_phi, stop, side="right")
-    return np.concatenate([order, order, order]), first, last
-
-
 def cast_rays(
     origin: np.ndarray,
     angles: np.ndarray,
@@ -159,11 +127,11 @@ def cast_rays(
     Segments that cannot come nearer than ``max_range`` are dropped; each remaining segment is
     tested only against the rays inside the angular interval it subtends from ``origin`` (found by
     index arithmetic for a full turn of evenly spaced rays, the lidar case, else by binary search
-    in the sorted ray angles). The tests themselves are :func:`ray_segment_params` on the brute
-    force's operands, pair by pair, so the ranges are identical to :func:`ray_segment_distances`'s.
-    ``directions`` may pass precomputed :func:`segment_directions` of ``segments``; ``even`` the
-    (first angle, increment) of rays the caller knows cover one turn evenly (a lidar), which
-    spares checking it.
+    in the sorted ray angles). The tests themselves are :func:`ray_segment_params`' expressions on
+    the brute force's operands, pair by pair, so the ranges are identical to
+    :func:`ray_segment_distances`'s. ``directions`` may pass precomputed :func:`segment_directions`
+    of ``segments``; ``even`` the (first angle, increment) of rays the caller knows cover one turn
+    evenly (a lidar), which spares checking it.
     """
     origin = np.asarray(origin, dtype=float)
     angles = np.asarray(angles, dtype=float)
@@ -171,9 +139,12 @@ def cast_rays(
     ranges = np.full(n_rays, max_range, dtype=float)
     if len(segments) == 0 or n_rays == 0:
         return ranges
-    if n_rays * len(segments) <= BRUTE_FORCE_PAIRS:
-        return ray_segment_distances(origin, angles, segments, max_range)
     e = segment_directions(segments) if directions is None else directions
+    even = even if even is not None else _full_turn(angles)
+    if even is not None:
+        cos, sin = np.cos(angles), np.sin(angles)
+        _cast_turn(ranges, cos, sin, origin, segments, e, even[0], even[1], float(max_range))
+        return ranges
     ao = segments[:, 0:2] - origin  # exactly the brute force's ``a - origin``
     ex, ey = e[:, 0], e[:, 1]
     aox, aoy = ao[:, 0], ao[:, 1]
@@ -193,23 +164,129 @@ def cast_rays(
     sweep = np.arctan2(aox * by - aoy * bx, aox * bx + aoy * by)
     start = np.arctan2(aoy, aox) + np.minimum(sweep, 0.0) - ANGLE_MARGIN
     stop = start + (np.abs(sweep) + 2.0 * ANGLE_MARGIN)
-    rays, first, last = _ray_runs(angles, start, stop, even)
+    rays, first, last = _sorted_ray_runs(angles, start, stop)
     # A segment passing (almost) through the origin subtends about half a turn either way it is
     # computed: test it against every ray, once each.
     near = dist2 < NEAR_SEGMENT * NEAR_SEGMENT
     if near.any():
         first[near], last[near] = n_rays, 2 * n_rays
-    counts = np.maximum(last - first, 0)
-    ends = np.cumsum(counts)
-    total = int(ends[-1])
-    if total == 0:
-        return ranges
-    seg = np.repeat(np.arange(len(ids)), counts)
-    ray = rays[np.arange(total) + (first - (ends - counts))[seg]]
-    # The brute force's test, pair by pair.
-    denom, t, u = ray_segment_params(
-        aox[seg], aoy[seg], np.cos(angles)[ray], np.sin(angles)[ray], ex[seg], ey[seg]
-    )
-    hit = (np.abs(denom) > EPS) & (t > 0) & (u >= 0) & (u <= 1)
-    np.minimum.at(ranges, ray[hit], t[hit])
+    _nearest_hits(ranges, rays, first, last, np.cos(angles), np.sin(angles), aox, aoy, ex, ey)
     return ranges
+
+
+@compiled
+def _cast_turn(
+    ranges: np.ndarray,
+    cos: np.ndarray,
+    sin: np.ndarray,
+    origin: np.ndarray,
+    segments: np.ndarray,
+    e: np.ndarray,
+    a0: float,
+    inc: float,
+    max_range: float,
+) -> None:
+    """:func:`cast_rays` for rays at ``a0 + k * inc`` covering one turn, one segment at a time:
+    the segment's nearest point (out of range: skipped), the rays of its angular interval by index
+    arithmetic, then the brute force's test on each of them."""
+    n = len(ranges)
+    reach2 = (max_range + RANGE_MARGIN) ** 2
+    ox, oy = origin[0], origin[1]
+    for i in range(len(segments)):
+        sx, sy = e[i, 0], e[i, 1]
+        ee = sx * sx + sy * sy
+        if not ee > 0:
+            continue  # zero length: never hit
+        wx, wy = segments[i, 0] - ox, segments[i, 1] - oy  # exactly the brute force's ``a - origin``
+        s = min(max(-(wx * sx + wy * sy) / ee, 0.0), 1.0)
+        dist2 = (wx + s * sx) ** 2 + (wy + s * sy) ** 2
+        if not dist2 <= reach2:
+            continue
+        if dist2 < NEAR_SEGMENT * NEAR_SEGMENT:
+            first, last = 0, n  # through the origin: every ray, once
+        else:
+            bx, by = wx + sx, wy + sy
+            sweep = math.atan2(wx * by - wy * bx, wx * bx + wy * by)
+            start = math.atan2(wy, wx) + min(sweep, 0.0) - ANGLE_MARGIN
+            stop = start + (abs(sweep) + 2.0 * ANGLE_MARGIN)
+            first = int(math.ceil(((start - a0) % TWO_PI) / inc))
+            last = min(first + int(math.floor((stop - start) / inc)) + 2, first + n)
+        cross = wx * sy - wy * sx
+        for k in range(first, last):
+            r = k % n
+            dx, dy = cos[r], sin[r]
+            denom = dx * sy - dy * sx
+            if abs(denom) > EPS:
+                t = cross / denom
+                u = (wx * dy - wy * dx) / denom
+                if t > 0 and u >= 0 and u <= 1 and t < ranges[r]:
+                    ranges[r] = t
+
+
+def _sorted_ray_runs(
+    angles: np.ndarray, start: np.ndarray, stop: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rays whose angle lies in ``[start, stop]`` (mod 2 pi; each interval shorter than a turn),
+    for any angles: sorted in [0, 2 pi) and written out one turn below, at and above, so that
+    every interval (start in [-margin, 2 pi]) is one contiguous run.
+
+    Returns ``(rays, first, last)``: the rays of interval ``i`` are ``rays[first[i]:last[i]]``, and
+    ``rays[len(angles):2 * len(angles)]`` is every ray once.
+    """
+    phi = np.mod(angles, TWO_PI)
+    order = np.argsort(phi, kind="stable")
+    sorted_phi = phi[order]
+    ext_phi = np.concatenate([sorted_phi - TWO_PI, sorted_phi, sorted_phi + TWO_PI])
+    width = stop - start
+    start = np.mod(start, TWO_PI)
+    stop = start + width
+    first = np.searchsorted(ext_phi, start, side="left")
+    last = np.searchsorted(ext_phi, stop, side="right")
+    return np.concatenate([order, order, order]), first, last
+
+
+@compiled
+def _nearest_hits(
+    ranges: np.ndarray,
+    rays: np.ndarray,
+    first: np.ndarray,
+    last: np.ndarray,
+    cos: np.ndarray,
+    sin: np.ndarray,
+    wx: np.ndarray,
+    wy: np.ndarray,
+    ex: np.ndarray,
+    ey: np.ndarray,
+) -> None:
+    """``ranges[r] = min(ranges[r], t)`` over the hits of segment ``i`` with the rays
+    ``rays[first[i]:last[i]]``: :func:`ray_segment_params` and :func:`ray_segment_distances`' hit
+    test, the same float64 expressions in the same order, one pair at a time."""
+    for i in range(len(first)):
+        for k in range(first[i], last[i]):
+            r = rays[k]
+            dx, dy = cos[r], sin[r]
+            denom = dx * ey[i] - dy * ex[i]
+            if abs(denom) > EPS:
+                t = (wx[i] * ey[i] - wy[i] * ex[i]) / denom
+                u = (wx[i] * dy - wy[i] * dx) / denom
+                if t > 0 and u >= 0 and u <= 1 and t < ranges[r]:
+                    ranges[r] = t
+
+
+SHORTEST_SEGMENT2 = 1e-9  # m^2: squared lengths below this count as this in nearest_segment_distance
+
+
+@compiled
+def nearest_segment_distance(x: float, y: float, segments: np.ndarray, cap: float) -> float:
+    """Distance from ``(x, y)`` to the nearest of the (S, 4) segments, ``cap`` if none is nearer:
+    the point's projection ``s = (p - a) . e / |e|^2`` clipped to [0, 1], then ``|a + s e - p|``."""
+    best = cap
+    for i in range(len(segments)):
+        ax, ay = segments[i, 0], segments[i, 1]
+        ex, ey = segments[i, 2] - ax, segments[i, 3] - ay
+        s = ((x - ax) * ex + (y - ay) * ey) / max(ex * ex + ey * ey, SHORTEST_SEGMENT2)
+        s = min(max(s, 0.0), 1.0)
+        d = math.hypot(ax + ex * s - x, ay + ey * s - y)
+        if d < best:
+            best = d
+    return best

@@ -10,9 +10,8 @@ from functools import cached_property
 import numpy as np
 
 from bimtools.site.records import Obstacle
-from initcli.core.raycast import cast_rays, ray_segment_params, segment_directions
+from initcli.core.raycast import cast_rays, nearest_segment_distance, ray_segment_params, segment_directions
 
-EPS = 1e-9  # m^2: shortest squared segment length in clearance()
 NEAR_CACHE_SIZE = 256  # blocks of grid cells whose segment indices SimWorld keeps
 
 
@@ -52,9 +51,6 @@ def box_edges(cx: float, cy: float, half_w: float, half_h: float, yaw: float = 0
     rot = corners @ np.array([[c, s], [-s, c]]) + [cx, cy]
     return polygon_edges(rot)
 
-
-# The edges of box_edges(0, 0, 1, 1): a worker's outline is its centre + radius * these.
-SQUARE_EDGES = np.array([[-1, -1, 1, -1], [1, -1, 1, 1], [1, 1, -1, 1], [-1, 1, -1, -1]], dtype=float)
 
 GLASS_ECHO_DEG = 10.0  # a lidar beam returns from glass only this close to the pane's normal
 
@@ -96,11 +92,23 @@ class Worker:
     def length(self) -> float:
         return float(np.hypot(*(self.b - self.a))) or 1.0  # a and b never move
 
-    def position(self, t: float = 0.0) -> np.ndarray:
+    @cached_property
+    def _line(self) -> tuple[float, float, float, float]:
+        """a and b - a as floats (a and b never move)."""
+        ax, ay = float(self.a[0]), float(self.a[1])
+        return ax, ay, float(self.b[0]) - ax, float(self.b[1]) - ay
+
+    def xy(self) -> tuple[float, float]:
+        """Where the worker is: ``a + (b - a) * (s / length)`` at the loop's phase, as floats."""
         length = self.length
         s = self.phase % (2 * length)
         s = s if s <= length else 2 * length - s
-        return self.a + (self.b - self.a) * (s / length)
+        ax, ay, dx, dy = self._line
+        f = s / length
+        return ax + dx * f, ay + dy * f
+
+    def position(self, t: float = 0.0) -> np.ndarray:
+        return np.array(self.xy())
 
     def advance(self, dt: float, robot_xy: np.ndarray) -> None:
         if self.giving_way > 0:
@@ -209,10 +217,14 @@ class SimWorld:
         key = tuple((w.phase, w.radius) for w in self.workers)  # a worker's a and b never change
         if self._worker_cache is not None and self._worker_cache[0] == key:
             return self._worker_cache[1]
-        centres = np.array([w.position(t) for w in self.workers], dtype=float)  # (W, 2)
-        r = np.array([w.radius for w in self.workers], dtype=float)[:, None, None]
-        # box_edges' edges, unrotated: (W, 4 edges, from xy + to xy)
-        edges = (np.tile(centres, 2)[:, None, :] + r * SQUARE_EDGES[None, :, :]).reshape(-1, 4)
+        rows: list[tuple[float, float, float, float]] = []
+        for w in self.workers:
+            x, y = w.xy()
+            r = w.radius
+            x0, y0, x1, y1 = x - r, y - r, x + r, y + r
+            # box_edges(x, y, r, r)'s four edges, unrotated
+            rows += [(x0, y0, x1, y0), (x1, y0, x1, y1), (x1, y1, x0, y1), (x0, y1, x0, y0)]
+        edges = np.array(rows)
         self._worker_cache = (key, edges)
         return edges
 
@@ -238,23 +250,17 @@ class SimWorld:
         origin = np.asarray(origin, dtype=float)
         block = self._near(float(origin[0]), float(origin[1]), max_range)
         static, directions, glazed = block.opaque, block.directions, block.glazed
-        moving = self.worker_segments(t)
-        if len(moving):
-            static = np.concatenate([static, moving])
-            directions = np.concatenate([directions, segment_directions(moving)])
         ranges = cast_rays(origin, angles, static, max_range, directions, even)
+        moving = self.worker_segments(t)
+        if len(moving):  # the nearer of the walls and the workers, ray by ray
+            np.minimum(ranges, cast_rays(origin, angles, moving, max_range, even=even), out=ranges)
         if len(glazed):
             ranges = np.minimum(ranges, glass_echoes(origin, angles, glazed, max_range))
         return ranges
 
     def clearance(self, x: float, y: float, t: float, radius: float = 1.0) -> float:
-        """Distance from a point to the nearest segment (capped at ``radius``)."""
-        segments = self.segments_at(x, y, radius, t)
-        if len(segments) == 0:
-            return radius
-        p = np.array([x, y])
-        a, b = segments[:, 0:2], segments[:, 2:4]
-        ab = b - a
-        s = np.clip(np.einsum("ij,ij->i", p - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), EPS), 0, 1)
-        closest = a + ab * s[:, None]
-        return float(min(radius, np.hypot(*(closest - p).T).min()))
+        """Distance from a point to the nearest segment or worker (capped at ``radius``)."""
+        x, y, radius = float(x), float(y), float(radius)
+        static = nearest_segment_distance(x, y, self.segments_near(x, y, radius), radius)
+        moving = self.worker_segments(t)
+        return nearest_segment_distance(x, y, moving, static) if len(moving) else static
