@@ -109,6 +109,12 @@ class OccupancyGrid:
     def shape(self) -> tuple[int, int]:
         return self.cells.shape  # type: ignore[return-value]
 
+    def content_key(self) -> tuple[object, ...]:
+        """What the map holds, as a hashable key (cells by a hash of their bytes): two grids with
+        the same key are the same map, whichever objects hold them."""
+        cells = np.ascontiguousarray(self.cells)
+        return (cells.shape, cells.dtype.str, hash(cells.tobytes()), self.resolution, tuple(self.origin))
+
     def world_to_cell(self, x: np.ndarray | float, y: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
         """World coordinates -> (row, col) integer indices (may be out of bounds)."""
         col = np.floor((np.asarray(x) - self.origin[0]) / self.resolution).astype(int)

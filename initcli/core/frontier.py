@@ -20,6 +20,7 @@ import numpy as np
 from bimtools.site.records import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
 from initcli.core.geometry import Pose2D
 from initcli.core.grid_planner import PlanningGrid
+from initcli.core.jit import compiled
 
 L_FREE = -0.4  # log-odds added to a cell a beam passed through
 L_OCC = 0.85  # log-odds added at a beam's end point
@@ -57,6 +58,8 @@ class LocalMap:
         n = int(round(2 * self.params.half_size / self.params.resolution))
         self.logodds = np.zeros((n, n), dtype=np.float32)
         self.origin = (-self.params.half_size, -self.params.half_size)
+        self._stamp = np.zeros(n * n, dtype=np.int64)  # 2k - 1 / 2k: end point / passed in scan k
+        self._scans = 0
         self.failed: list[np.ndarray] = []
 
     def cells_of(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -66,7 +69,9 @@ class LocalMap:
         return r, c
 
     def integrate(self, pose: Pose2D, angles: np.ndarray, ranges: np.ndarray, range_max: float) -> None:
-        """Write one scan taken at ``pose`` (odom frame) into the grid."""
+        """Write one scan taken at ``pose`` (odom frame) into the grid: each cell a beam passed
+        through (samples every 0.7 cells up to the beam's end or ``integrate_range``) gains
+        ``L_FREE`` once, each cell holding an end point ``L_OCC`` once (and no ``L_FREE``)."""
         p = self.params
         ranges = np.asarray(ranges, dtype=float)
         ok = np.isfinite(ranges) & (ranges > 0.05)
@@ -74,29 +79,14 @@ class LocalMap:
             return
         a = pose.yaw + np.asarray(angles, dtype=float)[ok]
         r = ranges[ok]
-        hit = r < min(range_max, p.integrate_range)
-        reach = np.minimum(r, p.integrate_range)
-        steps = np.arange(0.0, p.integrate_range, p.resolution * 0.7)
-        # Free samples along each beam up to its end point (the end point's cell is occupied).
-        t = steps[None, :]
-        along = t < reach[:, None]
-        xs = pose.x + t * np.cos(a)[:, None]
-        ys = pose.y + t * np.sin(a)[:, None]
-        free_xy = np.column_stack([xs[along], ys[along]])
-        n = self.logodds.shape[0]
-        flat = self.logodds.reshape(-1)
-        rr, cc = self.cells_of(free_xy)
-        inside = (rr >= 0) & (rr < n) & (cc >= 0) & (cc < n)
-        free_cells = np.unique(rr[inside] * n + cc[inside])
-        end_cells = np.zeros(0, dtype=np.int64)
-        if hit.any():
-            end = np.column_stack([pose.x + r[hit] * np.cos(a[hit]), pose.y + r[hit] * np.sin(a[hit])])
-            er, ec = self.cells_of(end)
-            inside = (er >= 0) & (er < n) & (ec >= 0) & (ec < n)
-            end_cells = np.unique(er[inside] * n + ec[inside])
-            flat[end_cells] = np.minimum(flat[end_cells] + L_OCC, L_CLAMP)
-        free_cells = np.setdiff1d(free_cells, end_cells, assume_unique=True)
-        flat[free_cells] = np.maximum(flat[free_cells] + L_FREE, -L_CLAMP)
+        self._scans += 1
+        _integrate_scan(
+            self.logodds.reshape(-1), self.logodds.shape[0], self._stamp, 2 * self._scans,
+            float(pose.x), float(pose.y), np.cos(a), np.sin(a), r,
+            r < min(range_max, p.integrate_range), np.minimum(r, p.integrate_range),
+            np.arange(0.0, p.integrate_range, p.resolution * 0.7),
+            float(self.origin[0]), float(self.origin[1]), float(p.resolution),
+        )  # fmt: skip
 
     def occupancy(self) -> tuple[OccupancyGrid, tuple[int, int]]:
         """The known part of the grid as a trinary map (cropped to what was seen, 2 m margin), and the
@@ -185,3 +175,43 @@ class LocalMap:
     def give_up(self, target: np.ndarray) -> None:
         """Remember a target that could not be reached (not chosen again)."""
         self.failed.append(np.asarray(target, dtype=float))
+
+
+@compiled
+def _integrate_scan(
+    flat: np.ndarray,
+    n: int,
+    stamp: np.ndarray,
+    mark: int,
+    x: float,
+    y: float,
+    cos: np.ndarray,
+    sin: np.ndarray,
+    ranges: np.ndarray,
+    hit: np.ndarray,
+    reach: np.ndarray,
+    steps: np.ndarray,
+    x0: float,
+    y0: float,
+    resolution: float,
+) -> None:
+    """:meth:`LocalMap.integrate`'s updates of the flat float32 log-odds (row-major, ``n`` x ``n``): the end
+    points of the beams that ``hit`` first (``stamp`` = mark - 1), then the cells at ``steps`` along
+    each beam short of its ``reach`` that hold no end point (``stamp`` = mark), each cell once."""
+    occ, free, clamp = np.float32(L_OCC), np.float32(L_FREE), np.float32(L_CLAMP)
+    for i in range(len(ranges)):
+        if hit[i]:
+            c = int(math.floor((x + ranges[i] * cos[i] - x0) / resolution))
+            r = int(math.floor((y + ranges[i] * sin[i] - y0) / resolution))
+            if 0 <= r < n and 0 <= c < n and stamp[r * n + c] != mark - 1:
+                stamp[r * n + c] = mark - 1
+                flat[r * n + c] = min(flat[r * n + c] + occ, clamp)
+    for i in range(len(ranges)):
+        for j in range(len(steps)):
+            if not steps[j] < reach[i]:
+                break
+            c = int(math.floor((x + steps[j] * cos[i] - x0) / resolution))
+            r = int(math.floor((y + steps[j] * sin[i] - y0) / resolution))
+            if 0 <= r < n and 0 <= c < n and stamp[r * n + c] < mark - 1:
+                stamp[r * n + c] = mark
+                flat[r * n + c] = max(flat[r * n + c] + free, -clamp)

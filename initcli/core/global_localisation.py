@@ -39,12 +39,14 @@ import numpy as np
 
 from bimtools.site.records import FREE, OccupancyGrid
 from initcli.core.geometry import Pose2D, wrap_angle
+from initcli.core.grid_cache import GridCache
 from initcli.core.particle_filter import (
     FilterNoise,
     LaserModel,
     LikelihoodField,
     ParticleFilter,
     beam_log_likelihood,
+    likelihood_field,
     low_variance_indices,
     weighted_pose_stats,
 )
@@ -177,11 +179,21 @@ class PoseHistogram:
         return compact[inverse]
 
 
+_FREE_CELLS: GridCache[np.ndarray] = GridCache()
+
+
 def free_cell_centres(grid: OccupancyGrid) -> np.ndarray:
-    """(N, 2) world centres of the grid's free cells: where global localisation spreads particles."""
-    rows, cols = np.nonzero(grid.cells == FREE)
-    x, y = grid.cell_centre(rows, cols)
-    return np.column_stack([x, y])
+    """(N, 2) world centres of the grid's free cells: where global localisation spreads particles
+    (read-only; built once per map content in this process)."""
+
+    def build() -> np.ndarray:
+        rows, cols = np.nonzero(grid.cells == FREE)
+        x, y = grid.cell_centre(rows, cols)
+        centres = np.column_stack([x, y])
+        centres.flags.writeable = False
+        return centres
+
+    return _FREE_CELLS.get(grid, None, build)
 
 
 class GlobalLocalisation:
@@ -200,7 +212,7 @@ class GlobalLocalisation:
     ):
         self.params = params
         self.rng = rng
-        self.field = field if field is not None else LikelihoodField(grid, params.laser.max_distance)
+        self.field = field if field is not None else likelihood_field(grid, params.laser.max_distance)
         self.histogram = PoseHistogram(grid, params.bin_xy, params.bin_yaw)
         self.filter = ParticleFilter(self.field, params.particles, params.noise, params.laser, rng)
         free = free_cell_centres(grid)

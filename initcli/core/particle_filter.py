@@ -21,6 +21,7 @@ import numpy as np
 
 from bimtools.site.records import OCCUPIED, OccupancyGrid
 from initcli.core.geometry import Pose2D, wrap_angle
+from initcli.core.grid_cache import GridCache
 
 
 @dataclass(frozen=True)
@@ -87,6 +88,15 @@ class LikelihoodField:
         if tolerance not in self._near:
             self._near[tolerance] = (self._padded < tolerance).ravel()
         return self._near[tolerance]
+
+
+_FIELDS: GridCache[LikelihoodField] = GridCache()
+
+
+def likelihood_field(grid: OccupancyGrid, max_distance: float = 2.0) -> LikelihoodField:
+    """The map's :class:`LikelihoodField`, built once per map content and ``max_distance`` in this
+    process (the sessions, fine tuning and AMCL of an evaluation share it)."""
+    return _FIELDS.get(grid, max_distance, lambda: LikelihoodField(grid, max_distance))
 
 
 def sample_motion(

@@ -9,6 +9,7 @@ corner becomes the nearest point and drifts behind), as the paper's random explo
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -29,17 +30,23 @@ class WallFollowParams:
     lost: float = 2.0  # m: no wall point this close on the side -> arc toward it
 
 
+BEAM_CACHE_SIZE = 8  # beam layouts (a lidar's angles) whose directions ScanView keeps
+
+
 @dataclass(frozen=True)
 class ScanView:
-    """Valid beams of a scan in the robot frame."""
+    """Valid beams of a scan in the robot frame (``cos``/``sin`` of the angles when known)."""
 
     angles: np.ndarray
     ranges: np.ndarray
+    cos: np.ndarray | None = None
+    sin: np.ndarray | None = None
 
     @staticmethod
     def of(angles: np.ndarray, ranges: np.ndarray, max_range: float) -> ScanView:
         ok = np.isfinite(ranges) & (ranges > 0.05) & (ranges < max_range - 1e-6)
-        return ScanView(np.asarray(wrap_angle(angles[ok])), ranges[ok])
+        wrapped, cos, sin = _beam_directions(np.asarray(angles, dtype=float))
+        return ScanView(wrapped[ok], ranges[ok], cos[ok], sin[ok])
 
     def sector_min(self, lo: float, hi: float, default: float = math.inf) -> float:
         mask = (self.angles >= lo) & (self.angles <= hi)
@@ -48,13 +55,32 @@ class ScanView:
     @cached_property
     def _xy(self) -> tuple[np.ndarray, np.ndarray]:
         """The beam end points in the robot frame (the wall follower asks for the front twice)."""
-        return self.ranges * np.cos(self.angles), self.ranges * np.sin(self.angles)
+        cos = np.cos(self.angles) if self.cos is None else self.cos
+        sin = np.sin(self.angles) if self.sin is None else self.sin
+        return self.ranges * cos, self.ranges * sin
 
     def front(self, half_width: float = 0.35) -> float:
         """Distance ahead within a corridor of ``half_width`` metres (robot width + margin)."""
         x, y = self._xy
         mask = (x > 0) & (np.abs(y) <= half_width)
         return float(x[mask].min()) if mask.any() else math.inf
+
+
+_BEAMS: OrderedDict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] = OrderedDict()
+
+
+def _beam_directions(angles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The angles wrapped to [-pi, pi) and their cosines and sines, kept per beam layout: a lidar
+    sends the same angles with every scan, and each scan is seen by the wall follower."""
+    key = angles.tobytes()
+    found = _BEAMS.get(key)
+    if found is None:
+        wrapped = np.asarray(wrap_angle(angles), dtype=float)
+        found = (wrapped, np.cos(wrapped), np.sin(wrapped))
+        _BEAMS[key] = found
+        if len(_BEAMS) > BEAM_CACHE_SIZE:
+            _BEAMS.popitem(last=False)
+    return found
 
 
 def wall_follow(scan: ScanView, side: int, p: WallFollowParams) -> tuple[float, float]:

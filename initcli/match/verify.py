@@ -18,7 +18,7 @@ from bimtools.site.load import Site, StoreyModel
 from initcli.core.classes import ClassMap
 from initcli.core.detection_filter import Sighting
 from initcli.core.geometry import Pose2D
-from initcli.core.particle_filter import LikelihoodField
+from initcli.core.particle_filter import LikelihoodField, likelihood_field
 from initcli.core.verification import (
     CameraView,
     FreeSpace,
@@ -71,7 +71,7 @@ class StoreyEvidence:
             np.array([x.height for x in f], dtype=float),
             [cmap.canonical(x.category) for x in f],
             walls,
-            LikelihoodField(storey.grid) if storey.grid is not None else None,
+            likelihood_field(storey.grid) if storey.grid is not None else None,
             FreeSpace(storey.grid, VerificationParams().path_margin) if storey.grid is not None else None,
         )
 

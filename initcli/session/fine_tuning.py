@@ -20,7 +20,7 @@ from initcli.config import FineTuningSection
 from initcli.core.detection_filter import ConfirmedFeature
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.motion import motion_delta
-from initcli.core.particle_filter import FilterNoise, LaserModel, LikelihoodField, ParticleFilter, scan_fit
+from initcli.core.particle_filter import FilterNoise, LaserModel, ParticleFilter, likelihood_field, scan_fit
 from initcli.core.wall_following import ScanView, WallFollowParams, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
 
@@ -129,7 +129,7 @@ class FineTuning:
         """Track from ``frame`` with the filter seeded at ``seed`` and weighted by the matched
         ``landmarks`` (odom, BIM positions); ``transform`` (odom -> BIM) carries the rectified pose."""
         cfg = self.params
-        pf = ParticleFilter(LikelihoodField(self.grid), cfg.particles, FilterNoise(), LaserModel(), self.rng)
+        pf = ParticleFilter(likelihood_field(self.grid), cfg.particles, FilterNoise(), LaserModel(), self.rng)
         pf.seed(seed, cfg.seed_sigma_xy, math.radians(cfg.seed_sigma_yaw))
         odom_xy, bim_xy = landmarks
         pf.weight_by_landmarks(frame.odom, odom_xy[-LANDMARKS:], bim_xy[-LANDMARKS:], LANDMARK_SIGMA)

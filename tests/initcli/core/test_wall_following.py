@@ -61,3 +61,20 @@ def test_passes_a_stack_that_leaves_a_gap_narrower_than_twice_the_wall_distance(
     path = _drive(segments, (0.0, 1.1, 0.0))
     assert path[:, 0].max() > 12.0  # past the stack (x 8-9.2) ...
     assert _clearance(segments, path) > RADIUS  # ... without touching anything
+
+
+def test_scan_view_keeps_each_beam_layouts_directions_and_gives_the_same_front() -> None:
+    """ScanView.of takes the beams' cosines from its per-layout cache: the end points, and so the
+    distance ahead, are those computed from the angles themselves, and a new layout is not served
+    an old one's directions."""
+    rng = np.random.default_rng(5)
+    for offset in (0.0, 0.0, 2 * math.pi, 0.3):  # repeated layouts and new ones
+        angles = BEAMS + offset
+        ranges = rng.uniform(0.3, 6.0, len(BEAMS))
+        ranges[rng.random(len(BEAMS)) < 0.1] = np.inf
+        view = ScanView.of(angles, ranges, 20.0)
+        plain = ScanView(view.angles, view.ranges)  # no cached directions: cos/sin of the angles
+        assert view.cos is not None and view.sin is not None
+        np.testing.assert_array_equal(view.cos, np.cos(view.angles))
+        for half_width in (0.2, 0.35, 1.0):
+            assert view.front(half_width) == plain.front(half_width)
