@@ -135,6 +135,9 @@ class ExplorationSection:
     max_route: float = 0.0  # m: active exploration takes no target farther along the corridors; 0: any
     recovery: bool = True
     initial_look: bool = True  # turn once on the spot before exploring
+    # m of travel without a new feature while following a wall with open space on the other side
+    # (a hall, a car park, an open-plan office) -> turn once on the spot again; 0: never
+    look_every: float = 10.0
 
 
 @dataclass

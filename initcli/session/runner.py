@@ -61,6 +61,7 @@ from initcli.session.result import MatchStep, SessionResult
 __all__ = ["Observer", "Session"]
 
 RECOVERY_TURN = 2 * math.pi  # rad turned in place by the initial look and the recovery behaviour
+OPEN_SIDE_M = 3.0  # m: nothing nearer on the side away from the followed wall: open space (looks)
 LOOP_WINDOW_S = 45.0  # s of path checked for a loop (circling an island of clutter, a chicane)
 LOOP_RADIUS = 2.5  # m: a path that long staying this close to its centre is a loop
 LOOP_LENGTH = 8.0  # m driven in the window (a robot arcing at 0.3 m/s on a 0.7 m radius drives 12 m)
@@ -135,6 +136,8 @@ class Session:
         self.loop_escape_until = -1.0  # s
         self.last_feature_t = 0.0  # s: when the last new feature was confirmed
         self.turned = 0.0  # rad turned since the look or recovery rotation began
+        self.look_from = 0.0  # m of odometry travel at the last look or new feature
+        self.looks = 0  # looks begun (the initial one included)
         self.hypotheses = 0  # of the last match step
         self.decided_at = 0.0  # m of travel at the last match step
         self.storeys_left: list[str] = []  # storeys the last match step's hypotheses lie on
@@ -204,6 +207,7 @@ class Session:
             # Turn once on the spot first: features behind the robot cost no distance (§3.3.4's
             # recovery rotation, done before the first metre).
             self._set_state(frame.t, "look")
+            self.looks += 1
         else:
             self._set_state(frame.t, "explore")
         self.hypotheses, self.storeys_left = 0, []
@@ -251,6 +255,8 @@ class Session:
                 self.escape = None
         elif self._held(frame, scan):
             v, w = 0.0, 0.0
+        elif self._look_again(frame, scan):
+            return 0.0, 0.0
         else:
             v, w = wall_follow(scan, self.side, self.follow)
         if self._looping(frame):
@@ -262,6 +268,24 @@ class Session:
                 self._escape(frame, BugNavigator(toward, BugParams(follow=self.follow)))
             self._note(frame.t, "loop escape")
         return v, w
+
+    def _look_again(self, frame: SensorFrame, scan: ScanView) -> bool:
+        """Turn once on the spot again (beyond the paper)? After ``exploration.look_every`` m
+        without a new feature along a wall with open space on the other side: the camera looks
+        along the followed wall, and in a hall or a car park the features stand on the walls across
+        the open floor, out of its view. Costs time, no distance. In a corridor (the other wall
+        within OPEN_SIDE_M) the camera already sees both walls ahead, and the robot drives on."""
+        every = self.config.exploration.look_every
+        if every <= 0 or self.perception.travel - self.look_from < every:
+            return False
+        lo, hi = sorted((-self.side * math.radians(30.0), -self.side * math.radians(150.0)))
+        if scan.sector_min(lo, hi) < OPEN_SIDE_M:
+            return False
+        self.look_from = self.perception.travel
+        self.turned = 0.0
+        self.looks += 1
+        self._set_state(frame.t, "look", why=f"{every:g} m without a new feature, open space beside")
+        return True
 
     def _active(self, frame: SensorFrame, scan: ScanView | None) -> tuple[float, float]:
         """Active exploration toward the current target; give it up when it brings nothing."""
@@ -282,7 +306,8 @@ class Session:
         """The initial look or the recovery rotation: turn in place, then carry on."""
         if self.turned >= RECOVERY_TURN:
             if self.state == "look":
-                self._set_state(frame.t, "explore", why="initial look done")
+                why = "initial look done" if self.looks == 1 else "look done"
+                self._set_state(frame.t, "explore", why=why)
             elif self.exploration.exhausted:
                 # Targets keep failing (blocked routes, a symmetric layout): wall following
                 # covers new ground until a new feature changes the hypotheses (§3.3.4).
@@ -310,6 +335,7 @@ class Session:
             return False
         confirmed = self.perception.confirmed
         self.last_feature_t = frame.t
+        self.look_from = self.perception.travel
         self.exploration.fruitless = 0
         self.result.features_detected = len(confirmed)
         if len(confirmed) < self.options.min_inliers:

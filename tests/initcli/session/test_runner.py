@@ -20,17 +20,19 @@ from tests.helpers import SAMPLES
 
 
 class BlindDriver:
-    """Unicycle odometry at 10 Hz, no images, an open-space scan (``scan``) or none; the truth is the
-    odometry shifted by (10, 0)."""
+    """Unicycle odometry at 10 Hz, no images, an open-space scan (``scan``), the given ranges (the
+    same at every pose: an endless corridor, say) or none; the truth is the odometry shifted by
+    (10, 0)."""
 
     camera = DEFAULT_CAMERA
     mount = DEFAULT_MOUNT
     control_rate = 10.0
     depth_window = 2
 
-    def __init__(self, scan: bool = False) -> None:
+    def __init__(self, scan: bool | np.ndarray = False) -> None:
         n = 360
-        self.scan = LaserScan(-math.pi, 2 * math.pi / n, 12.0, np.full(n, 12.0)) if scan else None
+        ranges = scan if isinstance(scan, np.ndarray) else np.full(n, 12.0)
+        self.scan = LaserScan(-math.pi, 2 * math.pi / n, 12.0, ranges) if scan is not False else None
         self.t, self.pose, self._distance = 0.0, Pose2D(0.0, 0.0, 0.0), 0.0
         self.commands: list[tuple[float, float]] = []
 
@@ -61,7 +63,7 @@ def config():
 
 
 def _session(
-    config, tmp_path: Path | None = None, observer=None, scan: bool = False, **limits: float
+    config, tmp_path: Path | None = None, observer=None, scan: bool | np.ndarray = False, **limits: float
 ) -> tuple[Session, BlindDriver]:
     config = dataclasses.replace(config, limits=dataclasses.replace(config.limits, **limits))
     driver = BlindDriver(scan)
@@ -162,3 +164,32 @@ def test_the_initial_look_turns_all_the_way_round_before_exploring(tmp_path: Pat
     assert [s for _, s in result.states[:2]] == ["look", "coarse"]
     assert result.distance_total_m < 2.0
     assert result.pose is not None and result.pose.distance_to(result.truth_pose) < 0.5
+
+
+def corridor_ranges(left: float, right: float, n: int = 360, max_range: float = 12.0) -> np.ndarray:
+    """A scan between two endless walls along the robot's heading, ``left`` and ``right`` m away."""
+    angles = -math.pi + 2 * math.pi / n * np.arange(n)
+    sin = np.sin(angles)
+    with np.errstate(divide="ignore"):
+        to_wall = np.where(sin > 0, left / sin, np.where(sin < 0, right / -sin, np.inf))
+    return np.minimum(to_wall, max_range)
+
+
+@pytest.mark.parametrize(
+    ("right", "look_every", "looks"),
+    [(None, 10.0, 2), (1.3, 10.0, 0), (None, 0.0, 0)],  # open beside the wall, a corridor, off
+)
+def test_looks_again_along_a_wall_with_open_space_beside_it(config, right, look_every, looks) -> None:
+    """Following the left wall with nothing within 3 m on the right (a hall, a car park) and no
+    feature: every ``exploration.look_every`` m of travel the robot turns once on the spot, then
+    follows the wall on; in a corridor, or with looks off, it drives on."""
+    exploration = dataclasses.replace(config.exploration, initial_look=False, look_every=look_every)
+    ranges = corridor_ranges(0.7, 50.0 if right is None else right)
+    session, driver = _session(
+        dataclasses.replace(config, exploration=exploration), scan=ranges, max_distance=25.0, max_time=600.0
+    )
+    result = session.run()
+    assert result.reason.startswith("moved 25 m without a unique match")
+    assert [s for _, s in result.states].count("look") == looks
+    turned_on_the_spot = sum(abs(w) * 0.1 for v, w in driver.commands if v == 0.0)
+    assert turned_on_the_spot == pytest.approx(looks * 2 * math.pi, abs=0.2)
