@@ -2,7 +2,9 @@
 
 The baselines drive exactly as ``bim-init run`` explores (§4.3: "using the same wall following
 based motion planning algorithm"), including its initial turn on the spot
-(``exploration.initial_look``), so distances compare like for like.
+(``exploration.initial_look``) and its looks on open floors (``exploration.look_every`` m of travel
+along a wall with open space beside it; with no features to count, every that many metres), so
+distances compare like for like.
 
 Their drive does not depend on what they sense (the commands come from the scans alone), so
 several baselines started from the same simulated setup drive the same path:
@@ -22,7 +24,7 @@ from typing import Protocol
 from initcli.baselines.outcome import LocalisationOutcome
 from initcli.config import SessionConfig, followed_side, turn_in_place_speed, wall_follow_params
 from initcli.core.geometry import wrap_angle
-from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
+from initcli.core.wall_following import MovingObstacleWait, ScanView, open_beside, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
 
 
@@ -36,6 +38,9 @@ class WallFollowingExplorer:
         self.look_speed = turn_in_place_speed(config)
         self.to_turn = 2 * math.pi if config.exploration.initial_look else 0.0
         self.last_yaw: float | None = None
+        self.look_every = config.exploration.look_every
+        self.since_look = 0.0  # m of odometry travel since the last look
+        self.last_xy: tuple[float, float] | None = None
 
     def command(self, frame: SensorFrame) -> tuple[float, float]:
         if self.to_turn > 0:
@@ -44,11 +49,18 @@ class WallFollowingExplorer:
             self.last_yaw = frame.odom.yaw
             if self.to_turn > 0:
                 return 0.0, self.look_speed
+        xy = (frame.odom.x, frame.odom.y)
+        if self.last_xy is not None:
+            self.since_look += math.hypot(xy[0] - self.last_xy[0], xy[1] - self.last_xy[1])
+        self.last_xy = xy
         if frame.scan is None:
             return 0.0, 0.0
         scan = ScanView.of(frame.scan.angles, frame.scan.ranges, frame.scan.range_max)
         if self.waiting.hold(frame.t, scan.front(), self.params.front_stop):
             return 0.0, 0.0
+        if 0 < self.look_every <= self.since_look and open_beside(scan, self.side):
+            self.since_look, self.to_turn, self.last_yaw = 0.0, 2 * math.pi, frame.odom.yaw
+            return 0.0, self.look_speed
         return wall_follow(scan, self.side, self.params)
 
 

@@ -31,6 +31,7 @@ class WallFollowParams:
 
 
 BEAM_CACHE_SIZE = 8  # beam layouts (a lidar's angles) whose directions ScanView keeps
+OPEN_SIDE_M = 3.0  # m: nothing nearer on the side away from the followed wall is open space
 
 
 @dataclass(frozen=True)
@@ -81,6 +82,13 @@ def _beam_directions(angles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nda
         if len(_BEAMS) > BEAM_CACHE_SIZE:
             _BEAMS.popitem(last=False)
     return found
+
+
+def open_beside(scan: ScanView, side: int) -> bool:
+    """Nothing within OPEN_SIDE_M across from the followed wall (``side`` +1 left, -1 right),
+    30-150 degrees off the heading: a hall, a car park, an open-plan office, not a corridor."""
+    lo, hi = sorted((-side * math.radians(30.0), -side * math.radians(150.0)))
+    return scan.sector_min(lo, hi) >= OPEN_SIDE_M
 
 
 def wall_follow(scan: ScanView, side: int, p: WallFollowParams) -> tuple[float, float]:

@@ -48,7 +48,7 @@ from initcli.core.verification import (
     track_favoured,
     track_outranks,
 )
-from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
+from initcli.core.wall_following import MovingObstacleWait, ScanView, open_beside, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
 from initcli.io.detection_log import Meta, State
 from initcli.match.pipeline import Hypothesis, MatchReport
@@ -61,7 +61,6 @@ from initcli.session.result import MatchStep, SessionResult
 __all__ = ["Observer", "Session"]
 
 RECOVERY_TURN = 2 * math.pi  # rad turned in place by the initial look and the recovery behaviour
-OPEN_SIDE_M = 3.0  # m: nothing nearer on the side away from the followed wall: open space (looks)
 LOOP_WINDOW_S = 45.0  # s of path checked for a loop (circling an island of clutter, a chicane)
 LOOP_RADIUS = 2.5  # m: a path that long staying this close to its centre is a loop
 LOOP_LENGTH = 8.0  # m driven in the window (a robot arcing at 0.3 m/s on a 0.7 m radius drives 12 m)
@@ -273,13 +272,12 @@ class Session:
         """Turn once on the spot again (beyond the paper)? After ``exploration.look_every`` m
         without a new feature along a wall with open space on the other side: the camera looks
         along the followed wall, and in a hall or a car park the features stand on the walls across
-        the open floor, out of its view. Costs time, no distance. In a corridor (the other wall
-        within OPEN_SIDE_M) the camera already sees both walls ahead, and the robot drives on."""
+        the open floor, out of its view. Costs time, no distance. In a corridor (see
+        :func:`open_beside`) the camera already sees both walls ahead, and the robot drives on."""
         every = self.config.exploration.look_every
         if every <= 0 or self.perception.travel - self.look_from < every:
             return False
-        lo, hi = sorted((-self.side * math.radians(30.0), -self.side * math.radians(150.0)))
-        if scan.sector_min(lo, hi) < OPEN_SIDE_M:
+        if not open_beside(scan, self.side):
             return False
         self.look_from = self.perception.travel
         self.turned = 0.0

@@ -66,3 +66,28 @@ def test_one_shared_drive_gives_each_baseline_the_outcome_it_has_alone(tmp_path)
         for a, b in zip(alone, shared, strict=True):
             assert dataclasses.replace(a, wall_seconds=0.0) == dataclasses.replace(b, wall_seconds=0.0)
         assert alone[0].distance_m != alone[1].distance_m  # they end at different places
+
+
+@pytest.mark.parametrize(("across", "looks"), [(50.0, 2), (1.3, 0)])  # an open floor, a corridor
+def test_explorer_looks_again_along_a_wall_with_open_space_beside_it(across: float, looks: int) -> None:
+    """Like the session: every ``exploration.look_every`` m of travel along a wall with nothing
+    within 3 m on the other side, one turn on the spot; in a corridor none."""
+    from initcli.baselines.drive import WallFollowingExplorer
+    from initcli.config import SessionConfig
+    from initcli.drivers.base import LaserScan
+
+    config = SessionConfig()
+    config.exploration.initial_look = False
+    explorer = WallFollowingExplorer(config)
+    angles = -math.pi + 2 * math.pi / 360 * np.arange(360)
+    sin = np.sin(angles)
+    with np.errstate(divide="ignore"):
+        ranges = np.minimum(np.where(sin > 0, 0.7 / sin, np.where(sin < 0, across / -sin, np.inf)), 20.0)
+    scan = LaserScan(-math.pi, 2 * math.pi / 360, 20.0, ranges)  # the left wall at 0.7 m, the same everywhere
+    pose, turned = Pose2D(0.0, 0.0, 0.0), 0.0
+    for step in range(700):  # 25 m at 0.5 m/s with the looks' turns
+        v, w = explorer.command(SensorFrame(step * 0.1, pose, scan))
+        turned += abs(w) * 0.1 if v == 0 else 0.0
+        pose = pose * Pose2D(v * 0.1, 0.0, w * 0.1)
+    assert pose.x > 20.0
+    assert turned == pytest.approx(looks * 2 * math.pi, abs=0.2)
