@@ -245,7 +245,7 @@ class Session:
         return self.waiting.hold(frame.t, scan.front(), self.follow.front_stop)
 
     def _explore(self, frame: SensorFrame, scan: ScanView | None) -> tuple[float, float]:
-        """Random exploration: follow the wall, and drive out of loops."""
+        """Random exploration: follow the wall, look round on open floors, drive out of loops."""
         if scan is None:
             v, w = 0.0, 0.0  # no scan this period: nothing to steer by
         elif self.escape is not None and frame.t < self.loop_escape_until:
@@ -301,7 +301,8 @@ class Session:
         return 0.0, 0.0
 
     def _turn(self, frame: SensorFrame) -> tuple[float, float]:
-        """The initial look or the recovery rotation: turn in place, then carry on."""
+        """The initial look, a look on an open floor or the recovery rotation: turn in place, then
+        carry on."""
         if self.turned >= RECOVERY_TURN:
             if self.state == "look":
                 why = "initial look done" if self.looks == 1 else "look done"
