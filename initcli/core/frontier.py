@@ -195,9 +195,10 @@ def _integrate_scan(
     y0: float,
     resolution: float,
 ) -> None:
-    """:meth:`LocalMap.integrate`'s updates of the flat float32 log-odds (row-major, ``n`` x ``n``): the end
-    points of the beams that ``hit`` first (``stamp`` = mark - 1), then the cells at ``steps`` along
-    each beam short of its ``reach`` that hold no end point (``stamp`` = mark), each cell once."""
+    """:meth:`LocalMap.integrate`'s updates of the flat float32 log-odds (row-major, ``n`` x ``n``):
+    the end points of the beams that ``hit`` first (``stamp`` = mark - 1), then the cells at
+    ``steps`` along each beam short of its ``reach`` that hold no end point (``stamp`` = mark),
+    each cell once."""
     occ, free, clamp = np.float32(L_OCC), np.float32(L_FREE), np.float32(L_CLAMP)
     for i in range(len(ranges)):
         if hit[i]:

@@ -188,7 +188,7 @@ def _cast_turn(
 ) -> None:
     """:func:`cast_rays` for rays at ``a0 + k * inc`` covering one turn, one segment at a time:
     the segment's nearest point (out of range: skipped), the rays of its angular interval by index
-    arithmetic, then the brute force's test on each of them."""
+    arithmetic, then the brute force's test on each of them (:func:`_shorten`)."""
     n = len(ranges)
     reach2 = (max_range + RANGE_MARGIN) ** 2
     ox, oy = origin[0], origin[1]
@@ -211,16 +211,8 @@ def _cast_turn(
             stop = start + (abs(sweep) + 2.0 * ANGLE_MARGIN)
             first = int(math.ceil(((start - a0) % TWO_PI) / inc))
             last = min(first + int(math.floor((stop - start) / inc)) + 2, first + n)
-        cross = wx * sy - wy * sx
         for k in range(first, last):
-            r = k % n
-            dx, dy = cos[r], sin[r]
-            denom = dx * sy - dy * sx
-            if abs(denom) > EPS:
-                t = cross / denom
-                u = (wx * dy - wy * dx) / denom
-                if t > 0 and u >= 0 and u <= 1 and t < ranges[r]:
-                    ranges[r] = t
+            _shorten(ranges, k % n, cos, sin, wx, wy, sx, sy)
 
 
 def _sorted_ray_runs(
@@ -259,18 +251,26 @@ def _nearest_hits(
     ey: np.ndarray,
 ) -> None:
     """``ranges[r] = min(ranges[r], t)`` over the hits of segment ``i`` with the rays
-    ``rays[first[i]:last[i]]``: :func:`ray_segment_params` and :func:`ray_segment_distances`' hit
-    test, the same float64 expressions in the same order, one pair at a time."""
+    ``rays[first[i]:last[i]]`` (:func:`_shorten` for each pair)."""
     for i in range(len(first)):
         for k in range(first[i], last[i]):
-            r = rays[k]
-            dx, dy = cos[r], sin[r]
-            denom = dx * ey[i] - dy * ex[i]
-            if abs(denom) > EPS:
-                t = (wx[i] * ey[i] - wy[i] * ex[i]) / denom
-                u = (wx[i] * dy - wy[i] * dx) / denom
-                if t > 0 and u >= 0 and u <= 1 and t < ranges[r]:
-                    ranges[r] = t
+            _shorten(ranges, rays[k], cos, sin, wx[i], wy[i], ex[i], ey[i])
+
+
+@compiled
+def _shorten(
+    ranges: np.ndarray, r: int, cos: np.ndarray, sin: np.ndarray, wx: float, wy: float, ex: float, ey: float
+) -> None:
+    """``ranges[r] = min(ranges[r], t)`` when ray ``r`` hits the segment ``a + u e`` (``w = a - p``):
+    :func:`ray_segment_params` and :func:`ray_segment_distances`' hit test, the same float64
+    expressions in the same order, for one pair."""
+    dx, dy = cos[r], sin[r]
+    denom = dx * ey - dy * ex
+    if abs(denom) > EPS:
+        t = (wx * ey - wy * ex) / denom
+        u = (wx * dy - wy * dx) / denom
+        if t > 0 and u >= 0 and u <= 1 and t < ranges[r]:
+            ranges[r] = t
 
 
 SHORTEST_SEGMENT2 = 1e-9  # m^2: squared lengths below this count as this in nearest_segment_distance
