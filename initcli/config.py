@@ -138,6 +138,9 @@ class ExplorationSection:
     # m of travel without a new feature while following a wall with open space on the other side
     # (a hall, a car park, an open-plan office) -> turn once on the spot again; 0: never
     look_every: float = 10.0
+    # after this many such looks since the last new feature (60 m of open floor with the
+    # defaults), drive across the open floor to a wall the lidar sees and follow it; 0: never
+    cross_after: int = 6
 
 
 @dataclass

@@ -2,9 +2,10 @@
 
 The baselines drive exactly as ``bim-init run`` explores (§4.3: "using the same wall following
 based motion planning algorithm"), including its initial turn on the spot
-(``exploration.initial_look``) and its looks on open floors (``exploration.look_every`` m of travel
-along a wall with open space beside it; with no features to count, every that many metres), so
-distances compare like for like.
+(``exploration.initial_look``), its looks on open floors (``exploration.look_every`` m of travel
+along a wall with open space beside it; with no features to count, every that many metres) and its
+drive across the open floor after every ``exploration.cross_after`` such looks, so distances
+compare like for like.
 
 Their drive does not depend on what they sense (the commands come from the scans alone), so
 several baselines started from the same simulated setup drive the same path:
@@ -23,6 +24,7 @@ from typing import Protocol
 
 from initcli.baselines.outcome import LocalisationOutcome
 from initcli.config import SessionConfig, followed_side, turn_in_place_speed, wall_follow_params
+from initcli.core.bug_navigation import BugNavigator, cross_floor
 from initcli.core.geometry import wrap_angle
 from initcli.core.wall_following import MovingObstacleWait, ScanView, open_beside, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
@@ -39,8 +41,13 @@ class WallFollowingExplorer:
         self.to_turn = 2 * math.pi if config.exploration.initial_look else 0.0
         self.last_yaw: float | None = None
         self.look_every = config.exploration.look_every
-        self.since_look = 0.0  # m of odometry travel since the last look
+        self.since_look = 0.0  # m of odometry travel since the last look (less a crossing's reach)
         self.last_xy: tuple[float, float] | None = None
+        self.cross_after = config.exploration.cross_after
+        self.looks = 0  # looks on an open floor since the last crossing
+        self.looking = False  # a look on an open floor after which to cross is under way
+        self.crossing: BugNavigator | None = None
+        self.crossing_until = -1.0  # s
 
     def command(self, frame: SensorFrame) -> tuple[float, float]:
         if self.to_turn > 0:
@@ -56,10 +63,23 @@ class WallFollowingExplorer:
         if frame.scan is None:
             return 0.0, 0.0
         scan = ScanView.of(frame.scan.angles, frame.scan.ranges, frame.scan.range_max)
+        if self.looking:  # the look just ended: across the floor, as the session does
+            self.looking = False
+            crossing = cross_floor(frame.odom, scan, self.side, self.params)
+            if crossing is not None:
+                self.crossing, self.crossing_until = crossing.navigator, frame.t + crossing.seconds
+                self.since_look, self.looks = -crossing.reach, 0
+        if self.crossing is not None and frame.t < self.crossing_until:
+            v, w, arrived = self.crossing.step(frame.odom, scan)
+            if arrived:
+                self.crossing = None
+            return v, w
         if self.waiting.hold(frame.t, scan.front(), self.params.front_stop):
             return 0.0, 0.0
         if 0 < self.look_every <= self.since_look and open_beside(scan, self.side):
             self.since_look, self.to_turn, self.last_yaw = 0.0, 2 * math.pi, frame.odom.yaw
+            self.looks += 1
+            self.looking = 0 < self.cross_after <= self.looks
             return 0.0, self.look_speed
         return wall_follow(scan, self.side, self.params)
 

@@ -15,7 +15,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from initcli.core.geometry import Pose2D, wrap_angle
-from initcli.core.wall_following import ScanView, WallFollowParams, wall_follow
+from initcli.core.wall_following import (
+    ScanView,
+    WallFollowParams,
+    across_the_floor,
+    crossing_seconds,
+    wall_follow,
+)
 
 
 @dataclass(frozen=True)
@@ -117,3 +123,25 @@ def around_side(scan: ScanView, d_yaw: float, margin: float = 0.3) -> int:
     if abs(min(left, 5.0) - min(right, 5.0)) > margin:
         return 1 if right > left else -1
     return 1 if d_yaw <= 0 else -1  # target to the right: keep the obstacle on the left
+
+
+@dataclass(frozen=True)
+class FloorCrossing:
+    """A drive across an open floor after a look there (beyond the paper, :func:`across_the_floor`)."""
+
+    navigator: BugNavigator
+    seconds: float  # allowed before wall following resumes wherever the robot is
+    reach: float  # m
+
+
+def cross_floor(pose: Pose2D, scan: ScanView, side: int, follow: WallFollowParams) -> FloorCrossing | None:
+    """The crossing of the open floor beside the followed wall (``side``) from ``pose`` (odom);
+    None when that side is not open."""
+    across = across_the_floor(scan, side)
+    if across is None:
+        return None
+    bearing, reach = across
+    toward = pose.apply(reach * np.array([math.cos(bearing), math.sin(bearing)]))
+    return FloorCrossing(
+        BugNavigator(toward, BugParams(follow=follow)), crossing_seconds(reach, follow), reach
+    )

@@ -32,6 +32,14 @@ class WallFollowParams:
 
 BEAM_CACHE_SIZE = 8  # beam layouts (a lidar's angles) whose directions ScanView keeps
 OPEN_SIDE_M = 3.0  # m: nothing nearer on the side away from the followed wall is open space
+CROSS_BEARINGS = (90, 75, 105, 60, 120, 45, 135)  # degrees off the heading a crossing may take ...
+CROSS_REACH = 15.0  # m: ... driving at most this far ...
+CROSS_HALF_WIDTH = 0.8  # m: ... along a way this wide either side clear of anything the lidar hit ...
+CROSS_SHORT = 1.5  # m: ... and stopping this much short of what the lidar hit across the floor ...
+CROSS_WALL_M = 2.0  # m: ... at a wall at least this wide (wall_width) ...
+WALL_GAP_M = 0.5  # m: lidar end points this close to their neighbour's lie on one wall
+CROSSING_SLACK = 1.5  # a crossing may take this many times its drive at cruise speed ...
+CROSSING_EXTRA_S = 5.0  # s ... plus this (turning toward it)
 
 
 @dataclass(frozen=True)
@@ -42,19 +50,20 @@ class ScanView:
     ranges: np.ndarray
     cos: np.ndarray | None = None
     sin: np.ndarray | None = None
+    range_max: float = math.inf  # m: a beam with no return saw nothing up to this far
 
     @staticmethod
     def of(angles: np.ndarray, ranges: np.ndarray, max_range: float) -> ScanView:
         ok = np.isfinite(ranges) & (ranges > 0.05) & (ranges < max_range - 1e-6)
         wrapped, cos, sin = _beam_directions(np.asarray(angles, dtype=float))
-        return ScanView(wrapped[ok], ranges[ok], cos[ok], sin[ok])
+        return ScanView(wrapped[ok], ranges[ok], cos[ok], sin[ok], max_range)
 
     def sector_min(self, lo: float, hi: float, default: float = math.inf) -> float:
         mask = (self.angles >= lo) & (self.angles <= hi)
         return float(self.ranges[mask].min()) if mask.any() else default
 
     @cached_property
-    def _xy(self) -> tuple[np.ndarray, np.ndarray]:
+    def xy(self) -> tuple[np.ndarray, np.ndarray]:
         """The beam end points in the robot frame (the wall follower asks for the front twice)."""
         cos = np.cos(self.angles) if self.cos is None else self.cos
         sin = np.sin(self.angles) if self.sin is None else self.sin
@@ -62,9 +71,28 @@ class ScanView:
 
     def front(self, half_width: float = 0.35) -> float:
         """Distance ahead within a corridor of ``half_width`` metres (robot width + margin)."""
-        x, y = self._xy
-        mask = (x > 0) & (np.abs(y) <= half_width)
-        return float(x[mask].min()) if mask.any() else math.inf
+        return self.clear_along(0.0, half_width)
+
+    def clear_along(self, bearing: float, half_width: float = 0.35) -> float:
+        """Free distance along ``bearing`` (rad, robot frame) within a corridor of ``half_width``
+        metres; inf when nothing the lidar hit is in that corridor."""
+        along, lateral = self._turned(bearing)
+        mask = (along > 0) & (np.abs(lateral) <= half_width)
+        return float(along[mask].min()) if mask.any() else math.inf
+
+    def hit_along(self, bearing: float, half_width: float = 0.35) -> int:
+        """The beam whose end point bounds :meth:`clear_along` that way; -1 when none does."""
+        along, lateral = self._turned(bearing)
+        mask = (along > 0) & (np.abs(lateral) <= half_width)
+        return int(np.argmin(np.where(mask, along, np.inf))) if mask.any() else -1
+
+    def _turned(self, bearing: float) -> tuple[np.ndarray, np.ndarray]:
+        """The beam end points along and across ``bearing`` (rad, robot frame)."""
+        x, y = self.xy
+        if bearing == 0.0:
+            return x, y
+        c, s = math.cos(bearing), math.sin(bearing)
+        return c * x + s * y, -s * x + c * y
 
 
 _BEAMS: OrderedDict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] = OrderedDict()
@@ -89,6 +117,57 @@ def open_beside(scan: ScanView, side: int) -> bool:
     30-150 degrees off the heading: a hall, a car park, an open-plan office, not a corridor."""
     lo, hi = sorted((-side * math.radians(30.0), -side * math.radians(150.0)))
     return scan.sector_min(lo, hi) >= OPEN_SIDE_M
+
+
+def across_the_floor(scan: ScanView, side: int) -> tuple[float, float] | None:
+    """Where to cross an open floor (beyond the paper): (bearing rad, reach m) toward a wall across
+    it, of CROSS_BEARINGS off the heading toward the side away from the followed wall (``side`` +1
+    left, -1 right): the way that gets farthest from the followed wall, square across first among
+    equals; ``reach`` stops CROSS_SHORT short of the wall. A way counts only when the lidar hit a
+    wall there within CROSS_REACH + CROSS_SHORT (:func:`wall_width` CROSS_WALL_M or more: not a
+    column nor a row of them, not the void of a floor wider than the lidar sees), and when it gets
+    more than OPEN_SIDE_M from the followed wall. None when no way does. In an open-plan office the
+    robot that follows the façade sees the doors of the rooms in the middle only from across."""
+    best: tuple[float, float, float] | None = None  # (progress away from the wall, bearing, clear)
+    for degrees in CROSS_BEARINGS:
+        bearing = -side * math.radians(degrees)
+        hit = scan.hit_along(bearing, CROSS_HALF_WIDTH)
+        if hit < 0:
+            continue
+        clear = float(scan.ranges[hit] * math.cos(scan.angles[hit] - bearing))
+        progress = clear * math.sin(math.radians(degrees))
+        if (
+            clear > min(scan.range_max, CROSS_REACH + CROSS_SHORT)
+            or progress <= OPEN_SIDE_M
+            or wall_width(scan, hit) < CROSS_WALL_M
+        ):
+            continue
+        if best is None or progress > best[0] + 1e-6:
+            best = (progress, bearing, clear)
+    if best is None:
+        return None
+    return best[1], best[2] - CROSS_SHORT
+
+
+def wall_width(scan: ScanView, hit: int) -> float:
+    """How wide the wall the lidar hit with beam ``hit`` is (m): the span of the run of beams on
+    either side whose end points lie within WALL_GAP_M of their neighbour's (the scan's beams in
+    angle order, as a lidar sends them)."""
+    x, y = scan.xy
+    n = len(x)
+    ends = []
+    for step in (-1, 1):
+        k = hit
+        while 0 <= k + step < n and math.hypot(x[k + step] - x[k], y[k + step] - y[k]) <= WALL_GAP_M:
+            k += step
+        ends.append(k)
+    return math.hypot(x[ends[1]] - x[ends[0]], y[ends[1]] - y[ends[0]])
+
+
+def crossing_seconds(reach: float, p: WallFollowParams) -> float:
+    """Time allowed for a crossing of ``reach`` m: CROSSING_SLACK times the drive at cruise speed
+    (a crossing that must go round something ends there and wall following resumes)."""
+    return CROSSING_SLACK * reach / max(p.speed, 1e-6) + CROSSING_EXTRA_S
 
 
 def wall_follow(scan: ScanView, side: int, p: WallFollowParams) -> tuple[float, float]:

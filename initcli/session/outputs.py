@@ -45,6 +45,7 @@ def summary_document(result: SessionResult, simulated: bool, extra: dict | None 
         "active_explorations": result.active_explorations,
         "recoveries": result.recoveries,
         "loop_escapes": result.loop_escapes,
+        "crossings": result.crossings,
         # Beyond the paper: each check of a unique match (stage coarse) and of the final pose (fine):
         # missed_predictions, scan_fit, passed (initcli.core.verification).
         "verification": list(result.verifications),

@@ -46,6 +46,7 @@ class SessionResult:
     states: list[tuple[float, str]] = field(default_factory=list)
     active_explorations: int = 0
     loop_escapes: int = 0
+    crossings: int = 0  # open floors crossed after a look (beyond the paper)
     fine_converged: bool | None = None
     recoveries: int = 0
     wall_seconds: float = 0.0

@@ -35,7 +35,7 @@ from initcli.config import (
     verification_params,
     wall_follow_params,
 )
-from initcli.core.bug_navigation import BugNavigator, BugParams, RouteNavigator
+from initcli.core.bug_navigation import BugNavigator, BugParams, RouteNavigator, cross_floor
 from initcli.core.classes import ClassMap
 from initcli.core.confinement import ConfinementWatch
 from initcli.core.frontier import LocalMap
@@ -84,6 +84,7 @@ RIVALS_CHECKED = 8  # rivals of a claim verified one by one; more count as credi
 RIVALS_COMPARED = 64  # ... unless the claim outranks them all, compared one by one up to this many
 TRACK_HYPOTHESES = 12  # several hypotheses are compared by the lidar along the path up to this many
 REDECIDE_M = 10.0  # m of travel after which hypotheses left undecided are matched and judged again
+FINE_TRIES = 2  # fine stages a session may run: after a failed one it explores on and claims again
 AGREE_M = 2.0  # m: a fine pose farther than this from the odometry-carried coarse pose disagrees ...
 AGREE_DEG = 30.0  # ... or turned more than this
 
@@ -137,6 +138,8 @@ class Session:
         self.turned = 0.0  # rad turned since the look or recovery rotation began
         self.look_from = 0.0  # m of odometry travel at the last look or new feature
         self.looks = 0  # looks begun (the initial one included)
+        self.open_floor_look = False  # the look under way is one on an open floor, not the initial one
+        self.fruitless_looks = 0  # looks on an open floor ended since the last new feature or crossing
         self.hypotheses = 0  # of the last match step
         self.decided_at = 0.0  # m of travel at the last match step
         self.storeys_left: list[str] = []  # storeys the last match step's hypotheses lie on
@@ -147,6 +150,9 @@ class Session:
         self.view = CameraView(driver.camera, driver.mount, self.options.min_depth)
         self._evidence: dict[str, StoreyEvidence] = {}
         self.cannot_leave: str | None = None  # set when the start is known to be closed in
+        self.fine_failures = 0  # fine stages that failed
+        self.fine_failed_why = ""  # why the last one failed
+        self.resume_from: SensorFrame | None = None  # the last frame of a fine stage that failed
         self._started = time.perf_counter()
 
     # -- records -------------------------------------------------------------------------------------
@@ -224,6 +230,8 @@ class Session:
             self._record_frame(frame, step)
             if self._perceive(frame):
                 return
+            if self.resume_from is not None:  # a fine stage drove on and failed: go on from there
+                frame, self.resume_from = self.resume_from, None
             self._emit(frame)
             self._watch_shuttling(frame)
             if self._out_of_limits(frame):
@@ -237,7 +245,7 @@ class Session:
         if self.state == "active":
             return self._active(frame, scan)
         if self.state in ("look", "recovery"):
-            return self._turn(frame)
+            return self._turn(frame, scan)
         raise RuntimeError(f"unexpected state {self.state}")
 
     def _held(self, frame: SensorFrame, scan: ScanView) -> bool:
@@ -282,6 +290,7 @@ class Session:
         self.look_from = self.perception.travel
         self.turned = 0.0
         self.looks += 1
+        self.open_floor_look = True
         self._set_state(frame.t, "look", why=f"{every:g} m without a new feature, open space beside")
         return True
 
@@ -300,13 +309,15 @@ class Session:
             self._set_state(frame.t, "explore", why=why)
         return 0.0, 0.0
 
-    def _turn(self, frame: SensorFrame) -> tuple[float, float]:
+    def _turn(self, frame: SensorFrame, scan: ScanView | None) -> tuple[float, float]:
         """The initial look, a look on an open floor or the recovery rotation: turn in place, then
-        carry on."""
+        carry on (across the floor after a look on an open floor)."""
         if self.turned >= RECOVERY_TURN:
             if self.state == "look":
-                why = "initial look done" if self.looks == 1 else "look done"
+                why = "look done" if self.open_floor_look else "initial look done"
                 self._set_state(frame.t, "explore", why=why)
+                if self.open_floor_look and scan is not None:
+                    self._cross_floor(frame, scan)
             elif self.exploration.exhausted:
                 # Targets keep failing (blocked routes, a symmetric layout): wall following
                 # covers new ground until a new feature changes the hypotheses (§3.3.4).
@@ -335,6 +346,7 @@ class Session:
         confirmed = self.perception.confirmed
         self.last_feature_t = frame.t
         self.look_from = self.perception.travel
+        self.fruitless_looks = 0
         self.exploration.fruitless = 0
         self.result.features_detected = len(confirmed)
         if len(confirmed) < self.options.min_inliers:
@@ -355,8 +367,7 @@ class Session:
         if claim is not None:
             verified, aligned, rivals = self._verified(frame, claim)
             if verified:
-                self._coarse_done(frame, claim, aligned)
-                return True
+                return self._coarse_done(frame, claim, aligned)
             if self.state == "look":
                 return False  # the look turns all the way round first: what is behind costs no distance
             if rivals and self._active_below(len(rivals)):
@@ -641,6 +652,26 @@ class Session:
         self.loop_escape_until = frame.t + LOOP_ESCAPE_S
         self.result.loop_escapes += 1
 
+    def _cross_floor(self, frame: SensorFrame, scan: ScanView) -> None:
+        """After ``exploration.cross_after`` looks on an open floor since the last new feature (a
+        look that found one counts as the first), drive across it (:func:`cross_floor`), then
+        follow the wall found there: from the façade of an open-plan office the doors of the rooms
+        in the middle are out of the camera's reach, and looking again from the same wall finds
+        nothing. The next look comes look_every m after the crossing's reach."""
+        self.fruitless_looks += 1
+        after = self.config.exploration.cross_after
+        if after <= 0 or self.fruitless_looks < after:
+            return
+        crossing = cross_floor(frame.odom, scan, self.side, self.follow)
+        if crossing is None:
+            return
+        self.fruitless_looks = 0
+        self.escape = crossing.navigator
+        self.loop_escape_until = frame.t + crossing.seconds
+        self.result.crossings += 1
+        self.look_from = self.perception.travel + crossing.reach
+        self._note(frame.t, f"crossing the open floor ({crossing.reach:.1f} m)")
+
     def _watch_shuttling(self, frame: SensorFrame) -> None:
         """Shuttling over the same ground for minutes: follow the other wall."""
         if not self.shuttles.confined(frame.t, frame.odom):
@@ -673,6 +704,11 @@ class Session:
                     f" on storeys {', '.join(self.storeys_left)}: the storey is not resolved)"
                     if len(self.storeys_left) > 1
                     else ")"
+                )
+                + (
+                    f"; the fine stage of an earlier one failed: {self.fine_failed_why}"
+                    if self.fine_failures
+                    else ""
                 ),
             )
             return True
@@ -705,8 +741,9 @@ class Session:
         r.truth_pose = frame.truth
         r.features = list(self.perception.confirmed)
 
-    def _coarse_done(self, frame: SensorFrame, report: MatchReport, aligned: Pose2D | None = None) -> None:
-        """The unique match: record the coarse and rectified poses (Eq. 17), fine-tune (Eq. 18)."""
+    def _coarse_done(self, frame: SensorFrame, report: MatchReport, aligned: Pose2D | None = None) -> bool:
+        """The unique match: record the coarse and rectified poses (Eq. 17), fine-tune (Eq. 18);
+        True once the session is over (False: the fine stage failed and exploration goes on)."""
         cfg = self.config
         best = report.hypotheses[0]
         r = self.result
@@ -743,10 +780,9 @@ class Session:
             hooks = FineTuningHooks(self._record_frame, self._note, self._emit)
             landmarks = matched_pairs(r.features, r.matched_ids, model.features)
             outcome = tuning.run(self.driver, frame, transform * frame.odom, transform, landmarks, hooks)
-            frame = outcome.frame
+            frame = self.resume_from = outcome.frame
             if isinstance(outcome, FineLost):
-                self._fail(frame, outcome.reason)
-                return
+                return self._fine_failed(frame, outcome.reason)
             r.fine_converged = outcome.converged
             pose, cov = outcome.pose, outcome.covariance
         else:
@@ -765,8 +801,7 @@ class Session:
                         f"{math.degrees(pose.yaw_error(carried)):.0f} deg from the coarse pose"
                     )
                 )
-                self._fail(frame, f"the pose failed verification: {why}")
-                return
+                return self._fine_failed(frame, f"the pose failed verification: {why}")
         r.success = True
         if cov is None:
             r.reason = "initialised (no fine tuning)"
@@ -782,3 +817,20 @@ class Session:
         r.distance_total_m = round(self.driver.distance, 3)
         r.duration_s = round(frame.t, 2)
         self._set_state(frame.t, "done", pose=[round(v, 4) for v in pose.as_tuple()])
+        return True
+
+    def _fine_failed(self, frame: SensorFrame, reason: str) -> bool:
+        """The fine stage failed (the filter lost the robot, or its pose failed verification): the
+        session fails with ``reason`` after FINE_TRIES such stages; before that the claim is dropped
+        and exploration goes on, and a unique match found again is fine-tuned from where the robot
+        is then (hoardings and stacks that hide the walls here may not be there). True once the
+        session is over."""
+        self.fine_failures += 1
+        self.fine_failed_why = reason
+        if self.fine_failures >= FINE_TRIES:
+            self._fail(frame, reason)
+            return True
+        self.perception.detecting = True
+        self.decided_at = self.perception.travel
+        self._set_state(frame.t, "explore", why=f"{reason}: exploring on")
+        return False

@@ -78,6 +78,7 @@ def test_explorer_looks_again_along_a_wall_with_open_space_beside_it(across: flo
 
     config = SessionConfig()
     config.exploration.initial_look = False
+    config.exploration.cross_after = 0
     explorer = WallFollowingExplorer(config)
     angles = -math.pi + 2 * math.pi / 360 * np.arange(360)
     sin = np.sin(angles)
@@ -91,3 +92,31 @@ def test_explorer_looks_again_along_a_wall_with_open_space_beside_it(across: flo
         pose = pose * Pose2D(v * 0.1, 0.0, w * 0.1)
     assert pose.x > 20.0
     assert turned == pytest.approx(looks * 2 * math.pi, abs=0.2)
+
+
+@pytest.mark.parametrize(("across", "crossing"), [(11.0, True), (1.3, False)])  # an open floor, a corridor
+def test_explorer_crosses_the_open_floor_after_a_look_like_the_session(across: float, crossing: bool) -> None:
+    """After a look along a wall with the floor open 11 m to the other side, the drive turns square
+    across, as the session does (the scan is the same in the robot's frame everywhere, so it drives
+    on that way); in a corridor it drives on along the wall."""
+    from initcli.baselines.drive import WallFollowingExplorer
+    from initcli.config import SessionConfig
+    from initcli.drivers.base import LaserScan
+
+    config = SessionConfig()
+    config.exploration.initial_look = False
+    config.exploration.cross_after = 1  # after the first look
+    explorer = WallFollowingExplorer(config)
+    angles = -math.pi + 2 * math.pi / 360 * np.arange(360)
+    sin = np.sin(angles)
+    with np.errstate(divide="ignore"):
+        ranges = np.minimum(np.where(sin > 0, 0.7 / sin, np.where(sin < 0, across / -sin, np.inf)), 20.0)
+    scan = LaserScan(-math.pi, 2 * math.pi / 360, 20.0, ranges)
+    pose = Pose2D(0.0, 0.0, 0.0)
+    for step in range(700):
+        v, w = explorer.command(SensorFrame(step * 0.1, pose, scan))
+        pose = pose * Pose2D(v * 0.1, 0.0, w * 0.1)
+    if crossing:
+        assert pose.x == pytest.approx(10.0, abs=0.7) and pose.y < -8.0
+    else:
+        assert abs(pose.y) < 0.5 and pose.x > 20.0

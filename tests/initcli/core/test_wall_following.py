@@ -78,3 +78,63 @@ def test_scan_view_keeps_each_beam_layouts_directions_and_gives_the_same_front()
         np.testing.assert_array_equal(view.cos, np.cos(view.angles))
         for half_width in (0.2, 0.35, 1.0):
             assert view.front(half_width) == plain.front(half_width)
+
+
+def _scan_at(segments: list[list[float]], x: float = 0.0, y: float = 0.0, yaw: float = 0.0) -> ScanView:
+    ranges = ray_segment_distances(np.array([x, y]), yaw + BEAMS, np.array(segments, dtype=float), 20.0)
+    return ScanView.of(BEAMS, ranges, 20.0)
+
+
+def test_clear_along_a_bearing_is_the_front_turned_that_way() -> None:
+    """A wall 0.7 m to the left and one 5 m to the right: free 0.7 m to the left, 5 m to the right,
+    and straight ahead the front (nothing up to the lidar's range)."""
+    scan = _scan_at([[-30.0, 0.7, 30.0, 0.7], [-30.0, -5.0, 30.0, -5.0]])
+    assert math.isclose(scan.clear_along(math.pi / 2), 0.7, abs_tol=0.02)
+    assert math.isclose(scan.clear_along(-math.pi / 2), 5.0, abs_tol=0.02)
+    assert scan.clear_along(0.0) == scan.front() == math.inf
+
+
+def test_across_the_floor_heads_square_across_the_open_side_to_short_of_the_far_wall() -> None:
+    """The façade followed on the left, the rooms in the middle 11 m to the right: square across,
+    stopping CROSS_SHORT short; mirrored for the right wall; a corridor (2.5 m) is no open floor."""
+    from initcli.core.wall_following import CROSS_SHORT, across_the_floor
+
+    hall = [[-30.0, 0.7, 30.0, 0.7], [-30.0, -11.0, 30.0, -11.0]]
+    bearing, reach = across_the_floor(_scan_at(hall), +1) or (0.0, 0.0)
+    assert math.isclose(bearing, -math.pi / 2) and math.isclose(reach, 11.0 - CROSS_SHORT, abs_tol=0.05)
+    mirrored = [[-30.0, -0.7, 30.0, -0.7], [-30.0, 11.0, 30.0, 11.0]]
+    bearing, reach = across_the_floor(_scan_at(mirrored), -1) or (0.0, 0.0)
+    assert math.isclose(bearing, math.pi / 2) and math.isclose(reach, 11.0 - CROSS_SHORT, abs_tol=0.05)
+    assert across_the_floor(_scan_at([[-30.0, 0.7, 30.0, 0.7], [-30.0, -2.5, 30.0, -2.5]]), +1) is None
+
+
+def test_across_the_floor_takes_the_way_that_gets_farthest_to_a_wall() -> None:
+    """A room's wall 4 m to the right with an opening ahead-right and a wall 10 m across behind it:
+    the crossing goes through the opening (farthest from the followed wall of its bearings)."""
+    from initcli.core.wall_following import CROSS_SHORT, across_the_floor
+
+    room = [[-30.0, 0.7, 30.0, 0.7], [-30.0, -4.0, 1.0, -4.0], [7.0, -4.0, 30.0, -4.0]]
+    bearing, reach = across_the_floor(_scan_at([*room, [-30.0, -10.0, 30.0, -10.0]]), +1) or (0.0, 0.0)
+    assert -math.radians(70) < bearing < -math.radians(40)  # through the opening ...
+    assert math.isclose(-math.sin(bearing) * (reach + CROSS_SHORT), 10.0, abs_tol=0.5)  # ... to the far wall
+    bearing, reach = across_the_floor(_scan_at(room), +1) or (0.0, 0.0)  # the opening leads nowhere seen
+    assert math.isclose(bearing, -math.pi / 2) and math.isclose(reach, 4.0 - CROSS_SHORT, abs_tol=0.05)
+
+
+def test_across_the_floor_needs_a_wall_not_a_column_nor_the_void() -> None:
+    """Across a car park only a column (0.5 m) stands 5 m away, or a row of them 3.5 m apart, or
+    nothing within the lidar's reach: no crossing (the robot would circle a column or stop in the
+    middle of nowhere)."""
+    from initcli.core.wall_following import across_the_floor
+
+    def column(x: float) -> list[list[float]]:
+        return [
+            [x - 0.25, -5.0, x + 0.25, -5.0],
+            [x + 0.25, -5.0, x + 0.25, -5.5],
+            [x + 0.25, -5.5, x - 0.25, -5.5],
+        ]
+
+    assert across_the_floor(_scan_at([[-30.0, 0.7, 30.0, 0.7], *column(0.0)]), +1) is None
+    row = [side for x in np.arange(-14.0, 15.0, 3.5) for side in column(float(x))]  # a row of them
+    assert across_the_floor(_scan_at([[-30.0, 0.7, 30.0, 0.7], *row]), +1) is None
+    assert across_the_floor(_scan_at([[-30.0, 0.7, 30.0, 0.7]]), +1) is None

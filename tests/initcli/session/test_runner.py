@@ -183,7 +183,9 @@ def test_looks_again_along_a_wall_with_open_space_beside_it(config, right, look_
     """Following the left wall with nothing within 3 m on the right (a hall, a car park) and no
     feature: every ``exploration.look_every`` m of travel the robot turns once on the spot, then
     follows the wall on; in a corridor, or with looks off, it drives on."""
-    exploration = dataclasses.replace(config.exploration, initial_look=False, look_every=look_every)
+    exploration = dataclasses.replace(
+        config.exploration, initial_look=False, look_every=look_every, cross_after=0
+    )
     ranges = corridor_ranges(0.7, 50.0 if right is None else right)
     session, driver = _session(
         dataclasses.replace(config, exploration=exploration), scan=ranges, max_distance=25.0, max_time=600.0
@@ -193,3 +195,64 @@ def test_looks_again_along_a_wall_with_open_space_beside_it(config, right, look_
     assert [s for _, s in result.states].count("look") == looks
     turned_on_the_spot = sum(abs(w) * 0.1 for v, w in driver.commands if v == 0.0)
     assert turned_on_the_spot == pytest.approx(looks * 2 * math.pi, abs=0.2)
+
+
+@pytest.mark.parametrize(
+    ("right", "cross", "crossings", "looks"), [(11.0, True, 1, 1), (11.0, False, 0, 2), (1.3, True, 0, 0)]
+)
+def test_crosses_the_open_floor_after_a_look_there(config, right, cross, crossings, looks) -> None:
+    """After the look on an open floor (the far side 11 m to the right of the followed wall) the
+    robot turns square across and drives over (the scan is the same in the robot's frame
+    everywhere, so it follows the wall on in that direction). Off, it drives on along the wall and
+    looks again 10 m on; in a corridor it neither looks nor crosses."""
+    exploration = dataclasses.replace(
+        config.exploration, initial_look=False, look_every=10.0, cross_after=1 if cross else 0
+    )
+    session, driver = _session(
+        dataclasses.replace(config, exploration=exploration),
+        scan=corridor_ranges(0.7, right),
+        max_distance=21.0,
+        max_time=600.0,
+    )
+    result = session.run()
+    assert result.crossings == crossings
+    assert [s for _, s in result.states].count("look") == looks  # the next look 10 m after the crossing
+    if crossings:
+        assert driver.pose.x == pytest.approx(10.0, abs=0.7) and driver.pose.y == pytest.approx(
+            -11.0, abs=0.7
+        )
+    else:
+        assert abs(driver.pose.y) < 1.5 and driver.pose.x > 20.0  # along the wall (a look ends a little over)
+
+
+@pytest.mark.parametrize("lost_stages", [1, 2])
+def test_a_failed_fine_stage_explores_on_and_fine_tunes_the_next_claim(
+    tmp_path: Path, monkeypatch, lost_stages
+) -> None:
+    """The filter loses the robot in the first fine stage (hoardings hiding the walls, say): the
+    claim is dropped, exploration goes on, the match is claimed again and fine-tuned from there.
+    When the second stage fails too (FINE_TRIES), the session fails with the filter's reason."""
+    from initcli.session import fine_tuning
+    from initcli.session.runner import FINE_TRIES
+    from initcli.session.setup import prepare_site, sim_session
+
+    assert FINE_TRIES == 2
+    real_run = fine_tuning.FineTuning.run
+    stages: list[float] = []
+
+    def failing_first(self, driver, frame, *args, **kwargs):
+        stages.append(driver.distance)
+        if len(stages) <= lost_stages:
+            return fine_tuning.FineLost(frame, "lost during fine tuning (forced by the test)")
+        return real_run(self, driver, frame, *args, **kwargs)
+
+    monkeypatch.setattr(fine_tuning.FineTuning, "run", failing_first)
+    config = load_config(SAMPLES / "block_a.site.yaml")
+    result = sim_session(config, prepare_site(config, tmp_path / "site"), 3).session.run()
+    assert len(stages) == 2 and stages[1] > stages[0]  # claimed again after driving on
+    assert [s for _, s in result.states].count("coarse") == 2
+    if lost_stages == 1:
+        assert result.success, result.reason
+        assert result.pose is not None and result.pose.distance_to(result.truth_pose) < 0.5
+    else:
+        assert not result.success and result.reason == "lost during fine tuning (forced by the test)"
