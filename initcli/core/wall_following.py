@@ -50,13 +50,12 @@ class ScanView:
     ranges: np.ndarray
     cos: np.ndarray | None = None
     sin: np.ndarray | None = None
-    range_max: float = math.inf  # m: a beam with no return saw nothing up to this far
 
     @staticmethod
     def of(angles: np.ndarray, ranges: np.ndarray, max_range: float) -> ScanView:
         ok = np.isfinite(ranges) & (ranges > 0.05) & (ranges < max_range - 1e-6)
         wrapped, cos, sin = _beam_directions(np.asarray(angles, dtype=float))
-        return ScanView(wrapped[ok], ranges[ok], cos[ok], sin[ok], max_range)
+        return ScanView(wrapped[ok], ranges[ok], cos[ok], sin[ok])
 
     def sector_min(self, lo: float, hi: float, default: float = math.inf) -> float:
         mask = (self.angles >= lo) & (self.angles <= hi)
@@ -125,8 +124,9 @@ def across_the_floor(scan: ScanView, side: int) -> tuple[float, float] | None:
     left, -1 right): the way that gets farthest from the followed wall, square across first among
     equals; ``reach`` stops CROSS_SHORT short of the wall. A way counts only when the lidar hit a
     wall there within CROSS_REACH + CROSS_SHORT (:func:`wall_width` CROSS_WALL_M or more: not a
-    column nor a row of them, not the void of a floor wider than the lidar sees), and when it gets
-    more than OPEN_SIDE_M from the followed wall. None when no way does. In an open-plan office the
+    column nor a row of them, not the void of a floor wider than the lidar sees; a beam with no
+    return is not in the scan), and when that wall stands more than OPEN_SIDE_M out from the
+    robot's line of travel. None when no way does. In an open-plan office the
     robot that follows the façade sees the doors of the rooms in the middle only from across."""
     best: tuple[float, float, float] | None = None  # (progress away from the wall, bearing, clear)
     for degrees in CROSS_BEARINGS:
@@ -137,7 +137,7 @@ def across_the_floor(scan: ScanView, side: int) -> tuple[float, float] | None:
         clear = float(scan.ranges[hit] * math.cos(scan.angles[hit] - bearing))
         progress = clear * math.sin(math.radians(degrees))
         if (
-            clear > min(scan.range_max, CROSS_REACH + CROSS_SHORT)
+            clear > CROSS_REACH + CROSS_SHORT
             or progress <= OPEN_SIDE_M
             or wall_width(scan, hit) < CROSS_WALL_M
         ):

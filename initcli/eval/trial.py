@@ -66,19 +66,20 @@ def _world(world_dir: str) -> Site | None:
 
 def session_outcomes(result: SessionResult) -> dict[str, LocalisationOutcome]:
     """``bim`` (coarse + rectification, Eq. 17) and ``bim+pf`` (plus fine tuning, Eq. 18) of a session."""
-    # The coarse pose, its distance and its wall time are set together at the unique match.
-    distance_coarse, wall_coarse = result.distance_coarse_m, result.wall_seconds_coarse
-    if result.coarse_pose is not None and distance_coarse is not None and wall_coarse is not None:
+    # The coarse-only method ends at the session's first claim (a failed fine stage may lead to
+    # a second one, which only bim+pf gets to).
+    claim = result.first_claim
+    if claim is not None:
         bim = LocalisationOutcome(
             method="bim",
             localised=True,
             reason="unique match",
-            pose=result.rectified_pose,
-            truth=result.truth_at_coarse,
-            distance_m=distance_coarse,
+            pose=claim.rectified_pose,
+            truth=claim.truth,
+            distance_m=claim.distance_m,
             duration_s=result.duration_s,
             features=result.features_detected,
-            wall_seconds=wall_coarse,
+            wall_seconds=claim.wall_seconds,
         )
     else:
         bim = LocalisationOutcome(

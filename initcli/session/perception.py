@@ -56,7 +56,7 @@ class Perception:
         self.confirmed: list[ConfirmedFeature] = []
         self.filter = DetectionFilter(options.filter_params())  # Eq. 3, fed each image's sightings
         self._filtered = 0  # sightings fed to the filter so far
-        self.detecting = True  # False once the coarse match is made: the log's detections end there
+        self.detecting = True  # False from a coarse claim on (again True after a failed fine stage)
         self.path = PathEvidence()  # images and scans along the odometry path, for verification
         self.travel = 0.0  # m of odometry travel so far
         self._last_odom: Pose2D | None = None

@@ -22,6 +22,17 @@ class MatchStep:
     poses: list[tuple[float, float, float]]  # (x m, y m, yaw rad) in the BIM frame
 
 
+@dataclass(frozen=True)
+class CoarseClaim:
+    """A unique match reported as the coarse result: its rectified pose (Eq. 17), the truth then
+    (simulated sessions), and the distance and wall-clock seconds it took."""
+
+    rectified_pose: Pose2D
+    truth: Pose2D | None
+    distance_m: float
+    wall_seconds: float
+
+
 @dataclass
 class SessionResult:
     success: bool
@@ -53,6 +64,9 @@ class SessionResult:
     wall_seconds_coarse: float | None = None  # wall-clock seconds until the unique match
     verifications: list[dict[str, Any]] = field(default_factory=list)  # every check, in order
     rejected: int = 0  # unique matches that failed verification
+    # The first coarse claim: where the coarse-only method ends (the fields above describe the
+    # last claim, which differs after a failed fine stage and a second claim).
+    first_claim: CoarseClaim | None = None
 
     def errors(self) -> tuple[dict[str, float | None], dict[str, float | None]]:
         """Translational (m) and rotational (deg) errors of the coarse, rectified and fine poses."""

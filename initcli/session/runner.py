@@ -56,7 +56,7 @@ from initcli.match.verify import StoreyEvidence, track_transform, verify_transfo
 from initcli.session.exploration import ActiveExploration
 from initcli.session.fine_tuning import FineLost, FineTuning, FineTuningHooks, matched_pairs
 from initcli.session.perception import Perception
-from initcli.session.result import MatchStep, SessionResult
+from initcli.session.result import CoarseClaim, MatchStep, SessionResult
 
 __all__ = ["Observer", "Session"]
 
@@ -84,7 +84,7 @@ RIVALS_CHECKED = 8  # rivals of a claim verified one by one; more count as credi
 RIVALS_COMPARED = 64  # ... unless the claim outranks them all, compared one by one up to this many
 TRACK_HYPOTHESES = 12  # several hypotheses are compared by the lidar along the path up to this many
 REDECIDE_M = 10.0  # m of travel after which hypotheses left undecided are matched and judged again
-FINE_TRIES = 2  # fine stages a session may run: after a failed one it explores on and claims again
+FINE_TRIES = 2  # final-pose checks a session may fail: after a failed one it explores on and claims again
 AGREE_M = 2.0  # m: a fine pose farther than this from the odometry-carried coarse pose disagrees ...
 AGREE_DEG = 30.0  # ... or turned more than this
 
@@ -754,6 +754,8 @@ class Session:
         r.truth_at_coarse = frame.truth
         r.distance_coarse_m = round(self.driver.distance, 3)
         r.wall_seconds_coarse = time.perf_counter() - self._started
+        if r.first_claim is None:
+            r.first_claim = CoarseClaim(rectified, frame.truth, r.distance_coarse_m, r.wall_seconds_coarse)
         r.matched_ids = list(best.matches)
         r.features = list(report.features)  # the ones matched (a drift window may leave old ones out)
         transform = rectified * frame.odom.inverse()
@@ -763,7 +765,9 @@ class Session:
             # place can be 15 degrees off, which a filter seeded 10 degrees wide may not recover.
             transform = aligned
         r.transform = transform
-        self.perception.detecting = False  # the log ends its detections here: it replays to this verdict
+        # The log's detections end here, so that it replays to this verdict (they go on after a
+        # failed fine stage, up to the next claim).
+        self.perception.detecting = False
         self._set_state(
             frame.t,
             "coarse",
@@ -820,11 +824,12 @@ class Session:
         return True
 
     def _fine_failed(self, frame: SensorFrame, reason: str) -> bool:
-        """The fine stage failed (the filter lost the robot, or its pose failed verification): the
-        session fails with ``reason`` after FINE_TRIES such stages; before that the claim is dropped
-        and exploration goes on, and a unique match found again is fine-tuned from where the robot
-        is then (hoardings and stacks that hide the walls here may not be there). True once the
-        session is over."""
+        """The fine stage failed (the filter lost the robot, or its pose failed verification; with
+        fine tuning off, the carried coarse pose failed it): the session fails with ``reason`` after
+        FINE_TRIES such failures; before that the claim is not reported, detection and exploration
+        go on, and the match steps on (a new feature, or REDECIDE_M of travel) may claim the same
+        place again, fine-tuned from where the robot is then (hoardings and stacks that hide the
+        walls here may not be there). True once the session is over."""
         self.fine_failures += 1
         self.fine_failed_why = reason
         if self.fine_failures >= FINE_TRIES:
@@ -832,5 +837,7 @@ class Session:
             return True
         self.perception.detecting = True
         self.decided_at = self.perception.travel
+        self.escape = None  # a loop escape or crossing under way at the claim led from elsewhere
+        self.result.transform, self.result.fine_converged = None, None
         self._set_state(frame.t, "explore", why=f"{reason}: exploring on")
         return False

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from initcli.core.geometry import Pose2D
 from initcli.eval.trial import session_outcomes, trial_seed
-from initcli.session.result import SessionResult
+from initcli.session.result import CoarseClaim, SessionResult
 
 
 def _result(**kw: object) -> SessionResult:
@@ -39,6 +39,7 @@ def test_unique_match_bim_is_rectified_pose_at_the_match() -> None:
         rectified_pose=Pose2D(2.1, 2, 0),
         distance_coarse_m=12.0,
         wall_seconds_coarse=3.0,
+        first_claim=CoarseClaim(Pose2D(2.1, 2, 0), Pose2D(2, 2, 0), 12.0, 3.0),
     )
     bim = session_outcomes(result)["bim"]
     assert bim.localised and bim.reason == "unique match"
@@ -46,7 +47,23 @@ def test_unique_match_bim_is_rectified_pose_at_the_match() -> None:
     assert bim.distance_m == 12.0 and bim.wall_seconds == 3.0 and bim.features == 7
 
 
-def test_coarse_pose_without_its_distance_is_not_a_claim() -> None:
+def test_bim_ends_at_the_first_claim_when_a_failed_fine_stage_led_to_a_second() -> None:
+    """The coarse fields describe the last claim; the coarse-only method ends at the first."""
+    result = _result(
+        success=True,
+        pose=Pose2D(30.0, 2, 0),
+        coarse_pose=Pose2D(29.5, 2, 0),
+        rectified_pose=Pose2D(29.6, 2, 0),
+        distance_coarse_m=40.0,
+        wall_seconds_coarse=8.0,
+        first_claim=CoarseClaim(Pose2D(2.1, 2, 0), Pose2D(2, 2, 0), 12.0, 3.0),
+    )
+    bim, pf = session_outcomes(result)["bim"], session_outcomes(result)["bim+pf"]
+    assert bim.pose == Pose2D(2.1, 2, 0) and bim.distance_m == 12.0 and bim.wall_seconds == 3.0
+    assert pf.pose == Pose2D(30.0, 2, 0) and pf.distance_m == 40.0
+
+
+def test_a_coarse_pose_without_a_claim_record_is_not_a_claim() -> None:
     result = _result(coarse_pose=Pose2D(2.5, 2, 0), rectified_pose=Pose2D(2.1, 2, 0), distance_coarse_m=None)
     assert not session_outcomes(result)["bim"].localised
 
