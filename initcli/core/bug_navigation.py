@@ -15,13 +15,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from initcli.core.geometry import Pose2D, wrap_angle
-from initcli.core.wall_following import (
-    ScanView,
-    WallFollowParams,
-    across_the_floor,
-    crossing_seconds,
-    wall_follow,
-)
+from initcli.core.wall_following import ScanView, WallFollowParams, across_the_floor, wall_follow
+
+CROSSING_SLACK = 1.5  # a crossing may take this many times its drive at cruise speed ...
+CROSSING_EXTRA_S = 5.0  # s ... plus this (turning toward it); then wall following resumes there
 
 
 @dataclass(frozen=True)
@@ -142,6 +139,5 @@ def cross_floor(pose: Pose2D, scan: ScanView, side: int, follow: WallFollowParam
         return None
     bearing, reach = across
     toward = pose.apply(reach * np.array([math.cos(bearing), math.sin(bearing)]))
-    return FloorCrossing(
-        BugNavigator(toward, BugParams(follow=follow)), crossing_seconds(reach, follow), reach
-    )
+    seconds = CROSSING_SLACK * reach / max(follow.speed, 1e-6) + CROSSING_EXTRA_S
+    return FloorCrossing(BugNavigator(toward, BugParams(follow=follow)), seconds, reach)

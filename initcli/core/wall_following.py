@@ -38,8 +38,6 @@ CROSS_HALF_WIDTH = 0.8  # m: ... along a way this wide either side clear of anyt
 CROSS_SHORT = 1.5  # m: ... and stopping this much short of what the lidar hit across the floor ...
 CROSS_WALL_M = 2.0  # m: ... at a wall at least this wide (wall_width) ...
 WALL_GAP_M = 0.5  # m: lidar end points this close to their neighbour's lie on one wall
-CROSSING_SLACK = 1.5  # a crossing may take this many times its drive at cruise speed ...
-CROSSING_EXTRA_S = 5.0  # s ... plus this (turning toward it)
 
 
 @dataclass(frozen=True)
@@ -75,23 +73,25 @@ class ScanView:
     def clear_along(self, bearing: float, half_width: float = 0.35) -> float:
         """Free distance along ``bearing`` (rad, robot frame) within a corridor of ``half_width``
         metres; inf when nothing the lidar hit is in that corridor."""
-        along, lateral = self._turned(bearing)
-        mask = (along > 0) & (np.abs(lateral) <= half_width)
+        along, mask = self._in_way(bearing, half_width)
         return float(along[mask].min()) if mask.any() else math.inf
 
-    def hit_along(self, bearing: float, half_width: float = 0.35) -> int:
-        """The beam whose end point bounds :meth:`clear_along` that way; -1 when none does."""
-        along, lateral = self._turned(bearing)
-        mask = (along > 0) & (np.abs(lateral) <= half_width)
-        return int(np.argmin(np.where(mask, along, np.inf))) if mask.any() else -1
+    def way_along(self, bearing: float, half_width: float = 0.35) -> tuple[float, int]:
+        """:meth:`clear_along` and the beam whose end point bounds it (inf and -1 when none does)."""
+        along, mask = self._in_way(bearing, half_width)
+        if not mask.any():
+            return math.inf, -1
+        hit = int(np.argmin(np.where(mask, along, np.inf)))
+        return float(along[hit]), hit
 
-    def _turned(self, bearing: float) -> tuple[np.ndarray, np.ndarray]:
-        """The beam end points along and across ``bearing`` (rad, robot frame)."""
+    def _in_way(self, bearing: float, half_width: float) -> tuple[np.ndarray, np.ndarray]:
+        """Each beam end point's distance along ``bearing`` (rad, robot frame), and which lie ahead
+        within ``half_width`` m of that line."""
         x, y = self.xy
-        if bearing == 0.0:
-            return x, y
-        c, s = math.cos(bearing), math.sin(bearing)
-        return c * x + s * y, -s * x + c * y
+        if bearing != 0.0:
+            c, s = math.cos(bearing), math.sin(bearing)
+            x, y = c * x + s * y, -s * x + c * y
+        return x, (x > 0) & (np.abs(y) <= half_width)
 
 
 _BEAMS: OrderedDict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] = OrderedDict()
@@ -131,10 +131,9 @@ def across_the_floor(scan: ScanView, side: int) -> tuple[float, float] | None:
     best: tuple[float, float, float] | None = None  # (progress away from the wall, bearing, clear)
     for degrees in CROSS_BEARINGS:
         bearing = -side * math.radians(degrees)
-        hit = scan.hit_along(bearing, CROSS_HALF_WIDTH)
+        clear, hit = scan.way_along(bearing, CROSS_HALF_WIDTH)
         if hit < 0:
             continue
-        clear = float(scan.ranges[hit] * math.cos(scan.angles[hit] - bearing))
         progress = clear * math.sin(math.radians(degrees))
         if (
             clear > CROSS_REACH + CROSS_SHORT
@@ -162,12 +161,6 @@ def wall_width(scan: ScanView, hit: int) -> float:
             k += step
         ends.append(k)
     return math.hypot(x[ends[1]] - x[ends[0]], y[ends[1]] - y[ends[0]])
-
-
-def crossing_seconds(reach: float, p: WallFollowParams) -> float:
-    """Time allowed for a crossing of ``reach`` m: CROSSING_SLACK times the drive at cruise speed
-    (a crossing that must go round something ends there and wall following resumes)."""
-    return CROSSING_SLACK * reach / max(p.speed, 1e-6) + CROSSING_EXTRA_S
 
 
 def wall_follow(scan: ScanView, side: int, p: WallFollowParams) -> tuple[float, float]:

@@ -784,7 +784,7 @@ class Session:
             hooks = FineTuningHooks(self._record_frame, self._note, self._emit)
             landmarks = matched_pairs(r.features, r.matched_ids, model.features)
             outcome = tuning.run(self.driver, frame, transform * frame.odom, transform, landmarks, hooks)
-            frame = self.resume_from = outcome.frame
+            frame = outcome.frame
             if isinstance(outcome, FineLost):
                 return self._fine_failed(frame, outcome.reason)
             r.fine_converged = outcome.converged
@@ -835,6 +835,7 @@ class Session:
         if self.fine_failures >= FINE_TRIES:
             self._fail(frame, reason)
             return True
+        self.resume_from = frame  # the main loop goes on from where the fine stage ended
         self.perception.detecting = True
         self.decided_at = self.perception.travel
         self.escape = None  # a loop escape or crossing under way at the claim led from elsewhere
