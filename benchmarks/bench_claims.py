@@ -17,9 +17,13 @@ checks in one decision (a claim and a rival, or two of several hypotheses), the 
 fitted window by window for each (``tracked_scan_fit``, from where its recent scans fit best).
 Prints, by whether each is at the right place, how much the one fits its best window better than
 the other, and how often ``track_outranks`` would let a wrong place outrank the right one (the
-count that must stay 0) against how often it lets the right place outrank a wrong one.
+count that must stay 0) against how often it lets the right place outrank a wrong one; and, for
+the pairs where B needs more outliers than A, how that count grows as the lead asked for over such
+a B shrinks (what ``track_lead_trailing`` rests on). ``--dump`` keeps every decision (pickled) for
+studying other rules offline.
 
     python benchmarks/bench_claims.py [--starts 100] [--sweep-starts 20] [--first-seed 1] [--workers 2]
+                                      [--dump decisions.pkl]
 
 It instruments ``Session._verified``, ``Session._credible`` and ``Session._match`` (private: this
 script is a measurement of the runner, not an API), and computes the path's fit of every rival:
@@ -32,8 +36,10 @@ import argparse
 import collections
 import math
 import multiprocessing
+import pickle
 import sys
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -145,33 +151,60 @@ def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, 
     return decisions
 
 
-def _track_pairs(decisions: list[dict[str, Any]]) -> dict[tuple[bool, bool], list[tuple[float, float, bool]]]:
-    """(A right, B right) -> for every ordered pair of hypotheses in one decision that the session
+@dataclass(frozen=True)
+class TrackPair:
+    """Hypothesis A against hypothesis B of one decision, by the lidar along the path."""
+
+    lead: float  # A's best lead over B in a window
+    back: float  # B's best lead over A
+    wins: bool  # track_outranks(A, B) as the session asks it: B's path as found and searched wide
+    more_outliers: int  # B's outliers less A's
+    leads: tuple[float, float]  # A's best lead over B's path as found and searched wide ...
+    backs: tuple[float, float]  # ... and B's over A's
+    windows: int  # windows both paths have
+    a_fits: bool  # A's worst window is at least min_track_fit
+
+
+def _track_pairs(decisions: list[dict[str, Any]]) -> dict[tuple[bool, bool], list[TrackPair]]:
+    """(A right, B right) -> every ordered pair of hypotheses in one decision that the session
     compares by the lidar along the path (a claim that passes the recent checks and each rival that
     does too, either way round; of several hypotheses one that passes them and any other, passing
-    or not): how much A fits its best window better than B, how much B fits its best window better
-    than A, and whether ``track_outranks(A, B)`` holds with B's path fitted both from where its
-    recent scans fit best and searched wide (as the session compares them)."""
+    or not), with B's path fitted both from where its recent scans fit best and searched wide (as
+    the session compares them; a B with outrank_outliers more outliers than A needs only the
+    trailing lead)."""
     from initcli.core.verification import VerificationParams, track_outranks
 
     params = VerificationParams()
-    pairs: dict[tuple[bool, bool], list[tuple[float, float, bool]]] = collections.defaultdict(list)
+    pairs: dict[tuple[bool, bool], list[TrackPair]] = collections.defaultdict(list)
     for d in decisions:
         several = d["kind"] != "claim"
         hs = d["hypotheses"] if several else [d["claim"], *d["rivals"]]
         hs = [h for h in hs if len(h["track"]) and (several or h["passed"])]
         for a in hs:
             for b in hs:
-                n = min(len(a["track"]), len(b["track"]))
-                if a is b or n == 0 or not a["passed"]:
+                if a is b or not a["passed"]:
                     continue
                 if not several and a is not d["claim"] and b is not d["claim"]:
                     continue
-                lead = np.asarray(a["track"][:n]) - np.asarray(b["track"][:n])
-                wins = track_outranks(a["track"], b["track"], params) and track_outranks(
-                    a["track"], b["wide"], params
+                mine = np.asarray(a["track"])
+                both = [np.asarray(b["track"]), np.asarray(b["wide"])]
+                n = min(len(mine), *(len(t) for t in both))
+                if n == 0:
+                    continue
+                diff = [mine[:n] - t[:n] for t in both]
+                trailing = b["outliers"] >= a["outliers"] + params.outrank_outliers
+                wins = all(track_outranks(mine, t, params, trailing) for t in both)
+                pair = TrackPair(
+                    float(diff[0].max()),
+                    float(-diff[0].min()),
+                    wins,
+                    b["outliers"] - a["outliers"],
+                    (float(diff[0].max()), float(diff[1].max())),
+                    (float(-diff[0].min()), float(-diff[1].min())),
+                    n,
+                    float(mine.min()) >= params.min_track_fit,
                 )
-                pairs[(a["right"], b["right"])].append((float(lead.max()), float(-lead.min()), wins))
+                pairs[(a["right"], b["right"])].append(pair)
                 if wins and not a["right"] and b["right"]:
                     print(
                         f"  unsafe: {d['where']} t={d['t']:.1f} ({d['kind']}): A {a['error']} "
@@ -188,6 +221,7 @@ def main() -> None:
     ap.add_argument("--sweep-starts", type=int, default=20, help="starts per sample at each doubled key")
     ap.add_argument("--first-seed", type=int, default=1, help="seed of the first start")
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--dump", type=Path, help="also pickle every decision here (for offline study of rules)")
     args = ap.parse_args()
     seeds = range(args.first_seed, args.first_seed + args.starts)
     sweep_seeds = range(args.first_seed, args.first_seed + args.sweep_starts)
@@ -196,6 +230,9 @@ def main() -> None:
         jobs += [(s, k, v, seed, work) for k, v in SWEEPS for s in SITES for seed in sweep_seeds]
         with multiprocessing.get_context("spawn").Pool(args.workers) as pool:
             decisions = [d for ds in pool.imap_unordered(_session_decisions, jobs) for d in ds]
+    if args.dump:
+        with args.dump.open("wb") as f:
+            pickle.dump(decisions, f)
     claims = [d for d in decisions if d["kind"] == "claim"]
     split: collections.Counter[tuple[str, str]] = collections.Counter()
     gaps: dict[str, list[float]] = {"right": [], "wrong": []}
@@ -244,22 +281,52 @@ def main() -> None:
             print(f"| {'right' if right else 'wrong'} | {len(worst)} | {p1:.3f} | {p5:.3f} | {p50:.3f} |")
     print("\npairs of hypotheses compared by the lidar along the path (A passing the recent checks, B a")
     print("claim's rival passing them too, or any other of several hypotheses): A's best lead over B in a")
-    print("window, B's best lead over A; and how often track_outranks(A, B) holds (lead")
+    print("window, B's best lead over A; and how often track_outranks(A, B) holds as the session asks it")
     print(
-        f"{params.track_lead}, slack {params.track_slack}, A's worst window at least {params.min_track_fit})"
+        f"(lead {params.track_lead}, or {params.track_lead_trailing} over a B with"
+        f" {params.outrank_outliers}+ more outliers; slack {params.track_slack}; A's worst window at"
+        f" least {params.min_track_fit}; {params.min_track_windows}+ windows)"
     )
     print("| A | B | pairs | A's lead: median / largest | B's lead: median / largest | A outranks B |")
     print("|---|---|---|---|---|---|")
     pairs = _track_pairs(decisions)
     for (a, b), values in sorted(pairs.items(), reverse=True):
-        lead = np.array([v[0] for v in values])
-        back = np.array([v[1] for v in values])
+        lead = np.array([v.lead for v in values])
+        back = np.array([v.back for v in values])
         print(
             f"| {'right' if a else 'wrong'} | {'right' if b else 'wrong'} | {len(values)} | "
             f"{np.median(lead):+.3f} / {lead.max():+.3f} | {np.median(back):+.3f} / {back.max():+.3f} | "
-            f"{sum(v[2] for v in values)} |"
+            f"{sum(v.wins for v in values)} |"
         )
-    unsafe = sum(v[2] for v in pairs.get((False, True), []))
+    print(
+        f"\nthe pairs where B has {params.outrank_outliers}+ more outliers than A (over"
+        f" {params.min_track_windows}+"
+    )
+    print("windows): how often A would outrank B at each lead over both of B's paths (the trailing lead")
+    print(
+        f"of the session is {params.track_lead_trailing}; slack {params.track_slack},"
+        " A's worst window at least"
+    )
+    print(f"{params.min_track_fit})")
+    leads = (0.05, 0.1, 0.15, 0.2)
+    print("| A | B | pairs | " + " | ".join(f"lead {x}" for x in leads) + " |")
+    print("|---|---|---|" + "---|" * len(leads))
+    for (a, b), values in sorted(pairs.items(), reverse=True):
+        trailing = [
+            v
+            for v in values
+            if v.more_outliers >= params.outrank_outliers and v.windows >= params.min_track_windows
+        ]
+        counts = [
+            sum(v.a_fits and min(v.leads) >= x and max(v.backs) <= params.track_slack for v in trailing)
+            for x in leads
+        ]
+        print(
+            f"| {'right' if a else 'wrong'} | {'right' if b else 'wrong'} | {len(trailing)} | "
+            + " | ".join(map(str, counts))
+            + " |"
+        )
+    unsafe = sum(v.wins for v in pairs.get((False, True), []))
     print(f"\na wrong place outranking the right one by the lidar along the path: {unsafe} (must be 0)")
     sys.stdout.flush()
 

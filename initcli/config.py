@@ -265,6 +265,8 @@ class VerificationSection:
     track_lead: float = _CHECKS.track_lead  # ... a place fitting some window this much better ...
     track_slack: float = _CHECKS.track_slack  # ... and none this much worse outranks another ...
     min_track_fit: float = _CHECKS.min_track_fit  # ... when it fits every window at least this well
+    track_lead_trailing: float = _CHECKS.track_lead_trailing  # the lead over one outrank_outliers worse
+    min_track_windows: int = _CHECKS.min_track_windows  # windows two places are compared on, at least
 
 
 @dataclass

@@ -1,4 +1,5 @@
-"""Paths the tests share: the repository root, the bundled samples, the real IFC models in ../shared/ifc.
+"""Paths the tests share: the repository root, the bundled samples, the real IFC models in ../shared/ifc;
+and how a session's claim replays from its log.
 
 Test modules import these as ``from tests.helpers import SAMPLES`` (pytest's ``pythonpath`` puts the
 repository root on ``sys.path``); the fixtures built on them live in ``tests/conftest.py``.
@@ -7,6 +8,10 @@ repository root on ``sys.path``); the fixtures built on them live in ``tests/con
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from initcli.match.pipeline import Hypothesis, MatchReport
 
 ROOT = Path(__file__).resolve().parent.parent
 SAMPLES = ROOT / "sample_models"
@@ -17,3 +22,20 @@ SHARED_IFC = ROOT.parent / "shared" / "ifc"
 def shared_ifc_files() -> list[Path]:
     """The real IFC models in ../shared/ifc, sorted (none when the folder is absent)."""
     return sorted(SHARED_IFC.glob("*.ifc")) if SHARED_IFC.is_dir() else []
+
+
+def replayed_claim(log_path: Path, site_dir: Path, report: MatchReport) -> Hypothesis:
+    """What a session claimed, as ``bim-init match`` finds it in the session's log (``report``, its
+    match): the unique match, or of several hypotheses the one the lidar along the path favours
+    (a session checks that one as a unique match)."""
+    from bimtools.site.load import load_site
+    from initcli.io.detection_log import read_log
+    from initcli.match.pipeline import site_class_map
+    from initcli.match.verify import verify_and_favour
+
+    if report.verdict == "unique match":
+        return report.hypotheses[0]
+    site = load_site(site_dir)
+    _, favoured = verify_and_favour(read_log(log_path), site, report, site_class_map(site))
+    assert favoured is not None, f"{report.verdict}, and the lidar along the path favours none"
+    return report.hypotheses[favoured]

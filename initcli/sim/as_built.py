@@ -10,7 +10,7 @@ key                    what it does                                             
 missing_doors          share of doors not installed: no leaf (a free doorway), nothing to     share
                        detect
 door_shift             doors built off their design place along the host wall (leaf and       m, sigma
-                       feature move together)
+                       feature move together; a closed one's design opening is walled up)
 wall_offset            every other element (walls, columns, glazing) built off its place      m, sigma
 open_doors             share of the installed doors standing open: no obstacle, still a door  share
 hoarding               temporary walls not in the BIM, across a corridor or in front of a     per 100 m
@@ -212,6 +212,7 @@ def derive_as_built(
     out_features: list[SimFeature] = []
     for f in features:
         pieces = by_element.get(f.id, [])  # indices of the door's own obstacles
+        design = f
         if f.cls in DOOR_CLASSES:
             exterior = f.id in doors and is_exterior(f, circulation)
             if f.id in doors and p.missing_doors > 0 and rng.random() < p.missing_doors:
@@ -237,6 +238,11 @@ def derive_as_built(
                 changes["open_doors"] += 1
             elif f.id in doors:
                 closed.append(door_leaf(f))
+                if f is not design:
+                    # The wall's opening stays where the design has it: a leaf built off its place
+                    # would leave a gap there beside it (out of a room, out of the building), so
+                    # the design opening is closed too (by the shifted door's wall).
+                    closed.append(door_leaf(design))
         if p.never_seen > 0 and rng.random() < p.never_seen:
             changes["never_seen"] += 1
             continue

@@ -353,7 +353,8 @@ def test_the_path_scans_follow_odometry_drift_back_along_the_path() -> None:
         ([0.9, 0.9, 0.9], [0.9, 0.97, 0.5], False),  # 0.07 worse somewhere: the other holds its own
         ([0.9, 0.9, 0.9], [0.85, 0.8, 0.8], False),  # never 0.2 better: no lead
         ([0.6, 0.9, 0.9], [0.3, 0.5, 0.5], False),  # its own worst window below min_track_fit
-        ([0.9, 0.9], [0.9, 0.9, 0.1], False),  # compared over the common windows only
+        ([0.9, 0.9, 0.9, 0.9], [0.9, 0.9, 0.9], False),  # compared over the common windows only
+        ([0.9, 0.9], [0.5, 0.5], False),  # two windows: the first 10 m are no path yet
         ([], [0.5], False),
     ],
 )
@@ -361,6 +362,17 @@ def test_one_place_outranks_another_by_the_path_scans_only_plainly(
     track: list[float], other: list[float], expected: bool
 ) -> None:
     assert track_outranks(np.array(track), np.array(other), VerificationParams()) is expected
+
+
+def test_a_place_needing_more_outliers_is_outranked_by_a_smaller_lead() -> None:
+    """The doors (one outlier fewer) and the lidar (0.12 better in a window, never worse) agree."""
+    mine, theirs = np.array([0.9, 0.85, 0.9, 0.8]), np.array([0.9, 0.85, 0.78, 0.8])
+    params = VerificationParams()
+    assert not track_outranks(mine, theirs, params)
+    assert track_outranks(mine, theirs, params, trailing=True)
+    # ... but not when the other holds its own somewhere, nor on a lead below the trailing lead
+    assert not track_outranks(mine, np.array([0.9, 0.95, 0.78, 0.8]), params, trailing=True)
+    assert not track_outranks(mine, np.array([0.9, 0.85, 0.85, 0.8]), params, trailing=True)
 
 
 GOOD, BAY_OFF, TURNED = np.array([0.9, 0.9, 0.9]), np.array([0.9, 0.9, 0.4]), np.array([0.9, 0.85, 0.9])
@@ -380,6 +392,12 @@ def test_of_several_hypotheses_the_one_the_path_scans_plainly_favour_is_found() 
     # one that fails the recent checks must be outranked as well (searched wide: here it still trails)
     assert track_favoured([True, True, False], [1, 1, 0], [6, 6, 5], tracks, wide, params) is None
     assert track_favoured([True, True, False], [1, 1, 1], [6, 6, 5], tracks, wide, params) == 0
+    # one place alone passes the checks and outranks the other, which fails them: that one
+    assert track_favoured([True, False], [1, 1], [6, 6], [GOOD, BAY_OFF], wide, params) == 0
+    # a place one outlier worse is outranked by the trailing lead (0.12 here, not 0.2)
+    near = np.array([0.9, 0.9, 0.78])
+    assert track_favoured([True, True], [1, 1], [6, 6], [GOOD, near], lambda k: near, params) is None
+    assert track_favoured([True, True], [1, 2], [6, 5], [GOOD, near], lambda k: near, params) == 0
 
 
 @pytest.mark.parametrize(
@@ -390,7 +408,6 @@ def test_of_several_hypotheses_the_one_the_path_scans_plainly_favour_is_found() 
         ([True, True], [1, 1], [3, 6], [GOOD, BAY_OFF], None),  # too few matched features to claim
         ([True], [1], [6], [GOOD], None),  # one hypothesis: nothing to tell apart here
         ([True, True], [1, 1], [6, 6], [GOOD, BAY_OFF], GOOD),  # searched wide the other fits as well
-        ([True, False], [1, 1], [6, 6], [GOOD, BAY_OFF], None),  # one place alone passes the checks
         # the true place found 1.5 m off fails the recent checks; searched wide it fits as well
         ([True, True, False], [0, 1, 0], [6, 6, 6], [GOOD, BAY_OFF, BAY_OFF], GOOD),
     ],

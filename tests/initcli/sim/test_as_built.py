@@ -97,6 +97,29 @@ def test_shifted_doors_move_along_their_wall_with_their_leaf(block_a: StoreyMode
     assert 0.1 < float(np.mean(moves)) < 0.5  # sigma 0.3 m: mean |shift| about 0.24 m
 
 
+def test_a_closed_door_built_off_its_place_leaves_no_gap_at_the_design_opening(block_a: StoreyModel) -> None:
+    """The leaf moves with the door, the wall's opening stays where the design has it: it is closed
+    there too, or a leaf 0.6 m off would leave a gap out of the room (or the building) beside it."""
+    world = derive(block_a, leaves=True, door_shift=0.6)
+    design = {f.id: f for f in block_a.features}
+    built = {f.id: f for f in world.features}
+    checked = 0
+    for door_id in door_ids(block_a) & set(built):
+        f, d = built[door_id], design[door_id]
+        if float(np.hypot(f.x - d.x, f.y - d.y)) < 0.3:
+            continue
+        leaves = [
+            np.asarray(o.exterior)
+            for o in world.obstacles
+            if o.element == door_id and o.ifc_class == LEAF_CLASS
+        ]
+        centres = [ring.mean(axis=0) for ring in leaves]
+        for x, y in ((f.x, f.y), (d.x, d.y)):  # a leaf across the built opening and the design one
+            assert any(float(np.hypot(c[0] - x, c[1] - y)) < 0.1 for c in centres), (door_id, x, y)
+        checked += 1
+    assert checked >= 3
+
+
 def test_hoardings_phantoms_and_extra_doors_are_added(block_a: StoreyModel) -> None:
     length = corridor_length(Circulation.of(block_a))
     assert length > 30.0
