@@ -494,7 +494,10 @@ def track_outranks(
     5,756 pairs of a right place passing the recent checks and a wrong one, 3,551 the other way
     round, the place to be outranked also searched wide), the right place outranked the wrong one
     3,096 times, the wrong one the right one 3 times, each on a single window at the initial look;
-    with a trailing lead of 0.1 over a place with more outliers, 79 such wrong-right pairs, none."""
+    with a trailing lead of 0.1 over a place with more outliers, 79 such wrong-right pairs, none.
+    With these rules, at 4ba9f3d: right over wrong 2,995 of 5,689 pairs, wrong over right 2 of
+    3,608, both against a hypothesis 1.8 m and 29 degrees off the truth in a set whose 0.2 m one
+    held its own (README, "Which checks matter")."""
     n = min(len(track), len(other))
     if n == 0 or n < params.min_track_windows or float(np.min(track)) < params.min_track_fit:
         return False
