@@ -73,6 +73,7 @@ def _stats(session: Any, frame: Any, hypothesis: Any, rival: bool) -> dict[str, 
 
 def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, Any]]:
     from initcli.config import load_config
+    from initcli.core.verification import trails
     from initcli.eval.sweep import apply_sweep, parse_sweep
     from initcli.session import runner
     from initcli.session.setup import prepare_site, sim_session
@@ -95,9 +96,9 @@ def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, 
         seen["rivals"], seen["found"] = rivals, list(found)
         return credible(self, frame, check, track, claim, rivals, found)
 
-    def spy_verified(self: Any, frame: Any, report: Any) -> tuple:
+    def spy_verified(self: Any, frame: Any, report: Any, picked: bool = False) -> tuple:
         seen.clear()
-        out = verified(self, frame, report)
+        out = verified(self, frame, report, picked)
         claim = _stats(self, frame, report.hypotheses[0], rival=False)
         found = seen.get("found", [])
         rivals = [_stats(self, frame, h, rival=True) for h in found[: runner.RIVALS_COMPARED]]
@@ -106,7 +107,7 @@ def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, 
         believed = checked if n_rivals > runner.RIVALS_CHECKED else [r for r in checked if r["passed"]]
         passing = [r for r in rivals if r["passed"]]
         complete = len(found) == n_rivals <= runner.RIVALS_COMPARED
-        trailing = [r for r in passing if r["outliers"] >= claim["outliers"] + self.checks.outrank_outliers]
+        trailing = [r for r in passing if trails(claim["outliers"], r["outliers"], self.checks)]
         decisions.append(
             {
                 "kind": "claim",
@@ -155,14 +156,22 @@ def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, 
 class TrackPair:
     """Hypothesis A against hypothesis B of one decision, by the lidar along the path."""
 
-    lead: float  # A's best lead over B in a window
-    back: float  # B's best lead over A
     wins: bool  # track_outranks(A, B) as the session asks it: B's path as found and searched wide
-    more_outliers: int  # B's outliers less A's
+    trailing: bool  # B needs outrank_outliers more outliers than A (``trails``)
     leads: tuple[float, float]  # A's best lead over B's path as found and searched wide ...
     backs: tuple[float, float]  # ... and B's over A's
     windows: int  # windows both paths have
     a_fits: bool  # A's worst window is at least min_track_fit
+
+    @property
+    def lead(self) -> float:
+        """A's best lead over B (B's path as found) in a window."""
+        return self.leads[0]
+
+    @property
+    def back(self) -> float:
+        """B's best lead over A."""
+        return self.backs[0]
 
 
 def _track_pairs(decisions: list[dict[str, Any]]) -> dict[tuple[bool, bool], list[TrackPair]]:
@@ -172,7 +181,7 @@ def _track_pairs(decisions: list[dict[str, Any]]) -> dict[tuple[bool, bool], lis
     or not), with B's path fitted both from where its recent scans fit best and searched wide (as
     the session compares them; a B with outrank_outliers more outliers than A needs only the
     trailing lead)."""
-    from initcli.core.verification import VerificationParams, track_outranks
+    from initcli.core.verification import VerificationParams, track_outranks, trails
 
     params = VerificationParams()
     pairs: dict[tuple[bool, bool], list[TrackPair]] = collections.defaultdict(list)
@@ -192,20 +201,17 @@ def _track_pairs(decisions: list[dict[str, Any]]) -> dict[tuple[bool, bool], lis
                 if n == 0:
                     continue
                 diff = [mine[:n] - t[:n] for t in both]
-                trailing = b["outliers"] >= a["outliers"] + params.outrank_outliers
-                wins = all(track_outranks(mine, t, params, trailing) for t in both)
+                trailing = trails(a["outliers"], b["outliers"], params)
                 pair = TrackPair(
-                    float(diff[0].max()),
-                    float(-diff[0].min()),
-                    wins,
-                    b["outliers"] - a["outliers"],
+                    all(track_outranks(mine, t, params, trailing) for t in both),
+                    trailing,
                     (float(diff[0].max()), float(diff[1].max())),
                     (float(-diff[0].min()), float(-diff[1].min())),
                     n,
                     float(mine.min()) >= params.min_track_fit,
                 )
                 pairs[(a["right"], b["right"])].append(pair)
-                if wins and not a["right"] and b["right"]:
+                if pair.wins and not a["right"] and b["right"]:
                     print(
                         f"  unsafe: {d['where']} t={d['t']:.1f} ({d['kind']}): A {a['error']} "
                         f"{np.round(a['track'], 2)}, B {b['error']} {np.round(b['track'], 2)}"
@@ -312,11 +318,7 @@ def main() -> None:
     print("| A | B | pairs | " + " | ".join(f"lead {x}" for x in leads) + " |")
     print("|---|---|---|" + "---|" * len(leads))
     for (a, b), values in sorted(pairs.items(), reverse=True):
-        trailing = [
-            v
-            for v in values
-            if v.more_outliers >= params.outrank_outliers and v.windows >= params.min_track_windows
-        ]
+        trailing = [v for v in values if v.trailing and v.windows >= params.min_track_windows]
         counts = [
             sum(v.a_fits and min(v.leads) >= x and max(v.backs) <= params.track_slack for v in trailing)
             for x in leads

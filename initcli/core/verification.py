@@ -262,6 +262,12 @@ def rival_search(
     return max(configured, max(RIVAL_MARGIN, budget - found_with) if noisy else 0)
 
 
+def trails(outliers: int, other_outliers: int, params: VerificationParams) -> bool:
+    """Does a place found with ``other_outliers`` need ``outrank_outliers`` more than one found with
+    ``outliers`` (what ``outranks`` and the trailing lead of ``track_outranks`` ask)?"""
+    return other_outliers >= outliers + params.outrank_outliers
+
+
 def outranks(
     claim: Verification,
     claim_outliers: int,
@@ -281,9 +287,8 @@ def outranks(
         return True
     if claim.scan_fit is None or rival.scan_fit is None:
         return False
-    return (
-        rival_outliers >= claim_outliers + params.outrank_outliers
-        and rival.scan_fit <= claim.scan_fit - params.outrank_scan_fit
+    return trails(claim_outliers, rival_outliers, params) and (
+        rival.scan_fit <= claim.scan_fit - params.outrank_scan_fit
     )
 
 
@@ -530,8 +535,8 @@ def track_favoured(
         return None
     fewest = min(outliers)
 
-    def trailing(i: int, j: int) -> bool:
-        return outliers[j] >= outliers[i] + params.outrank_outliers
+    def beats(i: int, j: int, track: np.ndarray) -> bool:
+        return track_outranks(tracks[i], track, params, trails(outliers[i], outliers[j], params))
 
     winners = [
         i
@@ -539,12 +544,12 @@ def track_favoured(
         if passed[i]
         and outliers[i] == fewest
         and inliers[i] >= params.min_claim_inliers
-        and all(track_outranks(tracks[i], tracks[j], params, trailing(i, j)) for j in range(n) if j != i)
+        and all(beats(i, j, tracks[j]) for j in range(n) if j != i)
     ]
     if len(winners) != 1:
         return None
     best = winners[0]
-    if all(track_outranks(tracks[best], wide(j), params, trailing(best, j)) for j in range(n) if j != best):
+    if all(beats(best, j, wide(j)) for j in range(n) if j != best):
         return best
     return None
 

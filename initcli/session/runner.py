@@ -47,6 +47,7 @@ from initcli.core.verification import (
     rival_search,
     track_favoured,
     track_outranks,
+    trails,
 )
 from initcli.core.wall_following import MovingObstacleWait, ScanView, open_beside, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
@@ -78,7 +79,6 @@ FRONTIER_BEAM_STEP = 2  # ... every second beam of them
 # many times wider too (ntu_hallway, doors shifted sigma 0.6 m: a 177-degree-off claim on 5 features).
 RIVAL_ALPHA_FACTOR = 1.5
 RIVAL_ALPHA_MAX_INLIERS = 6  # ... for a claim on this many matched features or fewer (more: alpha as is)
-BY_THE_LIDAR = "unique match by the lidar along the path"  # the verdict of a place it picked out
 DOUBT_WINDOW_M = 10.0  # m after a claim held back by credible rivals in which claims get the wide search
 RIVAL_SEARCH_FACTOR = 2.0  # a rival's scan fit may shift it this many times farther than a claim's
 RIVALS_CHECKED = 8  # rivals of a claim verified one by one; more count as credible without a check ...
@@ -366,7 +366,7 @@ class Session:
         unique = report.n_hypotheses == 1 or report.one_place()
         claim = report if unique else self._lidar_unique(frame, report)
         if claim is not None:
-            verified, aligned, rivals = self._verified(frame, claim)
+            verified, aligned, rivals = self._verified(frame, claim, picked=not unique)
             if verified:
                 return self._coarse_done(frame, claim, aligned)
             if self.state == "look":
@@ -431,7 +431,7 @@ class Session:
             report,
             hypotheses=[best],
             n_hypotheses=1,
-            verdict=f"{BY_THE_LIDAR} ({report.verdict})",
+            verdict=f"unique match by the lidar along the path ({report.verdict})",
         )
 
     def _track(
@@ -481,13 +481,15 @@ class Session:
         )
 
     def _verified(
-        self, frame: SensorFrame, report: MatchReport
+        self, frame: SensorFrame, report: MatchReport, picked: bool = False
     ) -> tuple[bool, Pose2D | None, list[Hypothesis]]:
         """Check a unique match before claiming it (beyond the paper): enough matched features, no
         credible rival when more outliers are allowed (an as-built site has doors the BIM lacks),
-        negative evidence, the path and the lidar. A failed one is logged and exploration goes on.
-        Also returns the transform moved to where the recent scans fit best (None: not checked) and
-        the rivals that keep a claim out (credible, or too many to check), for active exploration."""
+        negative evidence, the path and the lidar (``picked``: the lidar along the path picked it out
+        of several hypotheses, so its rivals get the wider search). A failed one is logged and
+        exploration goes on. Also returns the transform moved to where the recent scans fit best
+        (None: not checked) and the rivals that keep a claim out (credible, or too many to check),
+        for active exploration."""
         if not self.checks.enabled:
             return True, None, []
         hypothesis = report.hypotheses[0]
@@ -498,11 +500,6 @@ class Session:
             )
             return False, None, []
         c = self.checks
-        # A place the lidar along the path picked out of several: the doors alone did not single
-        # it out, so its rivals are searched with the wider tolerance too (point-symmetric
-        # ntu_hallway, a fifth of the features never seen: the place turned 179 degrees was
-        # favoured, the true one, its doors built off their place, fell outside Eq. 8's tolerance)
-        by_lidar = report.verdict.startswith(BY_THE_LIDAR)
         budget = report.options.outlier_budget(len(report.features))
         extra = rival_search(
             c.rival_outliers,
@@ -518,7 +515,11 @@ class Session:
             extra,
             c.rival_distance,
             math.radians(c.rival_turn_deg),
-            RIVAL_ALPHA_FACTOR if inliers <= RIVAL_ALPHA_MAX_INLIERS or self._doubted() or by_lidar else 1.0,
+            # ``picked``: the lidar along the path picked this place out of several, the doors
+            # alone did not single it out (point-symmetric ntu_hallway, a fifth of the features
+            # never seen: the place turned 179 degrees was favoured, the true one, its doors
+            # built off their place, fell outside Eq. 8's tolerance)
+            RIVAL_ALPHA_FACTOR if inliers <= RIVAL_ALPHA_MAX_INLIERS or self._doubted() or picked else 1.0,
         )
         pose = hypothesis.reported_pose
         check = self._verify(hypothesis.storey, pose * frame.odom.inverse())
@@ -609,7 +610,7 @@ class Session:
             # ntu_hallway, doors 0.6 m off, a turned place fitted the path better than the true one
             # 1.8 m off until that search).
             mine = claim_track()
-            trailing = h.n_outliers >= claim.n_outliers + c.outrank_outliers
+            trailing = trails(claim.n_outliers, h.n_outliers, c)
             return track_outranks(mine, self._track(frame, h, theirs), c, trailing) and track_outranks(
                 mine, self._track(frame, h, theirs, wide=True), c, trailing
             )
