@@ -68,8 +68,24 @@ test -s block_a_site/features.csv || fail "bim-extract wrote no features.csv"
 "$WORK/venv/bin/bim-init" run --config block_a.site.yaml --out session --start 10.0,11.0,0 --seed 3 --quiet \
   || fail "bim-init run"
 test -s session/summary.json || fail "bim-init run wrote no summary.json"
-"$WORK/venv/bin/bim-init" match session/session.jsonl --site block_a_site --top 1 >/dev/null \
-  || fail "bim-init match on the session log"
+# The session's claim, found again in its log: the unique match (exit 0) or, of several hypotheses
+# (exit 3), the one the lidar along the path favours, named in the notes with the same features.
+rc=0
+"$WORK/venv/bin/bim-init" match session/session.jsonl --site block_a_site --json >match.json || rc=$?
+case $rc in 0|3) ;; *) fail "bim-init match on the session log: exit $rc" ;; esac
+"$VPY" - <<'PY' || fail "bim-init match does not find the session's claim in its log"
+import json, re, sys
+match, summary = json.load(open("match.json")), json.load(open("session/summary.json"))
+if not summary["success"]:
+    sys.exit(f"the session did not initialise: {summary['reason']}")
+ranks = [1] if match["exit_code"] == 0 else [
+    int(m.group(1)) for n in match["notes"] if (m := re.search(r"favours hypothesis (\d+)", n))]
+found = [h for h in match["hypotheses"] if h["rank"] in ranks]
+ids = lambda xs: [x for x in xs if x]  # outliers are null
+if not found or ids(found[0]["matches"]) != ids(summary["matched_ids"]):
+    sys.exit(f"{match['verdict']}; notes {match['notes']}; session matched {summary['matched_ids']}")
+print(f"wheel_smoke: bim-init match: {match['verdict']}, the session's claim is hypothesis {ranks[0]}")
+PY
 if "$WORK/venv/bin/bim-init" eval --out eval_out 2>err.txt; then fail "bim-init eval without --config ran"; fi
 grep -q -- "--config" err.txt || fail "bim-init eval without --config: $(cat err.txt)"
 echo "wheel_smoke: OK ($(basename "$WHEEL"))"
