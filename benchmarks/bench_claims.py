@@ -73,7 +73,7 @@ def _stats(session: Any, frame: Any, hypothesis: Any, rival: bool) -> dict[str, 
 
 def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, Any]]:
     from initcli.config import load_config
-    from initcli.core.verification import trails
+    from initcli.core.verification import TRACK_HYPOTHESES, trails
     from initcli.eval.sweep import apply_sweep, parse_sweep
     from initcli.session import runner
     from initcli.session.setup import prepare_site, sim_session
@@ -130,7 +130,7 @@ def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, 
     def spy_match(self: Any, t: float) -> Any:
         report = match(self, t)
         frame = seen.get("frame")
-        several = 1 < report.n_hypotheses <= min(len(report.hypotheses), runner.TRACK_HYPOTHESES)
+        several = 1 < report.n_hypotheses <= min(len(report.hypotheses), TRACK_HYPOTHESES)
         if frame is not None and several:
             hs = [_stats(self, frame, h, rival=True) for h in report.hypotheses]
             decisions.append({"kind": "several", "hypotheses": hs, "where": where, "t": t})

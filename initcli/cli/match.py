@@ -9,6 +9,8 @@ from __future__ import annotations
 import json
 import math
 import sys
+from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated
 
@@ -19,14 +21,19 @@ from rich.table import Table
 from bimtools.errors import InputError
 from initcli.cli.bag2log import log_or_bag
 from initcli.core.geometry import Pose2D
+from initcli.core.verification import TRACK_HYPOTHESES, Verification
 from initcli.io.match_result import report_to_dict
 from initcli.match.pipeline import EXIT_BAD_INPUT, MatchOptions, MatchReport, run_match
 
 
-def _verifications(log_path: Path, site_path: Path, report: MatchReport, skip_bad: bool) -> list | None:
+def _verifications(
+    log_path: Path, site_path: Path, report: MatchReport, skip_bad: bool, shown: int
+) -> list[Verification | None]:
     """Negative evidence, scan fit and the lidar along the path of each hypothesis
-    (initcli.match.verify), for --json; with several hypotheses, a note naming the one the lidar
-    along the path favours (a session checks that one as a unique match)."""
+    (initcli.match.verify); with several hypotheses, a note naming the one the lidar along the path
+    favours (a session checks that one as a unique match). ``report`` lists up to
+    ``TRACK_HYPOTHESES`` so that the note does not depend on ``--top``; it is cut to the ``shown``
+    first here, with the checks."""
     from bimtools.site.load import load_site
     from initcli.io.detection_log import read_log
     from initcli.match.pipeline import site_class_map
@@ -37,11 +44,15 @@ def _verifications(log_path: Path, site_path: Path, report: MatchReport, skip_ba
         read_log(log_path, skip_bad=skip_bad), site, report, site_class_map(site)
     )
     if favoured is not None:
+        rank = report.hypotheses[favoured].rank
+        hidden = f" (not shown: --top {rank} shows it)" if rank > shown else ""
         report.notes.append(
-            f"the lidar along the path favours hypothesis {report.hypotheses[favoured].rank}: a session"
-            " checks it as a unique match"
+            f"the lidar along the path favours hypothesis {rank}{hidden}:"
+            " a session checks it as a unique match"
         )
-    return checks
+    del report.hypotheses[shown:]
+    report.options = replace(report.options, top=shown)
+    return checks[:shown]
 
 
 def _fail(message: str) -> typer.Exit:
@@ -55,8 +66,17 @@ def _fmt_pose(p: Pose2D | None) -> str:
     return f"{p.x:8.3f} {p.y:8.3f} {math.degrees(p.yaw):7.1f}°"
 
 
-def print_report(report: MatchReport, console: Console) -> None:
-    """Confirmed features, the top-K hypotheses table, then the verdict line (last line)."""
+def _fmt_checks(check: Verification | None) -> str:
+    """A hypothesis's verification in a few words: passed or not, missed predictions, scan fit."""
+    if check is None:
+        return "-"
+    fit = "" if check.scan_fit is None else f", fit {check.scan_fit:.2f}"
+    return f"{'pass' if check.passed else 'fail'}: missed {check.missed_predictions}/{check.predicted}{fit}"
+
+
+def print_report(report: MatchReport, console: Console, checks: Sequence[Verification | None] = ()) -> None:
+    """Confirmed features, the top-K hypotheses table (with each one's verification when
+    ``checks`` are given), then the verdict line (last line)."""
     feats = Table(
         title=f"Confirmed features S_object ({len(report.features)}, odom frame)", title_justify="left"
     )
@@ -88,11 +108,12 @@ def print_report(report: MatchReport, console: Console) -> None:
             "pose x y yaw",
             "rectified pose",
             "confidence",
+            *(["checks"] if checks else []),
         ):
             table.add_column(
                 col, justify="left" if col in ("storey", "matches (detection order)") else "right"
             )
-        for h in report.hypotheses:
+        for i, h in enumerate(report.hypotheses):
             matches = " ".join(m if m is not None else "-" for m in h.matches)
             rect = _fmt_pose(h.rectified_pose) if h.rectified_pose is not None else "(no walls)"
             table.add_row(
@@ -103,6 +124,7 @@ def print_report(report: MatchReport, console: Console) -> None:
                 _fmt_pose(h.pose),
                 rect,
                 f"{h.confidence:.3f}",
+                *([_fmt_checks(checks[i])] if checks else []),
             )
         console.print(table)
         if any(h.n_outliers for h in report.hypotheses):
@@ -244,11 +266,14 @@ def match(
         skip_bad=skip_bad,
     )
     checks = None
+    verify = site.is_dir()  # the checks need the site's maps; a bare features.csv has none
     try:
         with log_or_bag(log) as log_path:  # a ROS bag is converted first (bim-init bag2log)
-            report = run_match(log_path, site, options)
-            if json_out and site.is_dir():
-                checks = _verifications(log_path, site, report, options.skip_bad)
+            options.validate()
+            listed = replace(options, top=max(top, TRACK_HYPOTHESES)) if verify else options
+            report = run_match(log_path, site, listed)
+            if verify:
+                checks = _verifications(log_path, site, report, options.skip_bad, top)
     except InputError as exc:
         raise _fail(str(exc)) from None
 
@@ -258,7 +283,7 @@ def match(
         typer.echo(json.dumps(report_to_dict(report, checks), indent=2))
     else:
         console = Console(width=None if sys.stdout.isatty() else 200, soft_wrap=False)
-        print_report(report, console)
+        print_report(report, console, checks or ())
     if plot is not None:
         from initcli.cli.plot_hypotheses import plot_hypotheses
 

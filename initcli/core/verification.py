@@ -42,6 +42,8 @@ from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.core.visibility import CameraModel, FeatureArrays, visible
 
 RIVAL_MARGIN = 2  # more outliers than a noisy claim was found with that its rival search allows, at least
+# several hypotheses are compared by the lidar along the path (track_favoured) up to this many
+TRACK_HYPOTHESES = 12
 SCAN_TURN_STEP_DEG = 3.0  # degrees between the turns best_scan_alignment tries
 WIDE_STEP_M, WIDE_STEP_DEG = 0.5, 5.0  # grid of tracked_scan_fit's widened first search
 

@@ -20,6 +20,7 @@ from initcli.core.detection_filter import Sighting
 from initcli.core.geometry import Pose2D
 from initcli.core.particle_filter import LikelihoodField, likelihood_field
 from initcli.core.verification import (
+    TRACK_HYPOTHESES,
     CameraView,
     FreeSpace,
     PathTrack,
@@ -279,8 +280,9 @@ def verify_and_favour(
 ) -> tuple[list[Verification | None], int | None]:
     """:func:`verify_report`'s checks and, with several hypotheses, the index of the one the lidar
     along the path plainly favours, one hypothesis per place, as a session decides it
-    (:func:`initcli.core.verification.track_favoured`); None when none stands out or the report
-    lists fewer hypotheses than it counts."""
+    (:func:`initcli.core.verification.track_favoured`); None when none stands out, the report
+    lists fewer hypotheses than it counts or counts more than ``TRACK_HYPOTHESES`` (a session
+    compares no more)."""
     params = params or VerificationParams()
     checks, path, storeys = _check_report(log, site, report, cmap, params)
     if path is None or report.n_hypotheses < 2:
@@ -324,7 +326,7 @@ def _favoured(
     """The favoured hypothesis of :func:`verify_and_favour`, from the evidence the checks used."""
     hs = report.hypotheses
     odom = report.odom_pose
-    if odom is None or report.n_hypotheses > len(hs) or params.track_m <= 0:
+    if odom is None or not report.n_hypotheses <= len(hs) <= TRACK_HYPOTHESES or params.track_m <= 0:
         return None
     candidates = [(i, checks[i]) for i in report.places()]
     if any(check is None or check.track_fit is None for _, check in candidates):

@@ -41,6 +41,7 @@ from initcli.core.confinement import ConfinementWatch
 from initcli.core.frontier import LocalMap
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.verification import (
+    TRACK_HYPOTHESES,
     CameraView,
     Verification,
     outranks,
@@ -83,7 +84,6 @@ DOUBT_WINDOW_M = 10.0  # m after a claim held back by credible rivals in which c
 RIVAL_SEARCH_FACTOR = 2.0  # a rival's scan fit may shift it this many times farther than a claim's
 RIVALS_CHECKED = 8  # rivals of a claim verified one by one; more count as credible without a check ...
 RIVALS_COMPARED = 64  # ... unless the claim outranks them all, compared one by one up to this many
-TRACK_HYPOTHESES = 12  # several hypotheses are compared by the lidar along the path up to this many
 REDECIDE_M = 10.0  # m of travel after which hypotheses left undecided are matched and judged again
 FINE_TRIES = 2  # final-pose checks a session may fail: after a failed one it explores on and claims again
 AGREE_M = 2.0  # m: a fine pose farther than this from the odometry-carried coarse pose disagrees ...

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 
 import pytest
@@ -205,7 +206,14 @@ def test_a_claim_by_the_lidar_along_the_path_replays_as_a_note_of_match(tmp_path
     assert match.exit_code == 3, match.output
     report = json.loads(match.stdout)
     (note,) = [n for n in report["notes"] if "lidar along the path favours" in n]
-    rank = int(note.split("hypothesis ")[1].split(":")[0])
+    rank = int(re.search(r"favours hypothesis (\d+)", note).group(1))
     favoured = next(h for h in report["hypotheses"] if h["rank"] == rank)
     assert favoured["matches"] == doc["matched_ids"]
     assert all(h["verification"]["track_fit"] for h in report["hypotheses"])
+    # the console says the same whatever --top shows, with each shown hypothesis' checks
+    args = ["match", str(out / "session.jsonl"), "--site", str(out / "site"), "--top", "1"]
+    shown = runner.invoke(app, args)
+    assert shown.exit_code == 3, shown.output
+    assert f"favours hypothesis {rank}" in shown.stdout and "checks" in shown.stdout
+    assert ("(not shown: --top" in shown.stdout) == (rank > 1)
+    assert re.search(r"(pass|fail): missed \d+/\d+", shown.stdout)
