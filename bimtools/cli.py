@@ -32,7 +32,8 @@ out = Console()
 
 
 class LazyProgress:
-    """A rich progress bar that only appears once the work has taken more than a second."""
+    """A rich progress bar that only appears once the work has taken more than a second, and only
+    on a terminal (a log file gets no bar and no stray line from it)."""
 
     def __init__(self, label: str, delay: float = 1.0):
         self.label = label
@@ -43,7 +44,7 @@ class LazyProgress:
 
     def __call__(self, done: int, total: int) -> None:
         if self.progress is None:
-            if time.monotonic() - self.start < self.delay:
+            if not err.is_terminal or time.monotonic() - self.start < self.delay:
                 return
             self.progress = Progress(
                 TextColumn(self.label),

@@ -25,6 +25,7 @@ if TYPE_CHECKING:
     import ifcopenshell
 
 ENTRANCE_RADIUS = 2.5  # metres: a door this close to a lift/stair body is its entrance
+FOOT_CLEARANCE = 0.35  # metres in front of a stair's foot that must be free floor
 
 
 @dataclass
@@ -77,6 +78,7 @@ class StoreyContext:
     regions: FreeRegions
     spaces: SpaceIndex
     categories: CategorySet
+    warnings: list[str] = field(default_factory=list)  # what a user should hear (bim-extract prints them)
 
 
 def _enclosure_space(categories: CategorySet, name: str) -> bool:
@@ -247,9 +249,19 @@ def _body_front(ctx: StoreyContext, body: BodyCandidate, category: Category) -> 
         if foot is None:
             return None
         # A stair whose foot is seen only from outside the building (an exterior stair) is not a
-        # feature a robot inside can reach.
+        # feature a robot inside can reach; nor one whose foot faces a wall (the floor right in
+        # front of it is not free): its climb was misread, and a front through a wall would have
+        # the robot expect to see it from the room behind.
         ahead = _probe(ctx, foot.point, foot.normal)
-        return foot if ahead.reachable else None
+        if not ahead.reachable:
+            return None
+        step = foot.point + FOOT_CLEARANCE * foot.normal
+        if not ctx.regions.label_at(*step):
+            ctx.warnings.append(
+                f"storey {ctx.name!r}: stair {body.name!r} ({body.guid}): its foot faces a wall, skipped"
+            )
+            return None
+        return foot
     front = _best_front(ctx, body.footprint, set())
     if front is None:
         return None

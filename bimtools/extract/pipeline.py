@@ -264,7 +264,8 @@ def extract_site(
         if storey_result.features or storey is not None:
             result.storeys.append(storey_result)
     if not result.features:
-        raise InputError(f"{path}: no features found (no doors, lifts or stairs on any storey)")
+        where = "any storey" if storey in (None, "all") else f"storey {storey!r}"
+        raise InputError(f"{path}: no features found (no doors, lifts or stairs on {where})")
     return result
 
 
@@ -352,6 +353,7 @@ def _extract_storey(
                 )
                 break
     features = storey_features(ctx, doors, bodies)
+    warnings += ctx.warnings
     order = {c.name: i for i, c in enumerate(categories.categories)}
     features.sort(key=lambda f: (order.get(f.category, 99), round(f.x, 3), round(f.y, 3), f.id))
     features, notes = merge_duplicates(features)

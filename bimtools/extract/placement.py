@@ -13,6 +13,8 @@ import shapely
 from shapely.geometry.base import BaseGeometry
 
 MAX_FACE_OFFSET = 0.25  # metres from the element's centre plane to the face used as X, Y
+DEEPER_THAN_WIDE = 1.5  # a door this many times deeper than wide along its placement X is turned
+CLIMB_RISE = 1.0  # metres of rise over which a stair's climb at its foot is measured
 
 
 @dataclass(frozen=True)
@@ -43,16 +45,13 @@ def opening_in_plan(
     """Footprint of a door-like element from its mesh and placement axes (world frame, metres).
 
     The local X axis of a door's placement runs along the wall; local Y across it. When X is not
-    horizontal (unusual exports) the footprint's long side is used instead.
+    horizontal, or the element is plainly deeper than wide along it (a Vectorworks export keeps
+    the identity placement and puts the shape in world coordinates, so X may run across the
+    wall), the footprint's long side is used instead.
     """
     along = _unit(x_axis)
-    if along is None:
-        rect = shapely.minimum_rotated_rectangle(shapely.multipoints(verts[:, :2]))
-        coords = np.asarray(rect.exterior.coords)
-        edges = np.diff(coords, axis=0)
-        along = _unit(edges[int(np.argmax(np.hypot(edges[:, 0], edges[:, 1])))])
-        if along is None:
-            along = np.array([1.0, 0.0])
+    if along is None or _across_the_wall(verts, along, width):
+        along = _long_side(verts)
     across = np.array([-along[1], along[0]])
     y = _unit(y_axis)
     if y is not None and float(across @ y) < 0:
@@ -72,6 +71,28 @@ def opening_in_plan(
     )
 
 
+def _long_side(verts: np.ndarray) -> np.ndarray:
+    """Unit direction of the long side of the footprint's minimum rotated rectangle."""
+    rect = shapely.minimum_rotated_rectangle(shapely.multipoints(verts[:, :2]))
+    coords = np.asarray(rect.exterior.coords if rect.geom_type == "Polygon" else rect.coords)
+    edges = np.diff(coords[:, :2], axis=0)
+    along = _unit(edges[int(np.argmax(np.hypot(edges[:, 0], edges[:, 1])))]) if len(edges) else None
+    return np.array([1.0, 0.0]) if along is None else along
+
+
+def _across_the_wall(verts: np.ndarray, along: np.ndarray, width: float | None) -> bool:
+    """Does ``along`` (the placement's X) run across the wall? The element is more than
+    ``DEEPER_THAN_WIDE`` times as deep as wide along it, and its depth is nearer its nominal
+    ``width`` (when known) than its width is. A door drawn open stands about as deep as wide and
+    keeps its placement."""
+    s = verts[:, :2] @ along
+    t = verts[:, :2] @ np.array([-along[1], along[0]])
+    wide, deep = float(s.max() - s.min()), float(t.max() - t.min())
+    if deep <= DEEPER_THAN_WIDE * wide:
+        return False
+    return width is None or abs(deep - width) < abs(wide - width)
+
+
 @dataclass(frozen=True)
 class Front:
     """A feature position and the direction it is seen from."""
@@ -86,8 +107,10 @@ def stair_foot(parts: list[np.ndarray]) -> Front | None:
     """The foot of a staircase (Stairs fallback when it has no enclosure door).
 
     ``parts`` are the vertex arrays of the stair's flights (or the stair itself). The lowest
-    flight gives the climbing direction (centroid of its low vertices -> centroid of its high
-    ones); the foot is the edge of its lowest vertices, seen from the side the climb starts.
+    flight gives the climbing direction (centroid of its low vertices -> centroid of those
+    ``CLIMB_RISE`` higher, or of its top when it rises less: a stair exported as one body that
+    turns, U-shaped or three-quarter, climbs elsewhere at its top than at its foot); the foot is
+    the edge of its lowest vertices, seen from the side the climb starts.
     """
     parts = [p for p in parts if len(p)]
     if not parts:
@@ -95,8 +118,11 @@ def stair_foot(parts: list[np.ndarray]) -> Front | None:
     lowest = min(parts, key=lambda p: float(p[:, 2].min()))
     z0, z1 = float(lowest[:, 2].min()), float(lowest[:, 2].max())
     band = max(0.05, min(0.35, (z1 - z0) / 4.0))
+    top = min(z1, z0 + CLIMB_RISE)
     low = lowest[lowest[:, 2] <= z0 + band, :2]
-    high = lowest[lowest[:, 2] >= z1 - band, :2]
+    high = lowest[(lowest[:, 2] >= top - band) & (lowest[:, 2] <= top), :2]
+    if not len(high):  # a coarse body with no vertex near that height: its top
+        high = lowest[lowest[:, 2] >= z1 - band, :2]
     climb = _unit(high.mean(axis=0) - low.mean(axis=0))
     if climb is None:
         return None

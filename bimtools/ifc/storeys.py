@@ -64,6 +64,8 @@ def list_storeys(model: ifcopenshell.file, scale: float) -> list[Storey]:
     for index, storey in enumerate(storeys):
         if storey.elevation != storey.elevation:  # NaN
             storey.elevation = 3.0 * index
+        elif abs(storey.elevation) < 1e-6:  # a rounding residue (-2e-11 mm): 0.00, never -0.00
+            storey.elevation = 0.0
     storeys.sort(key=lambda s: s.elevation)
     seen: dict[str, int] = {}
     for storey in storeys:

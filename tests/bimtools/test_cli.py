@@ -106,6 +106,13 @@ def test_model_without_features(tmp_path):
     assert not list(tmp_path.glob("*_site"))
 
 
+def test_a_storey_without_features_is_named(tmp_path):
+    path = model_without(tmp_path, storeys=True)
+    result = run_extract(str(path), "--storey", "L1", "-o", str(tmp_path / "out"), cwd=tmp_path)
+    assert_bad_input(result, "empty_storey.ifc", "no doors, lifts or stairs on storey 'L1'")
+    assert not (tmp_path / "out").exists()
+
+
 def test_unknown_storey_lists_valid_names(tmp_path, small_ifc):
     result = run_extract(str(small_ifc), "--storey", "Level 9", "-o", str(tmp_path / "out"), cwd=tmp_path)
     assert_bad_input(result, "no storey 'Level 9'", "valid storeys: 'Level 1'")
@@ -146,3 +153,15 @@ def test_failed_run_keeps_previous_output(tmp_path):
     assert_bad_input(run_extract(str(path), "-o", str(out), cwd=tmp_path), "bad.ifc")
     assert (out / "features.csv").read_text() == "previous\n"
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".out")] == []
+
+
+def test_no_progress_bar_off_a_terminal(capfd):
+    """A log file (stderr not a terminal) gets no bar, and no stray newline when it stops."""
+    from bimtools.cli import LazyProgress
+
+    progress = LazyProgress("geometry", delay=0.0)
+    progress(1, 2)
+    progress(2, 2)
+    progress.close()
+    assert progress.progress is None
+    assert capfd.readouterr().err == ""

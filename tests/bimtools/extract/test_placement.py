@@ -53,6 +53,28 @@ def test_opening_with_a_vertical_x_axis_uses_the_long_side() -> None:
     assert door.depth == pytest.approx(0.2)
 
 
+def test_a_door_deeper_than_wide_along_its_placement_x_is_turned() -> None:
+    # a Vectorworks export: identity placement, the shape in world coordinates, the wall along y
+    verts = _box_verts(11.885, 12.085, 5.927, 6.887, 0.0, 2.13)
+    door = opening_in_plan(verts, np.array([1.0, 0, 0]), np.array([0, 1.0, 0]), 0.9, 2.1)
+    assert abs(door.along[1]) == pytest.approx(1.0)
+    assert abs(door.across[0]) == pytest.approx(1.0)
+    assert door.depth == pytest.approx(0.2)
+    np.testing.assert_allclose(door.centre, [11.985, 6.407], atol=1e-9)
+    # with no nominal width, plainly deeper than wide is enough
+    door = opening_in_plan(verts, np.array([1.0, 0, 0]), np.array([0, 1.0, 0]), None, None)
+    assert abs(door.along[1]) == pytest.approx(1.0)
+
+
+def test_a_door_drawn_open_keeps_its_placement() -> None:
+    # frame 1.0 m along x, the leaf open at 90 degrees: 0.95 m deep
+    verts = np.vstack(
+        [_box_verts(0.0, 1.0, 0.0, 0.15, 0.0, 2.1), _box_verts(0.05, 0.1, 0.15, 0.95, 0.0, 2.1)]
+    )
+    door = opening_in_plan(verts, np.array([1.0, 0, 0]), np.array([0, 1.0, 0]), 0.9, 2.1)
+    np.testing.assert_allclose(door.along, [1, 0])
+
+
 def test_stair_foot_is_the_low_edge_facing_against_the_climb() -> None:
     # a flight climbing +x from x=1 to x=4, 1.2 m wide, rising 1.5 m: treads as points
     steps = []
@@ -67,6 +89,23 @@ def test_stair_foot_is_the_low_edge_facing_against_the_climb() -> None:
     np.testing.assert_allclose(front.point, [1.0, 0.6], atol=1e-9)
     assert front.width == pytest.approx(1.2)
     assert front.height == pytest.approx(1.5)
+
+
+def test_stair_foot_of_a_turning_stair_in_one_body_follows_its_first_flight() -> None:
+    # one body (no flights): up +x from x=1 to x=3.4 at y 0-1 (rising 1.2 m), a landing, then
+    # back -x at y 1.2-2.2 to 2.4 m. Its top is beside its foot: the foot faces -x, not -y.
+    verts = []
+    for k in range(9):
+        x, z = 1.0 + 0.3 * k, 0.15 * k
+        verts += [[x, 0.0, z], [x, 1.0, z]]
+    verts += [[3.4, 0.0, 1.2], [3.4, 2.2, 1.2], [4.4, 0.0, 1.2], [4.4, 2.2, 1.2]]
+    for k in range(9):
+        x, z = 3.4 - 0.3 * k, 1.2 + 0.15 * k
+        verts += [[x, 1.2, z], [x, 2.2, z]]
+    front = stair_foot([np.array(verts)])
+    assert front is not None
+    np.testing.assert_allclose(front.normal, [-1, 0], atol=1e-9)
+    np.testing.assert_allclose(front.point, [1.0, 0.5], atol=1e-9)
 
 
 def test_stair_foot_without_parts_or_climb_is_none() -> None:

@@ -53,6 +53,21 @@ def test_no_feature_normal_points_outside(shared_ifc_dir, name):
 
 
 @pytest.mark.parametrize("name", NAMES)
+def test_no_door_or_stair_faces_a_wall(shared_ifc_dir, name):
+    """The floor right in front of every door and stair foot is open: no wall cell in the first
+    0.35 m along its normal (a stair foot read from a turning stair's whole body faced into the
+    stairwell's wall, its normal through it into the next room). A lift placed from its shaft's
+    outline stands behind the shaft wall, so lifts are not held to this."""
+    for result in _site(shared_ifc_dir, name).storeys:
+        grid = result.grid
+        for f in (f for f in result.features if f.category in ("Door", "Stairs")):
+            ahead = [
+                grid.value_at(f.x + t * f.norm_x, f.y + t * f.norm_y) for t in np.arange(0.1, 0.36, 0.05)
+            ]
+            assert OCCUPIED not in ahead, f"{result.storey.name}: {f.category} {f.name!r} faces a wall"
+
+
+@pytest.mark.parametrize("name", NAMES)
 def test_no_two_features_at_the_same_place(shared_ifc_dir, name):
     for result in _site(shared_ifc_dir, name).storeys:
         fs = result.features

@@ -68,6 +68,13 @@ def test_elevation_from_placement_when_missing_or_zero() -> None:
     assert storeys["nothing"] == pytest.approx(6.0)  # third in file order, 3 m apart
 
 
+def test_a_rounding_residue_is_elevation_zero() -> None:
+    model = ifcopenshell.file(schema="IFC4")
+    _storey(model, "level 0", -2e-11)  # as a Revit 2013 export writes it, in mm
+    (storey,) = list_storeys(model, 0.001)
+    assert f"{storey.elevation:.2f}" == "0.00"  # not -0.00 in tables, features.csv or site.json
+
+
 def test_unnamed_storeys_get_numbered_names() -> None:
     model = ifcopenshell.file(schema="IFC4")
     _storey(model, None, 0.0)
