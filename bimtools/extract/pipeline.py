@@ -264,8 +264,8 @@ def extract_site(
         if storey_result.features or storey is not None:
             result.storeys.append(storey_result)
     if not result.features:
-        where = "any storey" if storey in (None, "all") else f"storey {storey!r}"
-        raise InputError(f"{path}: no features found (no doors, lifts or stairs on {where})")
+        asked = "any storey" if storey in (None, "all") else f"storey {storey!r}"
+        raise InputError(f"{path}: no features found (no doors, lifts or stairs on {asked})")
     return result
 
 
