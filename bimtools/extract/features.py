@@ -253,15 +253,12 @@ def _body_front(ctx: StoreyContext, body: BodyCandidate, category: Category) -> 
         # front of it is not free): its climb was misread, and a front through a wall would have
         # the robot expect to see it from the room behind.
         ahead = _probe(ctx, foot.point, foot.normal)
-        if not ahead.reachable:
-            return None
         step = foot.point + FOOT_CLEARANCE * foot.normal
-        if not ctx.regions.label_at(*step):
-            ctx.warnings.append(
-                f"storey {ctx.name!r}: stair {body.name!r} ({body.guid}): its foot faces a wall, skipped"
-            )
-            return None
-        return foot
+        if ahead.reachable and ctx.regions.label_at(*step):
+            return foot
+        why = "its foot faces a wall" if ahead.reachable else "its foot is outside the building"
+        ctx.warnings.append(f"storey {ctx.name!r}: stair {body.name!r} ({body.guid}): {why}, skipped")
+        return None
     front = _best_front(ctx, body.footprint, set())
     if front is None:
         return None

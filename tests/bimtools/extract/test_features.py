@@ -70,3 +70,11 @@ def test_a_stair_foot_facing_a_wall_is_skipped_with_a_warning():
     ctx, body = _stair_storey((0.5, 0.8))
     assert storey_features(ctx, [], [body]) == []
     assert ctx.warnings == ["storey 'Level 0': stair 'Stair 1' (stair-guid): its foot faces a wall, skipped"]
+
+
+def test_a_stair_foot_outside_the_building_is_skipped_with_a_warning():
+    ctx, body = _stair_storey((0.0, 0.8))  # nothing but wall and the map's edge in front of the foot
+    assert storey_features(ctx, [], [body]) == []
+    assert ctx.warnings == [
+        "storey 'Level 0': stair 'Stair 1' (stair-guid): its foot is outside the building, skipped"
+    ]
