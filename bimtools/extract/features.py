@@ -25,6 +25,7 @@ if TYPE_CHECKING:
     import ifcopenshell
 
 ENTRANCE_RADIUS = 2.5  # metres: a door this close to a lift/stair body is its entrance
+ENCLOSURE_DOOR_RADIUS = 5.0  # metres: a door into a body's enclosure this close to the body enters it
 FOOT_CLEARANCE = 0.35  # metres in front of a stair's foot that must be free floor
 
 
@@ -169,7 +170,9 @@ def is_shaft_space(category: Category, area: float) -> bool:
     return category.kind != "lift" or area <= category.enclosure_max_area
 
 
-def _is_entrance(ctx: StoreyContext, door: DoorCandidate, category: Category, enclosures: set[int]) -> bool:
+def _is_entrance(
+    ctx: StoreyContext, door: DoorCandidate, category: Category, enclosures: dict[int, list[BaseGeometry]]
+) -> bool:
     if category.is_door(door.entity):
         return True
     if not door.room.reachable:
@@ -180,9 +183,12 @@ def _is_entrance(ctx: StoreyContext, door: DoorCandidate, category: Category, en
         and is_shaft_space(category, door.room.space_area)
     ):
         return True
-    return (
-        door.room.label != 0 and door.room.label in enclosures and door.room.label != door.circulation.label
-    )
+    if door.room.label == 0 or door.room.label == door.circulation.label:
+        return False
+    # a door into a small region holding the body, near the body: a 1.8 m wide hall of 50 m^2
+    # holding a stair at one end is no stairwell to a glass door 7 m away at the other
+    centre = shapely.Point(*door.opening.centre)
+    return any(body.distance(centre) <= ENCLOSURE_DOOR_RADIUS for body in enclosures.get(door.room.label, ()))
 
 
 def _best_front(ctx: StoreyContext, footprint: BaseGeometry, exclude: set[int]) -> Front | None:
@@ -215,7 +221,10 @@ def storey_features(
             continue
         own_bodies = [b for b in bodies if b.category == category.name]
         enclosure_of = {b.guid: _body_regions(ctx, b, category) for b in own_bodies}
-        enclosures = set().union(*enclosure_of.values()) if enclosure_of else set()
+        enclosures: dict[int, list[BaseGeometry]] = {}  # region label -> footprints of the bodies it holds
+        for b in own_bodies:
+            for label in enclosure_of[b.guid]:
+                enclosures.setdefault(label, []).append(b.footprint)
         entrances: list[DoorCandidate] = []
         for door in doors:
             if door.guid not in claimed and _is_entrance(ctx, door, category, enclosures):

@@ -3,12 +3,20 @@ stair foot faces open floor."""
 
 from __future__ import annotations
 
+import ifcopenshell
 import numpy as np
 import pytest
 from shapely.geometry import box
 
 from bimtools.extract.circulation import FreeRegions, SideProbe, SpaceIndex
-from bimtools.extract.features import BodyCandidate, StoreyContext, is_shaft_space, storey_features
+from bimtools.extract.features import (
+    BodyCandidate,
+    DoorCandidate,
+    StoreyContext,
+    is_shaft_space,
+    storey_features,
+)
+from bimtools.extract.placement import Opening
 from bimtools.ifc.categories import load_categories
 from bimtools.site.records import FREE, OCCUPIED, OccupancyGrid
 
@@ -78,3 +86,63 @@ def test_a_stair_foot_outside_the_building_is_skipped_with_a_warning():
     assert ctx.warnings == [
         "storey 'Level 0': stair 'Stair 1' (stair-guid): its foot is outside the building, skipped"
     ]
+
+
+_MODEL = ifcopenshell.file(schema="IFC4")  # outlives the entities made in it (else they dangle)
+
+
+def _hall_with_a_stair(door_x: float) -> tuple[StoreyContext, DoorCandidate, BodyCandidate]:
+    """A 12 x 3 m corridor (y 0-3) and beside it a 10 x 1.8 m hall (y 3.2-5.0, x 0-10) holding a
+    stair at its west end (x 0.4-2.5, climbing -x: its foot at x 2.5 faces along the hall), and
+    one closed door between them at ``door_x``."""
+    res = 0.05
+    cells = np.full((110, 250), FREE, dtype=np.uint8)  # 12.5 x 5.5 m, origin (-0.25, -0.25)
+    grid = OccupancyGrid(cells, res, (-0.25, -0.25, 0.0))
+
+    def wall(x0: float, x1: float, y0: float, y1: float) -> None:
+        (r1, c0), (r0, c1) = (grid.world_to_cell(x, y) for x, y in ((x0, y0), (x1, y1)))
+        cells[int(r0) : int(r1) + 1, int(c0) : int(c1) + 1] = OCCUPIED
+
+    for x0, x1, y0, y1 in [(-0.25, 12.2, -0.25, 0), (-0.25, 12.2, 5.0, 5.2), (-0.25, 0, -0.25, 5.2)]:
+        wall(x0, x1, y0, y1)
+    wall(12.0, 12.2, -0.25, 5.2)
+    wall(10.0, 12.0, 3.0, 5.0)  # the corridor's end: no hall beyond x 10
+    wall(0.0, 10.0, 3.0, 3.2)  # the wall between, the door closed in it (an obstacle on the map)
+    ctx = StoreyContext("Level 0", 0.0, FreeRegions(grid), SpaceIndex([], []), load_categories())
+    entity = _MODEL.createIfcDoor(GlobalId="door-guid", Name="Glass double door")
+    opening = Opening(
+        centre=np.array([door_x, 3.1]),
+        along=np.array([1.0, 0.0]),
+        across=np.array([0.0, 1.0]),
+        width=1.0,
+        depth=0.2,
+        height=2.1,
+        floor_z=0.0,
+    )
+    door = DoorCandidate("door-guid", "IfcDoor", "Glass double door", opening, entity)
+    steps = [[2.5 - 0.3 * k, y, 0.15 * k] for k in range(8) for y in (3.4, 4.8)]
+    stair = BodyCandidate(
+        guid="stair-guid",
+        ifc_class="IfcStair",
+        name="Stair 1",
+        category="Stairs",
+        footprint=box(0.4, 3.4, 2.5, 4.8),
+        points=np.array([[1.5, 4.1]]),
+        parts=[np.array(steps)],
+    )
+    return ctx, door, stair
+
+
+def test_a_door_into_a_small_hall_near_its_stair_enters_the_stair():
+    ctx, door, stair = _hall_with_a_stair(door_x=3.5)  # 1 m from the stair
+    (feature,) = storey_features(ctx, [door], [stair])
+    assert (feature.id, feature.category) == ("door-guid", "Stairs")
+    assert feature.norm_y == pytest.approx(-1.0)  # seen from the corridor
+
+
+def test_a_door_into_a_small_hall_far_from_its_stair_stays_a_door():
+    ctx, door, stair = _hall_with_a_stair(door_x=9.0)  # 6.5 m from the stair, at the hall's other end
+    features = {f.id: f for f in storey_features(ctx, [door], [stair])}
+    assert features["door-guid"].category == "Door"
+    assert features["stair-guid"].category == "Stairs"  # the stair's own foot instead
+    assert features["stair-guid"].norm_x == pytest.approx(1.0)
