@@ -70,7 +70,7 @@ class VerificationParams:
     min_path_free: float = 0.85  # share of the recent path on (or near) free BIM cells
     path_margin: float = 0.3  # m: a path point this close to a free cell counts as free
     min_claim_inliers: int = 4  # matched features a unique match needs before it is claimed
-    rival_outliers: int = 0  # a claim must stay unique with this many more outliers allowed (0: off) ...
+    rival_outliers: int = 1  # a claim must stay unique with this many more outliers allowed (0: off) ...
     rival_distance: float = 2.0  # m: ... counting rivals this far from it (or turned rival_turn_deg)
     rival_turn_deg: float = 30.0
     # A rival that passes the checks is still no reason to doubt a claim that it trails by at least
@@ -258,7 +258,8 @@ def rival_search(
     (``outlier_share`` of the features), and with at least RIVAL_MARGIN more allowed even there (a
     point-symmetric corridor with 40 % of its doors missing: the turned place explained the
     detections within the budget, the true one needed two outliers more). A match that explains every
-    detection needs only the ``configured`` search (``rival_outliers``, 0: none)."""
+    detection needs only the ``configured`` search (``rival_outliers``, 1 by default: on a site as
+    built the true place can need an outlier that a place one door along does not; 0: none)."""
     noisy = claim_outliers > 0 or outliers_allowed > max_outliers
     found_with = max(outliers_allowed, max_outliers)
     return max(configured, max(RIVAL_MARGIN, budget - found_with) if noisy else 0)
