@@ -19,7 +19,9 @@ echo "wheel_smoke: building the wheel in $WORK/dist"
 mkdir -p "$WORK/src"
 git -C "$SRC" ls-files -z --cached --others --exclude-standard \
   | (cd "$SRC" && xargs -0 cp --parents -P -t "$WORK/src" 2>/dev/null) || fail "copying the source tree"
-"$PYTHON" -m pip wheel --quiet --no-deps --no-build-isolation "$WORK/src" -w "$WORK/dist" \
+# Without build isolation first (no download); an interpreter whose setuptools is older than
+# pyproject's build-system asks (a bare CI Python) fails that quietly and builds isolated.
+"$PYTHON" -m pip wheel --quiet --no-deps --no-build-isolation "$WORK/src" -w "$WORK/dist" 2>/dev/null \
   || "$PYTHON" -m pip wheel --quiet --no-deps "$WORK/src" -w "$WORK/dist" || fail "pip wheel"
 WHEEL=$(ls "$WORK"/dist/bim_init-*.whl) || fail "no wheel built"
 # Whatever the command line needs at run time must be inside the wheel.
