@@ -20,9 +20,11 @@ mkdir -p "$WORK/src"
 git -C "$SRC" ls-files -z --cached --others --exclude-standard \
   | (cd "$SRC" && xargs -0 cp --parents -P -t "$WORK/src" 2>/dev/null) || fail "copying the source tree"
 # Without build isolation first (no download); an interpreter whose setuptools is older than
-# pyproject's build-system asks (a bare CI Python) fails that quietly and builds isolated.
-"$PYTHON" -m pip wheel --quiet --no-deps --no-build-isolation "$WORK/src" -w "$WORK/dist" 2>/dev/null \
-  || "$PYTHON" -m pip wheel --quiet --no-deps "$WORK/src" -w "$WORK/dist" || fail "pip wheel"
+# pyproject's build-system asks (a bare CI Python) fails that quietly and builds isolated. Should
+# both fail, the first one's errors are shown too.
+"$PYTHON" -m pip wheel --quiet --no-deps --no-build-isolation "$WORK/src" -w "$WORK/dist" 2>"$WORK/wheel.err" \
+  || "$PYTHON" -m pip wheel --quiet --no-deps "$WORK/src" -w "$WORK/dist" \
+  || { cat "$WORK/wheel.err" >&2; fail "pip wheel"; }
 WHEEL=$(ls "$WORK"/dist/bim_init-*.whl) || fail "no wheel built"
 # Whatever the command line needs at run time must be inside the wheel.
 "$PYTHON" - "$WHEEL" <<'PY' || fail "files missing from the wheel"
@@ -73,7 +75,7 @@ test -s session/summary.json || fail "bim-init run wrote no summary.json"
 # The session's claim, found again in its log: the unique match (exit 0) or, of several hypotheses
 # (exit 3), the one the lidar along the path favours, named in the notes with the same features.
 rc=0
-"$WORK/venv/bin/bim-init" match session/session.jsonl --site block_a_site --json >match.json || rc=$?
+"$WORK/venv/bin/bim-init" match session/session.jsonl --site block_a_site --top 12 --json >match.json || rc=$?
 case $rc in 0|3) ;; *) fail "bim-init match on the session log: exit $rc" ;; esac
 "$VPY" - <<'PY' || fail "bim-init match does not find the session's claim in its log"
 import json, re, sys

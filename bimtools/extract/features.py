@@ -26,7 +26,8 @@ if TYPE_CHECKING:
 
 ENTRANCE_RADIUS = 2.5  # metres: a door this close to a lift/stair body is its entrance
 ENCLOSURE_DOOR_RADIUS = 5.0  # metres: a door into a body's enclosure this close to the body enters it
-FOOT_CLEARANCE = 0.35  # metres in front of a stair's foot that must be free floor
+FOOT_CLEARANCE = 0.35  # metres in front of a stair's foot that must be free floor ...
+FOOT_STEPS = np.arange(0.1, FOOT_CLEARANCE + 1e-9, 0.05)  # ... sampled every 5 cm from 0.1 m
 
 
 @dataclass
@@ -236,8 +237,8 @@ def storey_features(
         served: list[BaseGeometry] = []
         for body in own_bodies:
             near = any(
-                door.room.label in enclosure_of[body.guid]
-                or body.footprint.distance(shapely.Point(*door.opening.centre)) <= ENTRANCE_RADIUS
+                body.footprint.distance(shapely.Point(*door.opening.centre))
+                <= (ENCLOSURE_DOOR_RADIUS if door.room.label in enclosure_of[body.guid] else ENTRANCE_RADIUS)
                 for door in entrances
             )
             if near or any(body.footprint.distance(s) < 1.0 for s in served):
@@ -262,8 +263,8 @@ def _body_front(ctx: StoreyContext, body: BodyCandidate, category: Category) -> 
         # front of it is not free): its climb was misread, and a front through a wall would have
         # the robot expect to see it from the room behind.
         ahead = _probe(ctx, foot.point, foot.normal)
-        step = foot.point + FOOT_CLEARANCE * foot.normal
-        if ahead.reachable and ctx.regions.label_at(*step):
+        floor = [foot.point + t * foot.normal for t in FOOT_STEPS]
+        if ahead.reachable and all(ctx.regions.label_at(*p) for p in floor):
             return foot
         why = "its foot faces a wall" if ahead.reachable else "its foot is outside the building"
         ctx.warnings.append(f"storey {ctx.name!r}: stair {body.name!r} ({body.guid}): {why}, skipped")

@@ -70,7 +70,7 @@ class VerificationParams:
     min_path_free: float = 0.85  # share of the recent path on (or near) free BIM cells
     path_margin: float = 0.3  # m: a path point this close to a free cell counts as free
     min_claim_inliers: int = 4  # matched features a unique match needs before it is claimed
-    rival_outliers: int = 1  # a claim must stay unique with this many more outliers allowed (0: off) ...
+    rival_outliers: int = 1  # a claim stays unique with this many more outliers (0: noisy claims only) ...
     rival_distance: float = 2.0  # m: ... counting rivals this far from it (or turned rival_turn_deg)
     rival_turn_deg: float = 30.0
     # A rival that passes the checks is still no reason to doubt a claim that it trails by at least

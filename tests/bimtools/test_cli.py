@@ -155,13 +155,20 @@ def test_failed_run_keeps_previous_output(tmp_path):
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".out")] == []
 
 
-def test_no_progress_bar_off_a_terminal(capfd):
+def test_no_progress_bar_off_a_terminal(monkeypatch, capfd):
     """A log file (stderr not a terminal) gets no bar, and no stray newline when it stops."""
+    import io
+
+    from rich.console import Console
+
+    import bimtools.cli
     from bimtools.cli import LazyProgress
 
+    log = io.StringIO()
+    monkeypatch.setattr(bimtools.cli, "err", Console(file=log, force_terminal=False))
     progress = LazyProgress("geometry", delay=0.0)
     progress(1, 2)
     progress(2, 2)
     progress.close()
     assert progress.progress is None
-    assert capfd.readouterr().err == ""
+    assert log.getvalue() == "" and capfd.readouterr().err == ""

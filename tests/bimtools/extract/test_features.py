@@ -72,10 +72,11 @@ def test_a_stair_foot_facing_open_floor_is_a_feature():
     assert ctx.warnings == []
 
 
-def test_a_stair_foot_facing_a_wall_is_skipped_with_a_warning():
-    # a wall 0.2-0.5 m in front of the foot, free floor beyond it: the probe finds the room behind,
-    # but the floor right in front of the foot is not free
-    ctx, body = _stair_storey((0.5, 0.8))
+@pytest.mark.parametrize("wall", [(0.5, 0.8), (0.75, 1.0), (0.8, 0.95)])
+def test_a_stair_foot_facing_a_wall_is_skipped_with_a_warning(wall: tuple[float, float]):
+    # a wall 0.2-0.5 m in front of the foot, or right at it and thinner than 0.35 m, free floor
+    # beyond it: the probe finds the room behind, but the floor in front of the foot is not free
+    ctx, body = _stair_storey(wall)
     assert storey_features(ctx, [], [body]) == []
     assert ctx.warnings == ["storey 'Level 0': stair 'Stair 1' (stair-guid): its foot faces a wall, skipped"]
 
@@ -146,3 +147,21 @@ def test_a_door_into_a_small_hall_far_from_its_stair_stays_a_door():
     assert features["door-guid"].category == "Door"
     assert features["stair-guid"].category == "Stairs"  # the stair's own foot instead
     assert features["stair-guid"].norm_x == pytest.approx(1.0)
+
+
+def test_a_second_stair_in_the_hall_far_from_the_entrance_gets_its_own_foot():
+    ctx, door, stair = _hall_with_a_stair(door_x=3.5)  # the entrance 1 m from the first stair
+    steps = [[9.0 + 0.3 * k, y, 0.15 * k] for k in range(4) for y in (3.4, 4.8)]
+    second = BodyCandidate(
+        guid="second-guid",
+        ifc_class="IfcStair",
+        name="Stair 2",
+        category="Stairs",
+        footprint=box(9.0, 3.4, 9.9, 4.8),  # 5.5 m from the entrance, in the same hall
+        points=np.array([[9.4, 4.1]]),
+        parts=[np.array(steps)],
+    )
+    features = {f.id: f for f in storey_features(ctx, [door], [stair, second])}
+    assert set(features) == {"door-guid", "second-guid"}
+    assert features["door-guid"].category == features["second-guid"].category == "Stairs"
+    assert features["second-guid"].norm_x == pytest.approx(-1.0)
