@@ -171,8 +171,23 @@ def is_shaft_space(category: Category, area: float) -> bool:
     return category.kind != "lift" or area <= category.enclosure_max_area
 
 
+def _door_distance(body: BodyCandidate, door: DoorCandidate) -> float:
+    """Metres from a body's footprint to the centre of a door's opening."""
+    return float(body.footprint.distance(shapely.Point(*door.opening.centre)))
+
+
+def _enters_enclosure(door: DoorCandidate, body: BodyCandidate, enclosure: set[int]) -> bool:
+    """Does ``door`` open into ``enclosure`` (the small regions holding ``body``) near the body? A
+    1.8 m wide hall of 50 m^2 holding a stair at one end is no stairwell to a glass door 7 m away
+    at the other."""
+    return door.room.label in enclosure and _door_distance(body, door) <= ENCLOSURE_DOOR_RADIUS
+
+
 def _is_entrance(
-    ctx: StoreyContext, door: DoorCandidate, category: Category, enclosures: dict[int, list[BaseGeometry]]
+    ctx: StoreyContext,
+    door: DoorCandidate,
+    category: Category,
+    enclosures: list[tuple[BodyCandidate, set[int]]],
 ) -> bool:
     if category.is_door(door.entity):
         return True
@@ -186,10 +201,7 @@ def _is_entrance(
         return True
     if door.room.label == 0 or door.room.label == door.circulation.label:
         return False
-    # a door into a small region holding the body, near the body: a 1.8 m wide hall of 50 m^2
-    # holding a stair at one end is no stairwell to a glass door 7 m away at the other
-    centre = shapely.Point(*door.opening.centre)
-    return any(body.distance(centre) <= ENCLOSURE_DOOR_RADIUS for body in enclosures.get(door.room.label, ()))
+    return any(_enters_enclosure(door, body, enclosure) for body, enclosure in enclosures)
 
 
 def _best_front(ctx: StoreyContext, footprint: BaseGeometry, exclude: set[int]) -> Front | None:
@@ -221,11 +233,7 @@ def storey_features(
                     )
             continue
         own_bodies = [b for b in bodies if b.category == category.name]
-        enclosure_of = {b.guid: _body_regions(ctx, b, category) for b in own_bodies}
-        enclosures: dict[int, list[BaseGeometry]] = {}  # region label -> footprints of the bodies it holds
-        for b in own_bodies:
-            for label in enclosure_of[b.guid]:
-                enclosures.setdefault(label, []).append(b.footprint)
+        enclosures = [(b, _body_regions(ctx, b, category)) for b in own_bodies]
         entrances: list[DoorCandidate] = []
         for door in doors:
             if door.guid not in claimed and _is_entrance(ctx, door, category, enclosures):
@@ -235,10 +243,9 @@ def storey_features(
                     _feature(ctx, door.guid, category.name, _door_front(door), door.ifc_class, door.name)
                 )
         served: list[BaseGeometry] = []
-        for body in own_bodies:
+        for body, enclosure in enclosures:
             near = any(
-                body.footprint.distance(shapely.Point(*door.opening.centre))
-                <= (ENCLOSURE_DOOR_RADIUS if door.room.label in enclosure_of[body.guid] else ENTRANCE_RADIUS)
+                _enters_enclosure(door, body, enclosure) or _door_distance(body, door) <= ENTRANCE_RADIUS
                 for door in entrances
             )
             if near or any(body.footprint.distance(s) < 1.0 for s in served):

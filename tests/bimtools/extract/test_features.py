@@ -39,6 +39,25 @@ def test_outside_is_not_reachable():
     assert SideProbe(label=5, space="", point=(0.0, 0.0)).reachable
 
 
+def _context(grid: OccupancyGrid) -> StoreyContext:
+    return StoreyContext("Level 0", 0.0, FreeRegions(grid), SpaceIndex([], []), load_categories())
+
+
+def _flight(guid: str, name: str, foot_x: float, climb: float, steps: int, y: tuple[float, float]):
+    """A straight stair along x, its foot at ``foot_x``, rising 0.15 m per 0.3 m step towards
+    ``climb`` (+1 or -1), between ``y``, as a stair body (its treads as points)."""
+    xs = [foot_x + climb * 0.3 * k for k in range(steps)]
+    return BodyCandidate(
+        guid=guid,
+        ifc_class="IfcStair",
+        name=name,
+        category="Stairs",
+        footprint=box(min(xs), y[0], max(xs), y[1]),
+        points=np.array([[(xs[0] + xs[-1]) / 2.0, (y[0] + y[1]) / 2.0]]),
+        parts=[np.array([[x, side, 0.15 * k] for k, x in enumerate(xs) for side in y])],
+    )
+
+
 def _stair_storey(wall: tuple[float, float] | None) -> tuple[StoreyContext, BodyCandidate]:
     """A 6 x 3 m floor (0.05 m cells), walled round, with a wall across it from x = ``wall[0]``
     to ``wall[1]`` (none: open), and a straight flight climbing +x from x = 1.0 at y 1-2 (its foot
@@ -50,18 +69,7 @@ def _stair_storey(wall: tuple[float, float] | None) -> tuple[StoreyContext, Body
     cells[[0, -1], :] = OCCUPIED
     cells[:, [0, -1]] = OCCUPIED
     grid = OccupancyGrid(cells, res, (0.0, 0.0, 0.0))
-    ctx = StoreyContext("Level 0", 0.0, FreeRegions(grid), SpaceIndex([], []), load_categories())
-    steps = [[1.0 + 0.3 * k, y, 0.15 * k] for k in range(12) for y in (1.0, 2.0)]
-    body = BodyCandidate(
-        guid="stair-guid",
-        ifc_class="IfcStair",
-        name="Stair 1",
-        category="Stairs",
-        footprint=box(1.0, 1.0, 4.3, 2.0),
-        points=np.array([[2.0, 1.5]]),
-        parts=[np.array(steps)],
-    )
-    return ctx, body
+    return _context(grid), _flight("stair-guid", "Stair 1", 1.0, +1, 12, (1.0, 2.0))
 
 
 def test_a_stair_foot_facing_open_floor_is_a_feature():
@@ -109,7 +117,6 @@ def _hall_with_a_stair(door_x: float) -> tuple[StoreyContext, DoorCandidate, Bod
     wall(12.0, 12.2, -0.25, 5.2)
     wall(10.0, 12.0, 3.0, 5.0)  # the corridor's end: no hall beyond x 10
     wall(0.0, 10.0, 3.0, 3.2)  # the wall between, the door closed in it (an obstacle on the map)
-    ctx = StoreyContext("Level 0", 0.0, FreeRegions(grid), SpaceIndex([], []), load_categories())
     entity = _MODEL.createIfcDoor(GlobalId="door-guid", Name="Glass double door")
     opening = Opening(
         centre=np.array([door_x, 3.1]),
@@ -121,17 +128,7 @@ def _hall_with_a_stair(door_x: float) -> tuple[StoreyContext, DoorCandidate, Bod
         floor_z=0.0,
     )
     door = DoorCandidate("door-guid", "IfcDoor", "Glass double door", opening, entity)
-    steps = [[2.5 - 0.3 * k, y, 0.15 * k] for k in range(8) for y in (3.4, 4.8)]
-    stair = BodyCandidate(
-        guid="stair-guid",
-        ifc_class="IfcStair",
-        name="Stair 1",
-        category="Stairs",
-        footprint=box(0.4, 3.4, 2.5, 4.8),
-        points=np.array([[1.5, 4.1]]),
-        parts=[np.array(steps)],
-    )
-    return ctx, door, stair
+    return _context(grid), door, _flight("stair-guid", "Stair 1", 2.5, -1, 8, (3.4, 4.8))
 
 
 def test_a_door_into_a_small_hall_near_its_stair_enters_the_stair():
@@ -151,16 +148,7 @@ def test_a_door_into_a_small_hall_far_from_its_stair_stays_a_door():
 
 def test_a_second_stair_in_the_hall_far_from_the_entrance_gets_its_own_foot():
     ctx, door, stair = _hall_with_a_stair(door_x=3.5)  # the entrance 1 m from the first stair
-    steps = [[9.0 + 0.3 * k, y, 0.15 * k] for k in range(4) for y in (3.4, 4.8)]
-    second = BodyCandidate(
-        guid="second-guid",
-        ifc_class="IfcStair",
-        name="Stair 2",
-        category="Stairs",
-        footprint=box(9.0, 3.4, 9.9, 4.8),  # 5.5 m from the entrance, in the same hall
-        points=np.array([[9.4, 4.1]]),
-        parts=[np.array(steps)],
-    )
+    second = _flight("second-guid", "Stair 2", 9.0, +1, 4, (3.4, 4.8))  # x 9-9.9: 5.5 m from the entrance
     features = {f.id: f for f in storey_features(ctx, [door], [stair, second])}
     assert set(features) == {"door-guid", "second-guid"}
     assert features["door-guid"].category == features["second-guid"].category == "Stairs"
