@@ -28,8 +28,8 @@ test: install
 	$(BIN)/python -m pytest -q
 
 lint: install
-	$(BIN)/ruff check bimtools initcli tests benchmarks
-	$(BIN)/ruff format --check bimtools initcli tests benchmarks
+	$(BIN)/ruff check bimkit bimtools initcli tests benchmarks
+	$(BIN)/ruff format --check bimkit bimtools initcli tests benchmarks
 	$(BIN)/mypy
 
 # Build the wheel, install it into a fresh venv outside the source tree and run both commands there.

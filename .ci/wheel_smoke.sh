@@ -31,8 +31,8 @@ WHEEL=$(ls "$WORK"/dist/bim_init-*.whl) || fail "no wheel built"
 import sys, zipfile
 names = set(zipfile.ZipFile(sys.argv[1]).namelist())
 need = ["bimtools/default_categories.yaml", "initcli/detector/models/default.onnx",
-        "initcli/detector/models/default.json", "bimtools/schemas/site_config.schema.json",
-        "bimtools/schemas/eval_config.schema.json", "bimtools/schemas/detection_log.schema.json"]
+        "initcli/detector/models/default.json", "bimkit/schemas/site_config.schema.json",
+        "bimkit/schemas/eval_config.schema.json", "bimkit/schemas/detection_log.schema.json"]
 missing = [n for n in need if n not in names]
 if missing:
     sys.exit(f"missing: {', '.join(missing)}")
@@ -52,9 +52,9 @@ cd "$RUN"
 export PYTHONPATH=  PYTHONNOUSERSITE=1
 # The installed package, not the source tree, must be what runs.
 "$VPY" - "$SRC" <<'PY' || fail "the installed package is not the one imported"
-import sys, pathlib, bimtools, initcli
+import sys, pathlib, bimkit, bimtools, initcli
 src = pathlib.Path(sys.argv[1]).resolve()
-for mod in (bimtools, initcli):
+for mod in (bimkit, bimtools, initcli):
     path = pathlib.Path(mod.__file__).resolve()
     if src in path.parents:
         sys.exit(f"{mod.__name__} imported from the source tree: {path}")

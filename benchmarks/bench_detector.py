@@ -31,9 +31,9 @@ ROOT = Path(__file__).resolve().parent.parent
 from bimtools.extract.output import write_site  # noqa: E402
 from bimtools.extract.pipeline import extract_site  # noqa: E402
 from bimtools.site.load import load_site  # noqa: E402
-from initcli.detector.render import render_view  # noqa: E402
-from initcli.detector.scene import Camera, Scene  # noqa: E402
-from initcli.detector.synth import SynthOptions, load_placements, write_dataset  # noqa: E402
+from initcli.detector.synth.dataset import SynthOptions, load_placements, write_dataset  # noqa: E402
+from initcli.detector.synth.render import render_view  # noqa: E402
+from initcli.detector.synth.scene import Camera, Scene  # noqa: E402
 
 
 def make_site(name: str, root: Path) -> Path:

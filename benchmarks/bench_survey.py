@@ -30,8 +30,8 @@ EVAL_MEDIAN = {"ntu_hallway": 28.0, "block_a": 3.2, "block_b": 4.3}
 def main() -> None:
     from initcli.cli.survey import survey_params
     from initcli.config import load_config
-    from initcli.eval.executor import LocalExecutor
     from initcli.eval.trial import trial_seed
+    from initcli.executor import LocalExecutor
     from initcli.session.setup import build_sim, choose_storey, prepare_site
     from initcli.survey.survey import (
         plan_storey,

@@ -13,9 +13,10 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TaskID, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from bimkit.checks import check_output_dir
+from bimkit.cli import number_option
+from bimkit.errors import EXIT_BAD_INPUT, InputError
 from bimtools import __version__
-from bimtools.checks import check_output_dir, number_option
-from bimtools.errors import EXIT_BAD_INPUT, InputError
 from bimtools.extract.settings import (
     DEFAULT_RESOLUTION,
     DEFAULT_SECTION_HEIGHT,
@@ -153,7 +154,7 @@ def extract(
 
 
 def main() -> None:
-    from bimtools.checks import run_cli
+    from bimkit.cli import run_cli
 
     run_cli(app, "bim-extract")
 

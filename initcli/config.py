@@ -16,10 +16,10 @@ from typing import Any
 
 import jsonschema
 
-from bimtools import checks
-from bimtools.checks import check_finite_tree, range_problem
-from bimtools.errors import InputError
-from bimtools.schemas import schema_path
+from bimkit import checks
+from bimkit.checks import check_finite_tree, range_problem
+from bimkit.errors import InputError
+from bimkit.schemas import schema_path
 from initcli.core.particle_filter import LaserModel
 from initcli.core.verification import VerificationParams
 from initcli.core.wall_following import WallFollowParams
@@ -377,7 +377,7 @@ def validate_document(doc: Any, schema_path: Path, where: str) -> None:
 
 def read_yaml(path: Path, what: str) -> Any:
     """The YAML document at ``path``; unreadable or binary files, syntax errors and numbers that are
-    not finite raise :class:`InputError` (:func:`bimtools.checks.read_yaml`)."""
+    not finite raise :class:`InputError` (:func:`bimkit.checks.read_yaml`)."""
     return checks.read_yaml(path, what)
 
 

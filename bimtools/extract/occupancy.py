@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 from shapely.geometry.base import BaseGeometry
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from bimtools.extract.floorplan import FloorPlan
 from bimtools.extract.section import polygons_of
 from bimtools.site.records import FREE, OCCUPIED, UNKNOWN, OccupancyGrid

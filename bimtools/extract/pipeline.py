@@ -13,8 +13,8 @@ import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
-from bimtools.checks import check_number
-from bimtools.errors import InputError
+from bimkit.checks import check_number
+from bimkit.errors import InputError
 from bimtools.extract.circulation import FreeRegions, SpaceIndex
 from bimtools.extract.features import (
     BodyCandidate,

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import ifcopenshell
 
-from bimtools.checks import range_problem, read_yaml
-from bimtools.errors import InputError
+from bimkit.checks import range_problem, read_yaml
+from bimkit.errors import InputError
 from bimtools.ifc.text import element_text, predefined_type
 
 DEFAULT_CATEGORIES = Path(__file__).resolve().parent.parent / "default_categories.yaml"

@@ -9,7 +9,7 @@ from pathlib import Path
 import ifcopenshell
 import ifcopenshell.util.unit
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 
 SUPPORTED_SCHEMAS = ("IFC2X3", "IFC4", "IFC4X3")
 

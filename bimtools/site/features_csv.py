@@ -11,8 +11,8 @@ import math
 from collections.abc import Iterable
 from pathlib import Path
 
-from bimtools.checks import read_text
-from bimtools.errors import InputError
+from bimkit.checks import read_text
+from bimkit.errors import InputError
 from bimtools.site.records import EXTRA_COLUMNS, FEATURE_COLUMNS, TABLE1_COLUMNS, Feature
 
 

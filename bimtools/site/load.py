@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from bimtools.site.features_csv import read_features
 from bimtools.site.manifest import SiteManifest, read_manifest
 from bimtools.site.occupancy_map import OccupancyGrid, read_map

@@ -6,8 +6,8 @@ import json
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from bimtools.errors import InputError
-from bimtools.site.jsonfile import read_json
+from bimkit.checks import read_json
+from bimkit.errors import InputError
 from bimtools.site.records import StoreyInfo
 
 SITE_FORMAT = "bim-init.site/1"

@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from bimtools.checks import read_yaml
-from bimtools.errors import InputError
+from bimkit.checks import read_yaml
+from bimkit.errors import InputError
 from bimtools.site.records import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
 
 __all__ = ["FREE", "OCCUPIED", "UNKNOWN", "OccupancyGrid", "read_map", "write_map"]

@@ -12,8 +12,8 @@ import json
 from collections.abc import Iterable
 from pathlib import Path
 
-from bimtools.errors import InputError
-from bimtools.site.jsonfile import read_json
+from bimkit.checks import read_json
+from bimkit.errors import InputError
 from bimtools.site.records import Obstacle, WallSegment
 
 

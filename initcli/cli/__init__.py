@@ -3,3 +3,5 @@
 Each module is one command (``match``, ``run``, ``eval``, ``detector``); :mod:`initcli.cli.main` holds
 the typer app. Algorithms live in :mod:`initcli.core`, file formats in :mod:`initcli.io`.
 """
+
+PROG = "bim-init"  # the program name of every error line (``bim-init: error: ...``)

@@ -15,8 +15,10 @@ from typing import Annotated
 
 import typer
 
-from bimtools.checks import check_output_file, number_option
-from bimtools.errors import EXIT_BAD_INPUT, InputError
+from bimkit.checks import check_output_file
+from bimkit.cli import fail, number_option
+from bimkit.errors import InputError
+from initcli.cli import PROG
 from initcli.io.detection_log import Record, write_log
 from initcli.ros.records import Bag2LogOptions, Bag2LogStats
 
@@ -120,8 +122,7 @@ def bag2log(
         )
         records, stats = convert_bag(bag, out, options, show_progress=True)
     except InputError as exc:
-        typer.echo(f"bim-init: error: {' '.join(str(exc).split())}", err=True)
-        raise typer.Exit(EXIT_BAD_INPUT) from None
+        fail(PROG, exc)
     for warning in stats.warnings:
         typer.echo(f"bim-init: warning: {warning}", err=True)
     typer.echo(

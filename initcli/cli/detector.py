@@ -16,10 +16,10 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from bimtools.checks import check_output_dir, number_option
-from bimtools.errors import EXIT_BAD_INPUT, InputError
-
-PROG = "bim-init"
+from bimkit.checks import check_output_dir
+from bimkit.cli import error_line, number_option
+from bimkit.errors import EXIT_BAD_INPUT, InputError
+from initcli.cli import PROG
 
 if TYPE_CHECKING:
     from initcli.detector.metrics import Metrics
@@ -36,8 +36,8 @@ MODEL_HELP = "An .onnx model; 'default' is the model shipped in the package."
 TORCH_MISSING = "needs PyTorch, the [train] extra: pip install 'bim-init[train]'"
 
 
-def _fail(message: str) -> typer.Exit:
-    typer.echo(f"bim-init: error: {' '.join(str(message).split())}", err=True)
+def _fail(message: object) -> typer.Exit:
+    typer.echo(error_line(PROG, message), err=True)
     return typer.Exit(EXIT_BAD_INPUT)
 
 
@@ -147,7 +147,7 @@ def synth(
 ) -> None:
     """Render a YOLO dataset (RGB, depth, labels) from site models with domain randomisation."""
     from initcli.cli.progress import count_bar
-    from initcli.detector.synth import SynthOptions, dataset_preview, write_dataset
+    from initcli.detector.synth.dataset import SynthOptions, dataset_preview, write_dataset
 
     try:
         check_output_dir(out, "--out", (), force=True)  # never over a file
@@ -281,8 +281,8 @@ def train(
         raise _fail(str(exc)) from None
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from initcli.detector.train import TrainOptions
-    from initcli.detector.train import train as run_training
+    from initcli.detector.training.train import TrainOptions
+    from initcli.detector.training.train import train as run_training
 
     console = _console()
     opts = TrainOptions(
@@ -384,7 +384,7 @@ def export(
             raise InputError(
                 "bim-init detector export needs the onnx package: pip install 'bim-init[train]'"
             ) from None
-        from initcli.detector.export import export_onnx
+        from initcli.detector.training.export import export_onnx
 
         report = export_onnx(model, out or model.with_suffix(".onnx"), imgsz)
     except InputError as exc:
@@ -451,7 +451,7 @@ def predict(
     import cv2
 
     from initcli.detector.runtime import Detector
-    from initcli.detector.synth import draw_boxes
+    from initcli.detector.synth.dataset import draw_boxes
 
     try:
         det = Detector(model, conf=conf, iou=iou, threads=threads)

@@ -21,20 +21,21 @@ from rich.progress import (
 )
 from rich.table import Table
 
-from bimtools.checks import check_output_dir, number_option
-from bimtools.errors import EXIT_BAD_INPUT, InputError
+from bimkit.checks import check_output_dir
+from bimkit.cli import fail, number_option
+from bimkit.errors import InputError
+from initcli.cli import PROG
 from initcli.config import REALITY_PROFILES
-from initcli.eval.campaign import check_start_poses, default_workers, plan_jobs, prepare_sites, run_jobs
+from initcli.eval.campaign import check_start_poses, plan_jobs, prepare_sites, run_jobs
 from initcli.eval.config import load_eval_config, parse_methods
-from initcli.eval.executor import make_executor
 from initcli.eval.records import TrialRecord
 from initcli.eval.report import RunStats, write_report
 from initcli.eval.results_file import ResultsWriter, read_results
 from initcli.eval.sweep import parse_sweep
 from initcli.eval.tables import NONE, table2, table3
+from initcli.executor import default_workers, make_executor
 
 EXIT_INTERRUPTED = 130
-PROG = "bim-init"
 EVAL_MARKERS = ("results.jsonl", "table.md")  # an --out folder holding one was written by bim-init eval
 
 
@@ -151,8 +152,7 @@ def evaluate(
     except InputError as exc:
         if not existed:  # nothing left behind: the site models extracted so far go too
             shutil.rmtree(out, ignore_errors=True)
-        print(f"bim-init: error: {' '.join(str(exc).split())}", file=sys.stderr)
-        raise typer.Exit(EXIT_BAD_INPUT) from None
+        fail(PROG, exc)
     n_workers = runner.slots if executor != "local" else workers or default_workers()
     done = {r.key for r in previous}
     jobs = plan_jobs(eval_config, prepared, chosen, starts, the_sweep, done, reality)

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import typer
 
-from bimtools.checks import run_cli
+from bimkit.cli import run_cli
+from initcli.cli import PROG
 from initcli.cli.bag2log import bag2log
 from initcli.cli.detector import detector_app
 from initcli.cli.eval import evaluate
@@ -45,7 +46,7 @@ app.add_typer(detector_app, name="detector")
 
 def main() -> None:
     """Console-script entry point (``bim-init``)."""
-    run_cli(app, "bim-init")
+    run_cli(app, PROG)
 
 
 if __name__ == "__main__":

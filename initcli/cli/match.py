@@ -18,7 +18,9 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from bimtools.errors import InputError
+from bimkit.cli import error_line
+from bimkit.errors import InputError
+from initcli.cli import PROG
 from initcli.cli.bag2log import log_or_bag
 from initcli.core.geometry import Pose2D
 from initcli.core.verification import TRACK_HYPOTHESES, Verification
@@ -55,8 +57,8 @@ def _verifications(
     return checks[:shown]
 
 
-def _fail(message: str) -> typer.Exit:
-    typer.echo(f"bim-init: error: {' '.join(str(message).split())}", err=True)
+def _fail(message: object) -> typer.Exit:
+    typer.echo(error_line(PROG, message), err=True)
     return typer.Exit(EXIT_BAD_INPUT)
 
 

@@ -15,8 +15,9 @@ from typing import Annotated
 
 import typer
 
-from bimtools.checks import number_option
-from bimtools.errors import EXIT_BAD_INPUT, InputError
+from bimkit.cli import fail, number_option
+from bimkit.errors import InputError
+from initcli.cli import PROG
 
 
 def publish_pose(
@@ -48,8 +49,7 @@ def publish_pose(
 
         publish_initial_pose(pose, host, port)
     except InputError as exc:
-        typer.echo(f"bim-init: error: {' '.join(str(exc).split())}", err=True)
-        raise typer.Exit(EXIT_BAD_INPUT) from None
+        fail(PROG, exc)
     typer.echo(
         f"sent /initialpose to ws://{host}:{port}: x {pose.x:.3f} y {pose.y:.3f} "
         f"yaw {math.degrees(pose.yaw):.2f} deg at t {pose.stamp:.3f} s"

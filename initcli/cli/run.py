@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import math
-import sys
 import time
 from datetime import datetime
 from pathlib import Path
@@ -15,9 +14,11 @@ from rich.console import Console
 from rich.live import Live
 from rich.table import Table
 
-from bimtools.checks import check_number, check_output_dir, check_output_file, number_option
-from bimtools.errors import EXIT_BAD_INPUT, InputError
-from bimtools.site.atomic import staged_directory
+from bimkit.atomic import staged_directory
+from bimkit.checks import check_number, check_output_dir, check_output_file
+from bimkit.cli import fail, number_option
+from bimkit.errors import InputError
+from initcli.cli import PROG
 from initcli.config import SessionConfig, config_to_dict, load_config
 from initcli.core.geometry import Pose2D
 from initcli.session.outputs import render_report, summary_document, write_summary
@@ -25,7 +26,6 @@ from initcli.session.result import MatchStep, SessionResult
 from initcli.session.setup import prepare_site, prepare_world, sim_session
 
 EXIT_FAILED = 1
-PROG = "bim-init"
 SEED_MAX = 2**32 - 1  # numpy seeds
 RUN_MARKERS = ("summary.json",)  # an --out folder holding one was written by bim-init run
 
@@ -261,8 +261,7 @@ def run(
 
             record_session(target, cfg.site_path(), record)
     except InputError as exc:
-        print(f"bim-init: error: {' '.join(str(exc).split())}", file=sys.stderr)
-        raise typer.Exit(EXIT_BAD_INPUT) from None
+        fail(PROG, exc)
     if as_json:
         print(json.dumps(doc, indent=2))
     elif quiet:

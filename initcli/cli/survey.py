@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import sys
 from functools import partial
 from pathlib import Path
 from typing import Annotated
@@ -13,13 +12,15 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from bimtools.checks import check_output_dir, number_option
-from bimtools.errors import EXIT_BAD_INPUT, InputError
-from bimtools.site.atomic import write_text_atomic
+from bimkit.atomic import write_text_atomic
+from bimkit.checks import check_output_dir
+from bimkit.cli import fail, number_option
+from bimkit.errors import InputError
 from bimtools.site.load import load_site
+from initcli.cli import PROG
 from initcli.config import SessionConfig, followed_side, load_config
 from initcli.core.visibility import CameraModel
-from initcli.eval.executor import make_executor
+from initcli.executor import make_executor
 from initcli.match.pipeline import site_class_map
 from initcli.session.setup import camera_of
 from initcli.survey.survey import (
@@ -37,7 +38,6 @@ EXIT_INTERRUPTED = 130
 SURVEY_VERSION = 1
 
 
-PROG = "bim-init"
 SURVEY_MARKERS = ("survey.json",)  # an --out folder holding one was written by bim-init survey
 
 
@@ -137,8 +137,7 @@ def survey(
         names = list(model.storeys) if storey == "all" else [model.storey(storey).name]
         runner = make_executor(executor, workers, address)
     except InputError as exc:
-        print(f"bim-init: error: {' '.join(str(exc).split())}", file=sys.stderr)
-        raise typer.Exit(EXIT_BAD_INPUT) from None
+        fail(PROG, exc)
     cmap = site_class_map(model)
     storeys: list[dict[str, object]] = []
     report: dict[str, object] = {

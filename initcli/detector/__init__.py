@@ -1,20 +1,20 @@
 """The object detector of paper §3.2.2 / §3.3.1: doors, lifts and staircases in the camera stream.
 
-Modules (torch is imported only by :mod:`model`, :mod:`train` and :mod:`export`):
+Three parts, each importable without the next:
 
-- :mod:`scene` -- a storey's walls and features as the renderer sees them (``Scene.from_storey``).
-- :mod:`look` -- appearance: textures, colours, lighting (fixed for the simulator, random for data).
-- :mod:`render` -- the numpy raycaster: ``render_view(scene, pose_xy_yaw, camera) -> View``.
-- :mod:`synth` -- synthetic YOLO datasets with domain randomisation, contact sheets.
-- :mod:`datasets` -- YOLO (incl. Roboflow-style paths) and COCO readers.
-- :mod:`model`, :mod:`train`, :mod:`export` -- the PyTorch network, its training, the ONNX export.
-- :mod:`preprocess`, :mod:`layouts`, :mod:`runtime` -- onnxruntime inference: letterbox, output
-  layouts (ours, Ultralytics YOLOv8/11, YOLOv5, NMS-in-graph), decoding, class-aware NMS.
-- :mod:`metrics`, :mod:`evaluate` -- precision, recall and AP@0.5 per class.
-- :mod:`sensor` -- the camera in the loop: render, detect, depth window -> detection-log objects.
-- :mod:`cli` -- ``bim-init detector synth|train|export|predict|eval``.
+- this package, the runtime (onnxruntime, OpenCV and numpy only): :mod:`.preprocess` (letterbox),
+  :mod:`.layouts` (output layouts: ours, Ultralytics YOLOv8/11, YOLOv5, NMS-in-graph; decoding,
+  class-aware NMS), :mod:`.runtime` (the ONNX detector), :mod:`.datasets` (YOLO, Roboflow-style and
+  COCO readers), :mod:`.metrics` and :mod:`.evaluate` (precision, recall, AP@0.5 per class);
+- :mod:`initcli.detector.synth`, rendering: :mod:`~initcli.detector.synth.scene` (a storey as the
+  renderer sees it), :mod:`~initcli.detector.synth.look` (textures, colours, lighting),
+  :mod:`~initcli.detector.synth.render` (the numpy raycaster) and
+  :mod:`~initcli.detector.synth.dataset` (synthetic YOLO datasets with domain randomisation);
+- :mod:`initcli.detector.training`, PyTorch (the ``[train]`` extra): the network
+  (:mod:`~initcli.detector.training.model`), augmentation, checkpoints, training and the ONNX export.
 
-See ``README.md`` in this folder for the commands, the data and what the shipped model can do.
+The command face is :mod:`initcli.cli.detector`; ``README.md`` in this folder has the commands,
+the data and what the shipped model can do.
 """
 
 from __future__ import annotations

@@ -44,8 +44,8 @@ from typing import Any
 
 import numpy as np
 
-from bimtools.checks import read_text, read_yaml
-from bimtools.errors import InputError
+from bimkit.checks import read_text, read_yaml
+from bimkit.errors import InputError
 
 IMAGE_SUFFIXES = {".jpg", ".jpeg", ".png", ".bmp", ".webp", ".tif", ".tiff"}
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from initcli.core.classes import ClassMap
 from initcli.detector.datasets import load_dataset
 from initcli.detector.metrics import MetricAccumulator, Metrics

@@ -18,7 +18,7 @@ import cv2
 import numpy as np
 import onnxruntime as ort
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from initcli.detector import DEFAULT_MODEL, resolve_model_path
 from initcli.detector.layouts import LayoutError, decode, infer_layout, nms
 from initcli.detector.preprocess import PAD_VALUE, Letterbox, letterbox

@@ -10,11 +10,10 @@ from bimtools.site.load import load_site
 from initcli.config import load_config
 from initcli.core.geometry import Pose2D
 from initcli.eval.config import EvalConfig, EvalSite
-from initcli.eval.executor import Executor, LocalExecutor, map_unordered
-from initcli.eval.executor import default_workers as default_workers
 from initcli.eval.records import TrialKey, TrialRecord
 from initcli.eval.sweep import Sweep, sweep_label
 from initcli.eval.trial import TrialJob, run_trial, trial_seed
+from initcli.executor import Executor, LocalExecutor, map_unordered
 from initcli.session.setup import check_start, choose_storey, prepare_site, prepare_world
 
 

@@ -11,8 +11,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from bimtools.errors import InputError
-from bimtools.schemas import schema_path
+from bimkit.errors import InputError
+from bimkit.schemas import schema_path
 from initcli.config import read_yaml, validate_document
 from initcli.core.global_localisation import GlobalLocalisationParams
 from initcli.eval.records import METHODS, FailureRule

@@ -5,7 +5,7 @@ from __future__ import annotations
 import io
 from pathlib import Path
 
-from bimtools.site.atomic import write_bytes_atomic
+from bimkit.atomic import write_bytes_atomic
 from initcli.eval.records import METHODS, MethodSummary, TrialRecord
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from bimtools.site.atomic import write_text_atomic
+from bimkit.atomic import write_text_atomic
 from initcli.eval import plots
 from initcli.eval.records import FailureRule, MethodSummary, TrialRecord
 from initcli.eval.results_file import write_csv

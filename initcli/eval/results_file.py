@@ -10,9 +10,9 @@ import math
 from pathlib import Path
 from typing import IO
 
-from bimtools.checks import read_text
-from bimtools.errors import InputError
-from bimtools.site.atomic import write_text_atomic
+from bimkit.atomic import write_text_atomic
+from bimkit.checks import read_text
+from bimkit.errors import InputError
 from initcli.eval.records import TrialRecord
 
 REQUIRED = ("site", "start", "method", "success", "reason")

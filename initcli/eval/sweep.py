@@ -7,8 +7,8 @@ import dataclasses
 import json
 from dataclasses import dataclass
 
-from bimtools.checks import check_number
-from bimtools.errors import InputError
+from bimkit.checks import check_number
+from bimkit.errors import InputError
 from initcli.config import SCHEMA_PATH as SITE_SCHEMA
 from initcli.config import SessionConfig
 

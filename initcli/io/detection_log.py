@@ -13,7 +13,7 @@ Schema: ``schemas/detection_log.schema.json`` (one line = one instance). Records
 - ``state``, ``hypotheses`` (optional, written by ``bim-init run``): kept as plain data.
 
 Unknown record types are skipped with one warning (forward compatibility); unknown keys in a
-known record are ignored. A malformed line raises :class:`bimtools.errors.InputError` naming
+known record are ignored. A malformed line raises :class:`bimkit.errors.InputError` naming
 ``file:line`` and the problem, or is skipped and counted with ``skip_bad=True``.
 """
 
@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any, Union
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount
 

@@ -20,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from bimtools.checks import check_number, read_yaml
-from bimtools.errors import InputError
+from bimkit.checks import check_number, read_yaml
+from bimkit.errors import InputError
 from bimtools.site.load import Site, StoreyModel, load_site
 from initcli.core.classes import ClassMap
 from initcli.core.detection_filter import (

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from bimtools.site.load import load_site
 from bimtools.site.records import OccupancyGrid
 from initcli.core.geometry import Pose2D

@@ -10,9 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from bimtools.checks import check_number
-from bimtools.errors import InputError
-from bimtools.site.jsonfile import read_json
+from bimkit.checks import check_number, read_json
+from bimkit.errors import InputError
 from initcli.core.geometry import Pose2D
 from initcli.io.detection_log import Detections, HypothesesRecord, Odom, read_log
 from initcli.ros.records import InitialPose

@@ -12,7 +12,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from initcli.ros.nav2 import initial_pose_message, state_message
 from initcli.ros.records import INITIALPOSE_TOPIC, STATE_TOPIC, InitialPose
 

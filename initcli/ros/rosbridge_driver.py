@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from initcli.core.depth import window_depth
 from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from initcli.ros.records import Transform
 
 

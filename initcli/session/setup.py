@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from bimtools.site.load import Site, StoreyModel, load_site
 from bimtools.site.records import FREE, OCCUPIED
 from initcli.config import SessionConfig, as_built_params, start_pose_degrees

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from bimtools.site.load import StoreyModel
 from initcli.config import SessionConfig
 from initcli.core.geometry import Pose2D

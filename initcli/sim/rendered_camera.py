@@ -19,10 +19,17 @@ import numpy as np
 from bimtools.site.load import StoreyModel
 from initcli.core.depth import window_depth
 from initcli.core.projection import CameraIntrinsics, CameraMount
-from initcli.detector.look import Look
-from initcli.detector.render import View, render_view
 from initcli.detector.runtime import Detection, Detector
-from initcli.detector.scene import CLUTTER_BOX, CLUTTER_PERSON, Camera, Clutter, Scene, camera_pose_in_world
+from initcli.detector.synth.look import Look
+from initcli.detector.synth.render import View, render_view
+from initcli.detector.synth.scene import (
+    CLUTTER_BOX,
+    CLUTTER_PERSON,
+    Camera,
+    Clutter,
+    Scene,
+    camera_pose_in_world,
+)
 from initcli.io.detection_log import DetectedObject
 from initcli.sim.world import SimWorld, box_edges
 

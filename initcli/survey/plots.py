@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from bimtools.site.atomic import write_bytes_atomic
+from bimkit.atomic import write_bytes_atomic
 from initcli.survey.survey import Landmark, StoreySurvey
 
 if TYPE_CHECKING:

@@ -19,7 +19,7 @@ import numpy as np
 from bimtools.site.load import StoreyModel
 from initcli.core.classes import ClassMap
 from initcli.core.visibility import CameraModel, FeatureArrays, visible
-from initcli.eval.executor import Executor, LocalExecutor, map_unordered
+from initcli.executor import Executor, LocalExecutor, map_unordered
 from initcli.sim.as_built import closed_doors, door_ids
 from initcli.sim.scenario import Circulation
 from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT, sim_features_from_bim

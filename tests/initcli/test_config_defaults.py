@@ -9,7 +9,7 @@ from typing import Any
 
 import pytest
 
-from bimtools.schemas import schema_path
+from bimkit.schemas import schema_path
 from initcli.cli.match import match
 from initcli.config import SessionConfig, config_to_dict, match_options
 from initcli.match.pipeline import MatchOptions

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from shapely.geometry import box
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from bimtools.extract.floorplan import ObstacleShape, build_floorplan
 from bimtools.extract.occupancy import MAX_GRID_PIXELS, GridFrame, fill, rasterise
 from bimtools.site.records import FREE, OCCUPIED, UNKNOWN

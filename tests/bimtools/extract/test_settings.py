@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from bimtools.checks import range_problem
+from bimkit.checks import range_problem
 from bimtools.extract import settings
 
 

@@ -10,7 +10,7 @@ import ifcopenshell.api.root
 import ifcopenshell.api.unit
 import pytest
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from bimtools.ifc.model import (
     authoring_application,
     describe_model,

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from bimtools.site.features_csv import format_features, read_features, write_features
 from bimtools.site.records import TABLE1_COLUMNS, Feature
 

@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from bimtools.site.features_csv import write_features
 from bimtools.site.load import load_site
 from bimtools.site.records import Feature

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from bimtools.site.occupancy_map import FREE, OCCUPIED, UNKNOWN, OccupancyGrid, read_map, write_map
 
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from initcli.cli.bag2log import convert_bag, is_bag, log_or_bag
 from initcli.io.detection_log import read_log
 from initcli.ros.records import Bag2LogOptions

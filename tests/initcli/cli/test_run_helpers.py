@@ -8,7 +8,7 @@ import pytest
 from rich.console import Console
 from rich.table import Table
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from initcli.cli.run import LiveView, parse_start, result_table
 
 

@@ -10,7 +10,7 @@ import jsonschema
 import pytest
 from typer.testing import CliRunner
 
-from bimtools.schemas import schema_path
+from bimkit.schemas import schema_path
 from initcli.cli.main import app
 from initcli.config import load_config
 from initcli.session.setup import prepare_site

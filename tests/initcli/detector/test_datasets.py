@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from initcli.detector.datasets import label_path, load_dataset
 
 

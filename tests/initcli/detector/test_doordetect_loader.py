@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import yaml
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from initcli.detector.datasets import holdout_fraction, load_dataset, load_doordetect, load_remapped
 
 NAMES = ["door", "lift", "stairs"]

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from initcli.detector.runtime import Detector
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 import initcli.eval.config as eval_config
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 
 
 def test_default_config_is_the_source_trees_sample() -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from initcli.eval.records import TrialRecord
 from initcli.eval.results_file import (
     ResultsWriter,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from initcli.config import SessionConfig
 from initcli.eval.sweep import apply_sweep, parse_sweep
 from initcli.match.pipeline import MatchOptions

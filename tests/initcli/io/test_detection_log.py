@@ -9,7 +9,7 @@ from pathlib import Path
 import jsonschema
 import pytest
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from initcli.core.geometry import Pose2D
 from initcli.io.detection_log import (
     DetectedObject,

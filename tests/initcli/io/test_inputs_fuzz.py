@@ -12,7 +12,7 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from bimtools.ifc.categories import DEFAULT_CATEGORIES, load_categories
 from bimtools.site.features_csv import read_features
 from initcli.config import load_config

@@ -8,7 +8,7 @@ import sqlite3
 import numpy as np
 import pytest
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from initcli.core.projection import detections_to_odom
 from initcli.detector.runtime import Detector
 from initcli.io.detection_log import Detections, Meta, Odom, Scan

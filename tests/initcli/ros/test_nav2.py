@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.io.detection_log import Detections, HypothesesRecord, Meta, Odom, write_log

@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from initcli.ros.records import InitialPose
 from tests.initcli.ros.rosbridge_server import RosbridgeServer
 

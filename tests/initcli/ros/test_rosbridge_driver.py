@@ -8,7 +8,7 @@ import time
 
 import pytest
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from initcli.config import RosbridgeSection
 from initcli.ros.bag_reader import BagSource
 from initcli.ros.msgdefs import to_dict

@@ -15,9 +15,9 @@ from bimtools.site.load import load_site
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.detector import DEFAULT_MODEL
 from initcli.detector.layouts import iou_matrix
-from initcli.detector.render import render_view
 from initcli.detector.runtime import Detector
-from initcli.detector.scene import Camera, Clutter, Scene, camera_pose_in_world
+from initcli.detector.synth.render import render_view
+from initcli.detector.synth.scene import Camera, Clutter, Scene, camera_pose_in_world
 from initcli.sim.rendered_camera import RenderedCamera, to_detected_objects, window_depth
 from tests.helpers import SAMPLES
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from bimtools.site.atomic import staged_directory, write_bytes_atomic, write_text_atomic
+from bimkit.atomic import staged_directory, write_bytes_atomic, write_text_atomic
 
 
 def test_text_and_bytes_are_written_whole_and_replace_the_old_file(tmp_path):

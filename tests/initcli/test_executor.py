@@ -7,14 +7,14 @@ from pathlib import Path
 
 import pytest
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from initcli.config import load_config
 from initcli.eval.campaign import PreparedSite, plan_jobs, run_jobs
 from initcli.eval.config import EvalConfig, EvalSite
-from initcli.eval.executor import LocalExecutor, make_executor, map_unordered
+from initcli.executor import LocalExecutor, make_executor, map_unordered
 from initcli.session.setup import prepare_site
 
-SAMPLES = Path(__file__).resolve().parents[3] / "sample_models"
+SAMPLES = Path(__file__).resolve().parents[2] / "sample_models"
 
 
 def _square(x: int) -> int:
@@ -58,7 +58,7 @@ def _records(jobs, executor=None, workers=1):
 
 def test_a_small_campaign_on_a_local_ray_instance_matches_the_local_pool(small_campaign):
     pytest.importorskip("ray")
-    from initcli.eval.executor import RayExecutor
+    from initcli.executor import RayExecutor
 
     local = _records(small_campaign)
     ray_executor = RayExecutor(None, num_cpus=2)

@@ -8,7 +8,7 @@ import jsonschema
 import numpy as np
 import yaml
 
-from initcli.detector.synth import SynthOptions, load_placements, render_sample, write_dataset
+from initcli.detector.synth.dataset import SynthOptions, load_placements, render_sample, write_dataset
 from tests.helpers import SCHEMAS
 
 

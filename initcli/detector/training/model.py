@@ -21,7 +21,7 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 
 STRIDE = 8
 

@@ -12,9 +12,9 @@ import pytest
 from bimtools.site.load import StoreyModel, load_site
 from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraMount, detections_to_odom
-from initcli.detector.render import render_view
 from initcli.detector.runtime import Detection
-from initcli.detector.scene import Camera, Scene, camera_pose_in_world
+from initcli.detector.synth.render import render_view
+from initcli.detector.synth.scene import Camera, Scene, camera_pose_in_world
 from initcli.sim.rendered_camera import detections_to_objects, window_depth
 from tests.helpers import SCHEMAS
 

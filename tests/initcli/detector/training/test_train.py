@@ -14,10 +14,11 @@ from typer.testing import CliRunner
 from bimtools.extract.output import write_site  # noqa: E402
 from bimtools.extract.pipeline import extract_site  # noqa: E402
 from initcli.cli.detector import detector_app  # noqa: E402
-from initcli.detector.export import export_onnx  # noqa: E402
 from initcli.detector.runtime import Detector  # noqa: E402
-from initcli.detector.synth import SynthOptions, write_dataset  # noqa: E402
-from initcli.detector.train import TrainOptions, build_targets, load_checkpoint, train  # noqa: E402
+from initcli.detector.synth.dataset import SynthOptions, write_dataset  # noqa: E402
+from initcli.detector.training.checkpoint import load_checkpoint  # noqa: E402
+from initcli.detector.training.export import export_onnx  # noqa: E402
+from initcli.detector.training.train import TrainOptions, build_targets, train  # noqa: E402
 from tests.helpers import SAMPLES, SCHEMAS
 
 torch = pytest.importorskip("torch")

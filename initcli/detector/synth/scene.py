@@ -19,7 +19,7 @@ import shapely
 from shapely.geometry import LineString, MultiPolygon, Polygon
 from shapely.geometry.polygon import orient
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from bimtools.site.load import StoreyModel
 from initcli.core.classes import ClassMap
 from initcli.core.projection import CameraIntrinsics, CameraMount

@@ -16,7 +16,7 @@ from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from typing import Any, Protocol
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 
 EXECUTORS = ("local", "ray")
 

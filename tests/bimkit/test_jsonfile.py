@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from bimtools.errors import InputError
-from bimtools.site.jsonfile import read_json
+from bimkit.checks import read_json
+from bimkit.errors import InputError
 
 
 def test_reads_the_document(tmp_path):

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from bimtools.site.load import StoreyModel
-from initcli.detector.scene import Scene
+from initcli.detector.synth.scene import Scene
 
 
 def test_scene_needs_walls():

@@ -7,13 +7,19 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from bimtools.site.load import StoreyModel
 from bimtools.site.records import Feature, WallSegment
-from initcli.detector import synth
-from initcli.detector.render import render_view
-from initcli.detector.scene import Camera, Scene
-from initcli.detector.synth import NoCirculation, SynthOptions, load_placements, placement_for, render_sample
+from initcli.detector.synth import dataset as synth
+from initcli.detector.synth.dataset import (
+    NoCirculation,
+    SynthOptions,
+    load_placements,
+    placement_for,
+    render_sample,
+)
+from initcli.detector.synth.render import render_view
+from initcli.detector.synth.scene import Camera, Scene
 
 
 def _walls(storey: str, pts: list[tuple[float, float, float, float]]) -> list[WallSegment]:

@@ -1,10 +1,10 @@
-"""initcli.detector.look: the fixed look, the noise tile and the randomised looks."""
+"""initcli.detector.synth.look: the fixed look, the noise tile and the randomised looks."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from initcli.detector.look import TEX, default_feature_looks, default_look, noise_tile, random_look
+from initcli.detector.synth.look import TEX, default_feature_looks, default_look, noise_tile, random_look
 
 NAMES = ("door", "lift", "stairs")
 

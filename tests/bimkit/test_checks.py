@@ -1,4 +1,4 @@
-"""bimtools.checks: number ranges, text and YAML files, output folders, the option callback."""
+"""bimkit.checks: number ranges, text and YAML files, output folders, the option callback."""
 
 from __future__ import annotations
 
@@ -9,19 +9,19 @@ from types import SimpleNamespace
 import pytest
 import typer
 
-from bimtools.checks import (
+from bimkit.checks import (
     check_finite_tree,
     check_number,
     check_output_dir,
     check_output_file,
-    number_option,
     parse_yaml,
     range_problem,
     read_text,
     read_yaml,
     show_number,
 )
-from bimtools.errors import EXIT_BAD_INPUT, InputError
+from bimkit.cli import number_option
+from bimkit.errors import EXIT_BAD_INPUT, InputError
 
 
 @pytest.mark.parametrize(

@@ -18,8 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from initcli.core.raycast import ray_segment_params
-from initcli.detector.look import TEX, FeatureLooks, Look, default_look, noise_tile
-from initcli.detector.scene import (
+from initcli.detector.synth.look import TEX, FeatureLooks, Look, default_look, noise_tile
+from initcli.detector.synth.scene import (
     CLUTTER_PERSON,
     DECOR_CABINET,
     DECOR_CALL_PANEL,

@@ -33,12 +33,12 @@ import numpy as np
 import yaml
 from scipy import ndimage
 
-from bimtools.errors import InputError
+from bimkit.errors import InputError
 from bimtools.site.load import load_site
 from initcli.detector import CLASS_NAMES
-from initcli.detector.look import random_look
-from initcli.detector.render import View, cast_rays, render_view
-from initcli.detector.scene import (
+from initcli.detector.synth.look import random_look
+from initcli.detector.synth.render import View, cast_rays, render_view
+from initcli.detector.synth.scene import (
     CLUTTER_BOX,
     CLUTTER_PERSON,
     DECOR_CABINET,

@@ -1,0 +1,78 @@
+"""Command-line plumbing shared by ``bim-extract`` and ``bim-init``: option range callbacks, the one
+error line, and the console-script runner that turns usage errors into that line and exit code 2."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable
+from typing import Any, NoReturn
+
+import typer
+
+from bimkit.checks import range_problem
+from bimkit.errors import EXIT_BAD_INPUT
+
+__all__ = ["error_line", "fail", "number_option", "run_cli"]
+
+
+def error_line(prog: str, message: object) -> str:
+    """``prog: error: message`` on one line (white space folded)."""
+    return f"{prog}: error: {' '.join(str(message).split())}"
+
+
+def number_option(
+    prog: str,
+    *,
+    minimum: float | None = None,
+    maximum: float | None = None,
+    above: float | None = None,
+    below: float | None = None,
+) -> Callable[..., Any]:
+    """A typer/click option callback: a number outside the range (or not finite) is one line on
+    stderr (``prog: error: --resolution: nan is not a finite number``) and exit code 2."""
+
+    def callback(ctx: Any, param: Any, value: Any) -> Any:
+        if value is None or getattr(ctx, "resilient_parsing", False):
+            return value
+        values = value if isinstance(value, list | tuple) else [value]
+        for v in values:
+            problem = range_problem(v, minimum=minimum, maximum=maximum, above=above, below=below)
+            if problem is not None:
+                name = max(getattr(param, "opts", None) or [str(param.name)], key=len)
+                fail(prog, f"{name}: {problem}")
+        return value
+
+    return callback
+
+
+def fail(prog: str, message: object) -> NoReturn:
+    """Print ``prog: error: message`` as one line on stderr and exit with code 2."""
+    typer.echo(error_line(prog, message), err=True)
+    raise typer.Exit(EXIT_BAD_INPUT)
+
+
+def run_cli(app: Any, prog: str) -> None:
+    """Run a typer ``app`` as a console script: a usage error (an unknown option, ``--seed abc``) is
+    one line on stderr and exit 2 like every other bad input, not click's usage block; Ctrl-C is 130."""
+    try:  # typer >= 0.20 carries its own copy of click
+        from typer._click import exceptions as cx
+    except ImportError:  # pragma: no cover - older typer on click
+        from click import exceptions as cx  # type: ignore[no-redef]
+
+    try:
+        code = app(standalone_mode=False)
+    except getattr(cx, "NoArgsIsHelpError", ()) as exc:  # a bare command: its help, as before
+        if exc.ctx is not None:
+            print(exc.ctx.get_help(), file=sys.stderr)
+        sys.exit(EXIT_BAD_INPUT)
+    except cx.UsageError as exc:
+        where = f" ({exc.ctx.command_path})" if exc.ctx is not None else ""
+        print(f"{prog}: error{where}: {' '.join(exc.format_message().split())}", file=sys.stderr)
+        sys.exit(EXIT_BAD_INPUT)
+    except cx.ClickException as exc:
+        print(error_line(prog, exc.format_message()), file=sys.stderr)
+        sys.exit(exc.exit_code)
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        sys.exit(130)
+    sys.exit(code if isinstance(code, int) else 0)
