@@ -76,7 +76,8 @@ def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, 
     from initcli.core.verification import TRACK_HYPOTHESES, trails
     from initcli.eval.sweep import apply_sweep, parse_sweep
     from initcli.session import runner
-    from initcli.session.setup import prepare_site, sim_session
+    from initcli.session.simulated import sim_session
+    from initcli.site import prepare_site
 
     name, key, value, seed, work = job
     config = load_config(ROOT / "sample_models" / f"{name}.site.yaml", "construction")

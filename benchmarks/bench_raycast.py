@@ -24,8 +24,9 @@ from bimtools.site.records import FREE
 from initcli.config import load_config
 from initcli.core.raycast import ray_segment_distances
 from initcli.drivers.sim import LidarSpec
-from initcli.session.setup import build_sim, choose_storey, prepare_site
+from initcli.sim.build import build_sim
 from initcli.sim.world import SimWorld
+from initcli.site import choose_storey, prepare_site
 
 ROOT = Path(__file__).resolve().parent.parent
 STOREYS = ("ntu_hallway", "block_a", "block_b")

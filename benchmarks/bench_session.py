@@ -29,7 +29,8 @@ PAPER_DISTANCE = {"ntu_hallway": 44.88, "block_a": 14.81, "block_b": 16.61}
 def one_session(args: tuple[str, int, str]) -> dict:
     name, seed, workdir = args
     from initcli.config import load_config
-    from initcli.session.setup import prepare_site, sim_session
+    from initcli.session.simulated import sim_session
+    from initcli.site import prepare_site
 
     config = load_config(ROOT / "sample_models" / f"{name}.site.yaml")
     site = prepare_site(config, Path(workdir) / name)

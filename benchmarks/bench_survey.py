@@ -32,7 +32,8 @@ def main() -> None:
     from initcli.config import load_config
     from initcli.eval.trial import trial_seed
     from initcli.executor import LocalExecutor
-    from initcli.session.setup import build_sim, choose_storey, prepare_site
+    from initcli.sim.build import build_sim
+    from initcli.site import choose_storey, prepare_site
     from initcli.survey.survey import (
         plan_storey,
         sample_views,

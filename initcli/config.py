@@ -21,6 +21,7 @@ from bimkit.checks import check_finite_tree, range_problem
 from bimkit.errors import InputError
 from bimkit.schemas import schema_path
 from initcli.core.particle_filter import LaserModel
+from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.core.verification import VerificationParams
 from initcli.core.wall_following import WallFollowParams
 from initcli.match.pipeline import MatchOptions
@@ -511,3 +512,11 @@ def wall_follow_params(config: SessionConfig) -> WallFollowParams:
 def turn_in_place_speed(config: SessionConfig) -> float:
     """rad/s of the look round at the start and of the recovery rotation (§3.3.4)."""
     return 0.6 * config.robot.max_angular
+
+
+def camera_of(config: SessionConfig) -> tuple[CameraIntrinsics, CameraMount]:
+    """The camera's intrinsics and its mount on the robot (``camera:``)."""
+    c = config.camera
+    intrinsics = CameraIntrinsics(c.fx, c.fy, c.cx, c.cy, int(c.width), int(c.height))
+    p = c.pose
+    return intrinsics, CameraMount(p.x, p.y, p.z, p.roll, p.pitch, p.yaw)

@@ -24,7 +24,7 @@ from initcli.core.geometry import Pose2D
 from initcli.core.global_localisation import GlobalLocalisation, GlobalLocalisationParams
 from initcli.core.motion import motion_delta
 from initcli.drivers.base import SensorFrame
-from initcli.session.setup import SimSetup
+from initcli.sim.build import SimSetup
 
 MIN_TRAVEL = 1.0  # m driven before a convergence claim counts (as in fine tuning)
 

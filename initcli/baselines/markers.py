@@ -15,11 +15,11 @@ import numpy as np
 from bimtools.site.load import Site
 from initcli.baselines.drive import drive_attempts, limit_passed
 from initcli.baselines.outcome import LocalisationOutcome
-from initcli.config import SessionConfig
+from initcli.config import SessionConfig, camera_of
 from initcli.core.geometry import Pose2D
 from initcli.core.marker_pose import robot_pose_from_marker
 from initcli.drivers.base import SensorFrame
-from initcli.session.setup import SimSetup, camera_of
+from initcli.sim.build import SimSetup
 from initcli.sim.markers import Marker, MarkerDetector, MarkerParams, place_markers
 from initcli.sim.scenario import Circulation
 

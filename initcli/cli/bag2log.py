@@ -5,11 +5,6 @@ Exit codes: 0 written, 2 bad input (one line on stderr).
 
 from __future__ import annotations
 
-import contextlib
-import sys
-import tempfile
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated
 
@@ -19,37 +14,9 @@ from bimkit.checks import check_output_file
 from bimkit.cli import fail, number_option
 from bimkit.errors import InputError
 from initcli.cli import PROG
-from initcli.io.detection_log import Record, write_log
-from initcli.ros.records import Bag2LogOptions, Bag2LogStats
-
-
-def convert_bag(
-    bag: Path, out: Path, options: Bag2LogOptions, show_progress: bool = False
-) -> tuple[list[Record], Bag2LogStats]:
-    """Read ``bag`` and write the log to ``out`` atomically (a progress bar on a terminal)."""
-    from initcli.ros.bag_reader import bag_to_records
-
-    if show_progress and sys.stderr.isatty():
-        from initcli.cli.progress import count_bar
-
-        with count_bar("bag2log") as bar:
-            task = bar.add_task("messages", total=None)
-            records, stats = bag_to_records(
-                bag, options, lambda done, total: bar.update(task, completed=done, total=total)
-            )
-    else:
-        records, stats = bag_to_records(bag, options)
-    out = Path(out)
-    tmp = out.with_name(f".{out.name}.partial")
-    try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        write_log(tmp, records)
-        tmp.replace(out)
-    except OSError as exc:
-        with contextlib.suppress(OSError):  # a parent that is a file: there is nothing to remove
-            tmp.unlink(missing_ok=True)
-        raise InputError(f"{out}: cannot write the log: {exc.strerror or exc}") from None
-    return records, stats
+from initcli.cli.progress import message_progress
+from initcli.ros.convert import convert_bag
+from initcli.ros.records import Bag2LogOptions
 
 
 def bag2log(
@@ -120,7 +87,8 @@ def bag2log(
             rate=rate,
             class_names=parse_class_names(class_names),
         )
-        records, stats = convert_bag(bag, out, options, show_progress=True)
+        with message_progress() as progress:
+            records, stats = convert_bag(bag, out, options, progress)
     except InputError as exc:
         fail(PROG, exc)
     for warning in stats.warnings:
@@ -130,23 +98,3 @@ def bag2log(
         f"{stats.scans} scans "
         f"({stats.messages} messages in {stats.seconds:.1f} s)"
     )
-
-
-BAG_SUFFIXES = (".bag", ".mcap", ".db3")
-
-
-def is_bag(path: Path) -> bool:
-    """A ROS bag rather than a detection log: .bag, .mcap, .db3, or a ROS 2 bag folder."""
-    return path.suffix.lower() in BAG_SUFFIXES or (path.is_dir() and (path / "metadata.yaml").exists())
-
-
-@contextmanager
-def log_or_bag(path: Path) -> Iterator[Path]:
-    """``path`` itself for a detection log; for a bag, the log converted into a temporary folder."""
-    if not is_bag(Path(path)):
-        yield Path(path)
-        return
-    with tempfile.TemporaryDirectory(prefix="bim-init-bag2log-") as tmp:
-        log = Path(tmp) / f"{Path(path).stem}.jsonl"
-        convert_bag(Path(path), log, Bag2LogOptions(), show_progress=True)
-        yield log

@@ -21,40 +21,13 @@ from rich.table import Table
 from bimkit.cli import error_line
 from bimkit.errors import InputError
 from initcli.cli import PROG
-from initcli.cli.bag2log import log_or_bag
+from initcli.cli.progress import message_progress
 from initcli.core.geometry import Pose2D
 from initcli.core.verification import TRACK_HYPOTHESES, Verification
 from initcli.io.match_result import report_to_dict
 from initcli.match.pipeline import EXIT_BAD_INPUT, MatchOptions, MatchReport, run_match
-
-
-def _verifications(
-    log_path: Path, site_path: Path, report: MatchReport, skip_bad: bool, shown: int
-) -> list[Verification | None]:
-    """Negative evidence, scan fit and the lidar along the path of each hypothesis
-    (initcli.match.verify); with several hypotheses, a note naming the one the lidar along the path
-    favours (a session checks that one as a unique match). ``report`` lists up to
-    ``TRACK_HYPOTHESES`` so that the note does not depend on ``--top``; it is cut to the ``shown``
-    first here, with the checks."""
-    from bimtools.site.load import load_site
-    from initcli.io.detection_log import read_log
-    from initcli.match.pipeline import site_class_map
-    from initcli.match.verify import verify_and_favour
-
-    site = load_site(site_path)
-    checks, favoured = verify_and_favour(
-        read_log(log_path, skip_bad=skip_bad), site, report, site_class_map(site)
-    )
-    if favoured is not None:
-        rank = report.hypotheses[favoured].rank
-        hidden = f" (not shown: --top {rank} shows it)" if rank > shown else ""
-        report.notes.append(
-            f"the lidar along the path favours hypothesis {rank}{hidden}:"
-            " a session checks it as a unique match"
-        )
-    del report.hypotheses[shown:]
-    report.options = replace(report.options, top=shown)
-    return checks[:shown]
+from initcli.match.verify import check_hypotheses
+from initcli.ros.convert import log_or_bag
 
 
 def _fail(message: object) -> typer.Exit:
@@ -270,12 +243,12 @@ def match(
     checks = None
     verify = site.is_dir()  # the checks need the site's maps; a bare features.csv has none
     try:
-        with log_or_bag(log) as log_path:  # a ROS bag is converted first (bim-init bag2log)
+        with message_progress() as progress, log_or_bag(log, progress=progress) as log_path:
             options.validate()
             listed = replace(options, top=max(top, TRACK_HYPOTHESES)) if verify else options
             report = run_match(log_path, site, listed)
             if verify:
-                checks = _verifications(log_path, site, report, options.skip_bad, top)
+                checks = check_hypotheses(log_path, site, report, options.skip_bad, top)
     except InputError as exc:
         raise _fail(str(exc)) from None
 

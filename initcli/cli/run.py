@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 import time
+from contextlib import nullcontext
 from datetime import datetime
 from pathlib import Path
 from typing import Annotated
@@ -14,16 +15,13 @@ from rich.console import Console
 from rich.live import Live
 from rich.table import Table
 
-from bimkit.atomic import staged_directory
 from bimkit.checks import check_number, check_output_dir, check_output_file
 from bimkit.cli import fail, number_option
 from bimkit.errors import InputError
 from initcli.cli import PROG
-from initcli.config import SessionConfig, config_to_dict, load_config
+from initcli.config import load_config
 from initcli.core.geometry import Pose2D
-from initcli.session.outputs import render_report, summary_document, write_summary
-from initcli.session.result import MatchStep, SessionResult
-from initcli.session.setup import prepare_site, prepare_world, sim_session
+from initcli.session.simulated import run_simulated
 
 EXIT_FAILED = 1
 SEED_MAX = 2**32 - 1  # numpy seeds
@@ -63,6 +61,10 @@ class LiveView:
             table.add_row("pose sigma", f"{math.sqrt(status['covariance']):.3f} m")
         return table
 
+    def running(self) -> Live:
+        """The context in which the view is on screen."""
+        return self.live
+
     def __call__(self, status: dict) -> None:
         now = time.monotonic()
         if now - self.last > 0.2:
@@ -91,118 +93,6 @@ def result_table(doc: dict) -> Table:
             e, r = doc["error_translation_m"][stage], doc["error_rotation_deg"][stage]
             table.add_row(f"error {stage}", "-" if e is None else f"{e:.3f} m, {r:.2f} deg")
     return table
-
-
-def run_session(
-    config: SessionConfig, out: Path, seed: int, start: Pose2D | None, quiet: bool, console: Console
-) -> dict:
-    """Run one session into ``out`` (staged: nothing half-written on failure). Returns the summary."""
-    with staged_directory(out) as stage:
-        site = prepare_site(config, stage)
-        world = prepare_world(config, stage)
-        view = None if quiet else LiveView(console)
-        built = sim_session(
-            config,
-            site,
-            seed,
-            start,
-            stage / "session.jsonl",
-            observer=view,
-            meta_source=f"bim-init run (sim, seed {seed})",
-            world=world,
-        )
-        session, setup = built.session, built.setup
-        if view is not None:
-            with view.live:
-                result: SessionResult = session.run()
-        else:
-            result = session.run()
-        extra = {
-            "seed": seed,
-            "start_pose": {
-                "x": setup.start.x,
-                "y": setup.start.y,
-                "yaw_deg": round(math.degrees(setup.start.yaw), 3),
-            },
-            "config": config_to_dict(config),
-        }
-        doc = summary_document(result, simulated=True, extra=extra)
-        write_summary(stage / "summary.json", doc)
-        render_report(
-            stage / "report.png",
-            result,
-            site.storeys[result.storey or built.simulated_storey],
-            f"{config.site.path}: {'success' if result.success else 'failure'} - {result.reason}",
-            world_segments=setup.world.static,
-        )
-    return doc
-
-
-def run_live_session(config: SessionConfig, out: Path, seed: int, quiet: bool, console: Console) -> dict:
-    """``robot.driver: rosbridge``: the session on the real robot behind a rosbridge server; its state
-    goes to ``/bim_init/state`` while it runs and the result to ``/initialpose`` (Nav2)."""
-    import numpy as np
-
-    from initcli.ros.nav2 import session_initial_pose
-    from initcli.ros.rosbridge import RosbridgeLink
-    from initcli.ros.rosbridge_driver import RosbridgeDriver
-    from initcli.session.runner import Session
-    from initcli.session.setup import SESSION_RNG_OFFSET, camera_of, choose_storey
-
-    r = config.robot
-    with staged_directory(out) as stage:
-        site = prepare_site(config, stage)
-        _, matched = choose_storey(config, site)
-        link = RosbridgeLink(r.rosbridge.host, r.rosbridge.port)
-        camera, mount = camera_of(config)
-        driver = RosbridgeDriver(
-            link,
-            camera,
-            mount,
-            r.rosbridge,
-            drive=r.drive,
-            depth_window=int(config.camera.depth_window),
-            max_linear=r.max_linear,
-            max_angular=r.max_angular,
-        )
-        view = None if quiet else LiveView(console)
-        last_state: list[str] = []
-        published = [0]  # match steps whose hypotheses went out
-        steps: list[MatchStep] = []  # the session's match steps (bound below)
-
-        def observe(update: dict) -> None:
-            if view is not None:
-                view(update)
-            if not last_state or update["state"] != last_state[-1]:
-                last_state.append(update["state"])
-                driver.publish_state(str(update["state"]))
-            if len(steps) > published[0]:
-                published[0] = len(steps)
-                step = steps[-1]
-                driver.publish_hypotheses(step.t, [Pose2D(*p) for p in step.poses])
-
-        session = Session(
-            config,
-            site,
-            matched,
-            driver,
-            stage / "session.jsonl",
-            np.random.default_rng(seed + SESSION_RNG_OFFSET),
-            observe,
-            meta_source=f"bim-init run (rosbridge ws://{r.rosbridge.host}:{r.rosbridge.port})",
-        )
-        steps = session.result.match_steps
-        try:
-            result = session.run()
-        finally:
-            driver.stop()
-        doc = summary_document(result, simulated=False, extra={"config": config_to_dict(config)})
-        write_summary(stage / "summary.json", doc)
-        if result.success:
-            driver.publish_initial_pose(session_initial_pose(doc, stage / "session.jsonl"))
-            driver.publish_state("initialised")
-        driver.close()
-    return doc
 
 
 def run(
@@ -253,9 +143,14 @@ def run(
         if cfg.robot.driver == "rosbridge":
             if start_pose is not None:
                 raise InputError("--start: only for the simulated robot (robot.driver: sim)")
-            doc = run_live_session(cfg, target, the_seed, quiet or as_json, console)
+            from initcli.session.live import run_live  # the ROS side only when asked for
+
+            doc = run_live(cfg, target, the_seed, None if quiet or as_json else LiveView(console))
         else:
-            doc = run_session(cfg, target, the_seed, start_pose, quiet or as_json, console)
+            view = None if quiet or as_json else LiveView(console)
+            doc = run_simulated(
+                cfg, target, the_seed, start_pose, view, running=view.running if view else nullcontext
+            )
         if record is not None:
             from initcli.ros.bag_writer import record_session
 

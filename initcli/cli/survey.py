@@ -18,11 +18,10 @@ from bimkit.cli import fail, number_option
 from bimkit.errors import InputError
 from bimtools.site.load import load_site
 from initcli.cli import PROG
-from initcli.config import SessionConfig, followed_side, load_config
+from initcli.config import SessionConfig, camera_of, followed_side, load_config
 from initcli.core.visibility import CameraModel
 from initcli.executor import make_executor
 from initcli.match.pipeline import site_class_map
-from initcli.session.setup import camera_of
 from initcli.survey.survey import (
     Landmark,
     StoreySurvey,

@@ -14,7 +14,8 @@ from initcli.eval.records import TrialKey, TrialRecord
 from initcli.eval.sweep import Sweep, sweep_label
 from initcli.eval.trial import TrialJob, run_trial, trial_seed
 from initcli.executor import Executor, LocalExecutor, map_unordered
-from initcli.session.setup import check_start, choose_storey, prepare_site, prepare_world
+from initcli.sim.build import check_start
+from initcli.site import choose_storey, prepare_site, prepare_world
 
 
 @dataclass(frozen=True)

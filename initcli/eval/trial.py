@@ -27,7 +27,9 @@ from initcli.eval.records import FailureRule, TrialRecord
 from initcli.eval.scoring import score
 from initcli.eval.sweep import Sweep, apply_sweep, sweep_label
 from initcli.session.result import SessionResult
-from initcli.session.setup import SimSetup, build_sim, choose_storey, sim_session
+from initcli.session.simulated import sim_session
+from initcli.sim.build import SimSetup, build_sim
+from initcli.site import choose_storey
 
 
 @dataclass(frozen=True)

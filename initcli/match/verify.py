@@ -11,10 +11,11 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 import numpy as np
 
-from bimtools.site.load import Site, StoreyModel
+from bimtools.site.load import Site, StoreyModel, load_site
 from initcli.core.classes import ClassMap
 from initcli.core.detection_filter import Sighting
 from initcli.core.geometry import Pose2D
@@ -32,8 +33,8 @@ from initcli.core.verification import (
     tracked_scan_fit,
     verify_hypothesis,
 )
-from initcli.io.detection_log import DetectionLog, Detections, Odom, Scan
-from initcli.match.pipeline import MatchReport
+from initcli.io.detection_log import DetectionLog, Detections, Odom, Scan, read_log
+from initcli.match.pipeline import MatchReport, site_class_map
 from initcli.match.sightings import sightings_from_log
 
 SCAN_BEAM_STEP = 3  # every third beam is enough for a fit share
@@ -348,3 +349,27 @@ def _favoured(
         params,
     )
     return None if found is None else candidates[found][0]
+
+
+def check_hypotheses(
+    log_path: Path, site_path: Path, report: MatchReport, skip_bad: bool, shown: int
+) -> list[Verification | None]:
+    """Negative evidence, scan fit and the lidar along the path of each hypothesis
+    (initcli.match.verify); with several hypotheses, a note naming the one the lidar along the path
+    favours (a session checks that one as a unique match). ``report`` lists up to
+    ``TRACK_HYPOTHESES`` so that the note does not depend on ``--top``; it is cut to the ``shown``
+    first here, with the checks."""
+    site = load_site(site_path)
+    checks, favoured = verify_and_favour(
+        read_log(log_path, skip_bad=skip_bad), site, report, site_class_map(site)
+    )
+    if favoured is not None:
+        rank = report.hypotheses[favoured].rank
+        hidden = f" (not shown: --top {rank} shows it)" if rank > shown else ""
+        report.notes.append(
+            f"the lidar along the path favours hypothesis {rank}{hidden}:"
+            " a session checks it as a unique match"
+        )
+    del report.hypotheses[shown:]
+    report.options = replace(report.options, top=shown)
+    return checks[:shown]

@@ -10,6 +10,8 @@ One module per job:
   hypotheses apart (Eq. 15-16);
 - :mod:`~initcli.session.fine_tuning` -- the particle filter seeded at the rectified pose (Eq. 18);
 - :mod:`~initcli.session.result` -- what a session found, and its errors against truth;
-- :mod:`~initcli.session.setup` -- the site, the storey, the simulated robot and the session on it;
+- :mod:`~initcli.session.simulated` -- a session on the simulated robot (:mod:`initcli.sim.build`):
+  assembled from its config and run into an output folder;
+- :mod:`~initcli.session.live` -- a session on a live robot over rosbridge, its pose sent to Nav2;
 - :mod:`~initcli.session.outputs` -- ``summary.json`` and ``report.png``.
 """

@@ -12,7 +12,7 @@ from initcli.config import load_config
 from initcli.eval.campaign import PreparedSite, plan_jobs, run_jobs
 from initcli.eval.config import EvalConfig, EvalSite
 from initcli.executor import LocalExecutor, make_executor, map_unordered
-from initcli.session.setup import prepare_site
+from initcli.site import prepare_site
 
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_models"
 

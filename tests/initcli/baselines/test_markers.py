@@ -11,8 +11,9 @@ from bimtools.site.load import Site
 from initcli.baselines.markers import MarkerParams, deploy_markers, run_markers
 from initcli.config import SessionConfig, load_config
 from initcli.core.geometry import Pose2D
-from initcli.session.setup import build_sim, choose_storey, prepare_site
+from initcli.sim.build import build_sim
 from initcli.sim.markers import Marker
+from initcli.site import choose_storey, prepare_site
 from tests.helpers import SAMPLES
 
 

@@ -12,8 +12,9 @@ from bimtools.site.load import Site
 from initcli.config import SessionConfig, load_config
 from initcli.core.geometry import Pose2D
 from initcli.io.detection_log import State
-from initcli.session.setup import prepare_site, sim_session
+from initcli.session.simulated import sim_session
 from initcli.sim.synthetic_log import SimFeature
+from initcli.site import prepare_site
 from tests.helpers import SAMPLES
 
 WRONG_M = 2.0  # a claimed pose this far from the truth is a confident wrong result

@@ -155,7 +155,8 @@ def test_the_initial_look_turns_all_the_way_round_before_exploring(tmp_path: Pat
     """block_a, seed 69: two doors are confirmed 2 s into the look, with 8 hypotheses. The look goes
     on (what is behind the robot costs no distance) and the features seen on the rest of the turn
     make the match unique on the spot; ending the look at the first ambiguous match drove 14 m."""
-    from initcli.session.setup import prepare_site, sim_session
+    from initcli.session.simulated import sim_session
+    from initcli.site import prepare_site
 
     config = load_config(SAMPLES / "block_a.site.yaml")
     built = sim_session(config, prepare_site(config, tmp_path / "site"), 69)
@@ -234,7 +235,8 @@ def test_a_failed_fine_stage_explores_on_and_fine_tunes_the_next_claim(
     When the second stage fails too (FINE_TRIES), the session fails with the filter's reason."""
     from initcli.session import fine_tuning
     from initcli.session.runner import FINE_TRIES
-    from initcli.session.setup import prepare_site, sim_session
+    from initcli.session.simulated import sim_session
+    from initcli.site import prepare_site
 
     assert FINE_TRIES == 2
     real_run = fine_tuning.FineTuning.run

@@ -9,7 +9,7 @@ from pathlib import Path
 import yaml
 from typer.testing import CliRunner
 
-import initcli.session.setup as setup
+import initcli.sim.build as setup
 from bimtools.site.load import load_site
 from initcli.cli.main import app
 from initcli.io.detection_log import read_log

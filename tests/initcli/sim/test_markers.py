@@ -13,7 +13,6 @@ from initcli.core.geometry import Pose2D
 from initcli.core.marker_pose import robot_pose_from_marker
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.core.raycast import ray_segment_distances
-from initcli.session.setup import choose_storey, prepare_site
 from initcli.sim.markers import (
     MAX_SHIFT,
     Marker,
@@ -24,6 +23,7 @@ from initcli.sim.markers import (
 )
 from initcli.sim.scenario import Circulation
 from initcli.sim.world import SimWorld
+from initcli.site import choose_storey, prepare_site
 from tests.helpers import SAMPLES
 
 CAMERA = CameraIntrinsics(320.0, 320.0, 320.0, 240.0, 640, 480)

@@ -1,4 +1,4 @@
-"""initcli.cli.bag2log called directly: is_bag, log_or_bag."""
+"""initcli.ros.convert: is_bag, log_or_bag, convert_bag."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 
 from bimkit.errors import InputError
-from initcli.cli.bag2log import convert_bag, is_bag, log_or_bag
 from initcli.io.detection_log import read_log
+from initcli.ros.convert import convert_bag, is_bag, log_or_bag
 from initcli.ros.records import Bag2LogOptions
 from tests.initcli.ros.rosbag_fixtures import make_recording, write
 

@@ -1,25 +1,24 @@
-"""Assemble a session from its config: the site model, the storey, the simulated robot, and the
-session on it (:func:`sim_session`, shared by ``bim-init run`` and the evaluation trials)."""
+"""The simulated robot in its world, built from a session config: the storey as built (doors missing,
+shifted or open, hoardings, extra doors), material stacks and walking workers, a start a robot can
+stand on, the odometry noise, the camera (simulated detector or a rendered view and a network) and
+the lidar; shared by ``bim-init run``, the evaluation's trials and the baselines."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from bimkit.errors import InputError
-from bimtools.site.load import Site, StoreyModel, load_site
+from bimtools.site.load import Site, StoreyModel
 from bimtools.site.records import FREE, OCCUPIED
-from initcli.config import SessionConfig, as_built_params, start_pose_degrees
+from initcli.config import SessionConfig, as_built_params, camera_of, start_pose_degrees
 from initcli.core.classes import ClassMap
 from initcli.core.geometry import Pose2D
-from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.drivers.sim import LidarSpec, SimDriver
 from initcli.io.detection_log import DetectedObject
-from initcli.session.runner import Observer, Session
 from initcli.sim.as_built import (
     HOARDING_CLASS,
     LEAF_CLASS,
@@ -33,55 +32,15 @@ from initcli.sim.robot import DiffDriveRobot, OdometryNoise
 from initcli.sim.scenario import Circulation, place_clutter, place_workers, random_start
 from initcli.sim.synthetic_log import sim_features_from_bim
 from initcli.sim.world import SimWorld, world_edges
+from initcli.site import world_storey
 
-SESSION_RNG_OFFSET = 7919  # the session's own generator (particle filter) is seeded apart from the world
-
-
-def prepare_site(config: SessionConfig, workdir: Path) -> Site:
-    """Load the site: a bim-extract OUTDIR as is, an IFC file extracted into ``workdir/site``."""
-    return _prepare(config.site_path(), "site.path", config, workdir / "site")
+__all__ = ["SimSetup", "build_sim", "check_clearance", "check_start"]
 
 
-def prepare_world(config: SessionConfig, workdir: Path) -> Site | None:
-    """The building the simulated robot lives in (``sim.world``), or None: the BIM itself."""
-    if not config.sim.world:
-        return None
-    base = config.source.parent if config.source else Path.cwd()
-    return _prepare((base / config.sim.world).resolve(), "sim.world", config, workdir / "world")
+START_MARGIN = 0.15  # m beyond the robot's radius: gaps narrower than 2 (radius + this) do not connect
 
 
-def _prepare(path: Path, key: str, config: SessionConfig, target: Path) -> Site:
-    where = f"{config.source}: {key}" if config.source else key
-    if not path.exists():
-        raise InputError(f"{where}: {path} does not exist")
-    if path.is_file() and path.suffix.lower() == ".ifc":
-        from bimtools.extract.output import write_site
-        from bimtools.extract.pipeline import extract_site
-
-        write_site(target, extract_site(path), preview=False)
-        path = target
-    site = load_site(path)
-    if not any(s.grid is not None for s in site.storeys.values()):
-        raise InputError(f"{where}: {path} has no occupancy maps (run bim-extract on the IFC model)")
-    return site
-
-
-def choose_storey(config: SessionConfig, site: Site) -> tuple[str, str | None]:
-    """(storey simulated, storey matched or None for every storey)."""
-    wanted = config.site.storey
-    if wanted != "auto":
-        site.storey(wanted)  # raises with the valid names
-        return wanted, wanted
-    with_maps = [s for s in site.storeys.values() if s.grid is not None]
-    simulated = max(with_maps, key=lambda s: len(s.features)).name
-    return simulated, (None if len(site.storeys) > 1 else simulated)
-
-
-def camera_of(config: SessionConfig) -> tuple[CameraIntrinsics, CameraMount]:
-    c = config.camera
-    intrinsics = CameraIntrinsics(c.fx, c.fy, c.cx, c.cy, int(c.width), int(c.height))
-    p = c.pose
-    return intrinsics, CameraMount(p.x, p.y, p.z, p.roll, p.pitch, p.yaw)
+AS_BUILT_SEED = 104729  # the as-built world draws from its own generator: the same starts at every value
 
 
 @dataclass
@@ -92,20 +51,6 @@ class SimSetup:
     storey: str
     as_built: AsBuiltWorld | None = None  # what differs from the design (None: the ideal world)
     enclosed: bool = False  # the start lies in a space closed off (doors, hoardings, narrow gaps)
-
-
-def world_storey(site: Site, world: Site | None, storey: str) -> StoreyModel:
-    """The storey the robot lives in: ``storey`` of ``world`` (same name, else the nearest elevation)."""
-    if world is None:
-        return site.storeys[storey]
-    if storey in world.storeys:
-        return world.storeys[storey]
-    elevation = site.storeys[storey].elevation
-    return min(world.storeys.values(), key=lambda s: abs(s.elevation - elevation))
-
-
-START_MARGIN = 0.15  # m beyond the robot's radius: gaps narrower than 2 (radius + this) do not connect
-AS_BUILT_SEED = 104729  # the as-built world draws from its own generator: the same starts at every value
 
 
 def build_sim(
@@ -253,40 +198,6 @@ def check_start(
             f"{where}: {at} is outside the building on storey {model.name!r} (its map spans "
             f"x {x0:.1f}..{x1:.1f}, y {y0:.1f}..{y1:.1f} m; a start must be on a free cell)"
         )
-
-
-@dataclass
-class SimSession:
-    """A session on the simulated robot, and what it was built from."""
-
-    session: Session
-    setup: SimSetup
-    simulated_storey: str  # the storey simulated (the session may match against every storey)
-
-
-def sim_session(
-    config: SessionConfig,
-    site: Site,
-    seed: int,
-    start: Pose2D | None = None,
-    log_path: Path | None = None,
-    observer: Observer | None = None,
-    meta_source: str = "bim-init run",
-    world: Site | None = None,
-) -> SimSession:
-    """The session of ``config`` on the simulated robot of ``seed`` (``start`` None: the config's
-    start, else a random one), logging to ``log_path`` (None: no log file); ``world``: the building
-    the robot lives in when it is not the BIM (``sim.world``)."""
-    simulated, matched = choose_storey(config, site)
-    setup = build_sim(config, site, simulated, seed, start, world_site=world)
-    rng = np.random.default_rng(seed + SESSION_RNG_OFFSET)
-    session = Session(config, site, matched, setup.driver, log_path, rng, observer, meta_source)
-    if setup.enclosed:
-        session.cannot_leave = (
-            "cannot leave: the start is in a space closed off by doors, hoardings or material "
-            "(no way wide enough for the robot to the corridors, where the features face)"
-        )
-    return SimSession(session, setup, simulated)
 
 
 def _no_detections(pose: Pose2D, t: float) -> list[DetectedObject]:

@@ -1,0 +1,63 @@
+"""A recorded ROS bag as a detection log (``bim-init bag2log``), and a log or a bag taken alike
+(``bim-init match``): no ROS needed."""
+
+from __future__ import annotations
+
+import contextlib
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from bimkit.errors import InputError
+from initcli.io.detection_log import Record, write_log
+from initcli.ros.records import Bag2LogOptions, Bag2LogStats
+
+if TYPE_CHECKING:
+    from initcli.ros.bag_reader import Progress
+
+__all__ = ["BAG_SUFFIXES", "convert_bag", "is_bag", "log_or_bag"]
+
+
+def convert_bag(
+    bag: Path, out: Path, options: Bag2LogOptions, progress: Progress | None = None
+) -> tuple[list[Record], Bag2LogStats]:
+    """Read ``bag`` and write the log to ``out`` atomically; ``progress(done, total)`` after each
+    message read."""
+    from initcli.ros.bag_reader import bag_to_records  # rosbags, only when a bag is read
+
+    records, stats = bag_to_records(bag, options, progress)
+    out = Path(out)
+    tmp = out.with_name(f".{out.name}.partial")
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        write_log(tmp, records)
+        tmp.replace(out)
+    except OSError as exc:
+        with contextlib.suppress(OSError):  # a parent that is a file: there is nothing to remove
+            tmp.unlink(missing_ok=True)
+        raise InputError(f"{out}: cannot write the log: {exc.strerror or exc}") from None
+    return records, stats
+
+
+BAG_SUFFIXES = (".bag", ".mcap", ".db3")
+
+
+def is_bag(path: Path) -> bool:
+    """A ROS bag rather than a detection log: .bag, .mcap, .db3, or a ROS 2 bag folder."""
+    return path.suffix.lower() in BAG_SUFFIXES or (path.is_dir() and (path / "metadata.yaml").exists())
+
+
+@contextmanager
+def log_or_bag(
+    path: Path, options: Bag2LogOptions | None = None, progress: Progress | None = None
+) -> Iterator[Path]:
+    """``path`` itself for a detection log; for a bag, the log converted into a temporary folder."""
+    if not is_bag(Path(path)):
+        yield Path(path)
+        return
+    with tempfile.TemporaryDirectory(prefix="bim-init-bag2log-") as tmp:
+        log = Path(tmp) / f"{Path(path).stem}.jsonl"
+        convert_bag(Path(path), log, options or Bag2LogOptions(), progress)
+        yield log
