@@ -177,20 +177,27 @@ def test_readme_site_yaml_is_the_docs_example_and_valid():
     assert doc["robot"]["driver"] == "rosbridge" and doc["site"]["path"]
 
 
-def test_readme_relative_links_resolve():
-    text = README.read_text(encoding="utf-8")
+@pytest.mark.parametrize("name", ["README.md", "CHANGELOG.md", "initcli/detector/README.md"])
+def test_repository_markdown_relative_links_resolve(name):
+    """Read on GitHub: links relative to the file, into the source tree and docs/."""
+    source = ROOT / name
+    text = source.read_text(encoding="utf-8")
 
     def resolve(path: str) -> str | bool | None:
         if not path:
             return text
-        target = ROOT / path
+        target = source.parent / path
         if not target.exists():
             return False
         return target.read_text(encoding="utf-8") if target.suffix == ".md" else None
 
-    links = LINK.findall(_strip_code(text))
-    assert any(link.startswith("docs/") for link in links)
-    assert _broken_links(text, "README.md", resolve) == []
+    assert LINK.findall(_strip_code(text)), f"{name} has no links to check"
+    assert _broken_links(text, name, resolve) == []
+
+
+def test_readme_links_into_the_docs():
+    links = LINK.findall(_strip_code(README.read_text(encoding="utf-8")))
+    assert {"docs/own-building.md", "docs/site-yaml.md", "docs/ros.md", "CHANGELOG.md"} <= set(links)
 
 
 # --------------------------------------------------------------------------------------------------
