@@ -3,8 +3,9 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
+DOCS_STAMP := $(VENV)/.installed-docs
 
-.PHONY: install run test lint wheel-check samples bench eval eval-real eval-construction clean sample-bag
+.PHONY: install run test lint docs wheel-check samples bench eval eval-real eval-construction clean sample-bag
 
 install: $(STAMP)
 
@@ -31,6 +32,15 @@ lint: install
 	$(BIN)/ruff check bimkit bimtools initcli tests benchmarks
 	$(BIN)/ruff format --check bimkit bimtools initcli tests benchmarks
 	$(BIN)/mypy
+
+# The docs site into site/, strict: a broken link, anchor or cross-reference fails (mkdocs.yml).
+# (The two variables silence banners about MkDocs 2.0 and Material's end of life; pyproject pins mkdocs<2.)
+docs: $(DOCS_STAMP)
+	DISABLE_MKDOCS_2_WARNING=true NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --clean
+
+$(DOCS_STAMP): $(STAMP)
+	$(BIN)/python -m pip install --quiet -e ".[docs]"
+	touch $(DOCS_STAMP)
 
 # Build the wheel, install it into a fresh venv outside the source tree and run both commands there.
 wheel-check: install
@@ -59,4 +69,4 @@ eval-construction: install
 	$(BIN)/bim-init eval --config sample_models/eval.yaml --reality construction --out eval_construction --resume
 
 clean:
-	rm -rf $(VENV) runs *_site .pytest_cache eval_results eval_real eval_construction
+	rm -rf $(VENV) runs *_site .pytest_cache eval_results eval_real eval_construction site

@@ -1,7 +1,7 @@
 """Which side of a door is the circulation area (corridor, lobby) a robot drives in.
 
 Geometry first, names second. Probe points just beyond each face; then, in this order
-(documented in the README):
+(documented in docs/extract.md):
 
 1. Reachable: a side outside the building (no free space and no space there) loses.
 2. Plan shape: each side's place (the IfcSpace the probe lies in, else its free-space region)

@@ -505,7 +505,7 @@ def track_outranks(
     with a trailing lead of 0.1 over a place with more outliers, 79 such wrong-right pairs, none.
     With these rules, at 4ba9f3d: right over wrong 2,995 of 5,689 pairs, wrong over right 2 of
     3,608, both against a hypothesis 1.8 m and 29 degrees off the truth in a set whose 0.2 m one
-    held its own (README, "Which checks matter")."""
+    held its own (CHANGELOG.md, "Which checks matter")."""
     n = min(len(track), len(other))
     if n == 0 or n < params.min_track_windows or float(np.min(track)) < params.min_track_fit:
         return False
