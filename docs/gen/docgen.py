@@ -41,7 +41,7 @@ __all__ = [
 ]
 
 ROOT = Path(__file__).resolve().parents[2]
-SCHEMA_DIR = Path("bimtools/schemas")
+SCHEMA_DIR = Path("bimkit/schemas")
 RESULTS_DIR = Path("benchmarks/results")
 API_DIR = "reference/api"
 RESULTS_PAGES = "results"
@@ -301,7 +301,7 @@ SETTINGS_INTRO = """# Settings reference: `site.yaml`
 
 Every key of the session config that `bim-init run`, `bim-init survey --config` and the site
 configs named by an `eval.yaml` read, generated at build time from
-`bimtools/schemas/site_config.schema.json` (the schema the config is validated against before
+`bimkit/schemas/site_config.schema.json` (the schema the config is validated against before
 anything runs), so this page cannot disagree with the code. Every key is optional except
 `site.path`; a key left out takes the default shown. Units: m, degrees (radians only where the
 unit column says so), s, px. The same names and units are the options of `bim-init match`
@@ -313,7 +313,7 @@ How to write one: [Writing a site.yaml](../site-yaml.md).
 EVAL_INTRO = """# Settings reference: `eval.yaml`
 
 Every key of the `bim-init eval` config, generated at build time from
-`bimtools/schemas/eval_config.schema.json`. How the evaluation runs:
+`bimkit/schemas/eval_config.schema.json`. How the evaluation runs:
 [bim-init eval](../eval.md).
 
 """
@@ -323,7 +323,7 @@ def _schema_formats(root: Path) -> str:
     out = [
         "# File formats",
         "",
-        "Every file bim-init reads or writes has a JSON Schema in `bimtools/schemas/` (the source "
+        "Every file bim-init reads or writes has a JSON Schema in `bimkit/schemas/` (the source "
         "tree's `schemas/` links there; the wheel ships them). This page is generated from those "
         "files at build time. The session and evaluation configs have pages of their own: "
         "[site.yaml](settings.md), [eval.yaml](eval-config.md).",
