@@ -1,25 +1,24 @@
 """Benchmark of ``bim-init bag2log`` (a benchmark, not a timed test): messages/s and images/s.
 
-Two synthetic recordings written with rosbags' MCAP writer (``tests/initcli/ros/rosbag_fixtures.py``):
-the robot's own detections (``vision_msgs/Detection2DArray`` + aligned 32FC1 depth, 20 Hz odometry,
-5 Hz scans), and raw 640x480 colour images run through the bundled ONNX detector (2 threads).
+Two synthetic recordings written with rosbags' MCAP writer (``benchmarks/_recordings.py``, the
+tests' recordings too): the robot's own detections (``vision_msgs/Detection2DArray`` + aligned
+32FC1 depth, 20 Hz odometry, 5 Hz scans), and raw 640x480 colour images run through the bundled
+ONNX detector (2 threads).
 
-Usage: ``.venv/bin/python benchmarks/bench_bag2log.py [--seconds 60] [--image-seconds 20]``
+Usage: ``.venv/bin/python benchmarks/bench_bag2log.py [--quick] [--seconds 60] [--image-seconds 20]``
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
 import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+from _common import parse_args
+from _recordings import make_recording, write
 
-from initcli.ros.bag_reader import bag_to_records  # noqa: E402
-from tests.initcli.ros.rosbag_fixtures import make_recording, write  # noqa: E402
+from initcli.ros.bag_reader import bag_to_records
 
 
 def bench(kind: str, seconds: float, tmp: Path) -> None:
@@ -40,7 +39,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=60.0, help="length of the detections recording")
     parser.add_argument("--image-seconds", type=float, default=20.0, help="length of the image recording")
-    args = parser.parse_args()
+    args = parse_args(parser, quick={"seconds": 10.0, "image_seconds": 4.0})
     with tempfile.TemporaryDirectory() as tmp:
         bench("detections", args.seconds, Path(tmp))
         bench("image", args.image_seconds, Path(tmp))

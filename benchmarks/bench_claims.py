@@ -22,8 +22,8 @@ the pairs where B needs more outliers than A, how that count grows as the lead a
 a B shrinks (what ``track_lead_trailing`` rests on). ``--dump`` keeps every decision (pickled) for
 studying other rules offline.
 
-    python benchmarks/bench_claims.py [--starts 100] [--sweep-starts 20] [--first-seed 1] [--workers 2]
-                                      [--dump decisions.pkl]
+    python benchmarks/bench_claims.py [--quick] [--starts 100] [--sweep-starts 20] [--first-seed 1]
+                                      [--workers 2] [--dump decisions.pkl]
 
 It instruments ``Session._verified``, ``Session._credible`` and ``Session._match`` (private: this
 script is a measurement of the runner, not an API), and computes the path's fit of every rival:
@@ -44,8 +44,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from _common import SAMPLES, parse_args
 
-ROOT = Path(__file__).resolve().parent.parent
 SITES = ("block_a", "block_b", "ntu_hallway")
 SWEEPS = (("sim.as_built.door_shift", 0.6), ("sim.as_built.missing_doors", 0.4))
 WRONG_M, WRONG_DEG = 2.0, 30.0
@@ -80,7 +80,7 @@ def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, 
     from initcli.site import prepare_site
 
     name, key, value, seed, work = job
-    config = load_config(ROOT / "sample_models" / f"{name}.site.yaml", "construction")
+    config = load_config(SAMPLES / f"{name}.site.yaml", "construction")
     if key:
         config = apply_sweep(config, parse_sweep(f"{key}={value}"), value)
     if (name, key, value) not in _SITES:  # one extraction per sample and sweep value in each worker
@@ -229,7 +229,7 @@ def main() -> None:
     ap.add_argument("--first-seed", type=int, default=1, help="seed of the first start")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--dump", type=Path, help="also pickle every decision here (for offline study of rules)")
-    args = ap.parse_args()
+    args = parse_args(ap, quick={"starts": 1, "sweep_starts": 1})
     seeds = range(args.first_seed, args.first_seed + args.starts)
     sweep_seeds = range(args.first_seed, args.first_seed + args.sweep_starts)
     with tempfile.TemporaryDirectory() as work:

@@ -11,7 +11,8 @@ Sections (``--only`` picks some):
 - ``accuracy``: mAP@0.5 per class on ``--val-images`` renders of block_b (a layout the default
   model never saw), through the runtime.
 
-Usage: ``.venv/bin/python benchmarks/bench_detector.py [--model default] [--only render,inference] [--json]``
+Usage: ``.venv/bin/python benchmarks/bench_detector.py [--quick] [--model default] [--only render,inference]
+[--json]``
 """
 
 from __future__ import annotations
@@ -25,21 +26,20 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _common import SAMPLES, parse_args
 
-ROOT = Path(__file__).resolve().parent.parent
-
-from bimtools.extract.output import write_site  # noqa: E402
-from bimtools.extract.pipeline import extract_site  # noqa: E402
-from bimtools.site.load import load_site  # noqa: E402
-from initcli.detector.synth.dataset import SynthOptions, load_placements, write_dataset  # noqa: E402
-from initcli.detector.synth.render import render_view  # noqa: E402
-from initcli.detector.synth.scene import Camera, Scene  # noqa: E402
+from bimtools.extract.output import write_site
+from bimtools.extract.pipeline import extract_site
+from bimtools.site.load import load_site
+from initcli.detector.synth.dataset import SynthOptions, load_placements, write_dataset
+from initcli.detector.synth.render import render_view
+from initcli.detector.synth.scene import Camera, Scene
 
 
 def make_site(name: str, root: Path) -> Path:
     out = root / name
     if not out.exists():
-        write_site(out, extract_site(ROOT / "sample_models" / f"{name}.ifc"), preview=False)
+        write_site(out, extract_site(SAMPLES / f"{name}.ifc"), preview=False)
     return out
 
 
@@ -124,7 +124,7 @@ def main() -> None:
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--val-images", type=int, default=500)
     ap.add_argument("--json", action="store_true")
-    args = ap.parse_args()
+    args = parse_args(ap, quick={"frames": 10, "val_images": 20})
     only = set(args.only.split(","))
     results: dict = {}
     with tempfile.TemporaryDirectory() as tmp:

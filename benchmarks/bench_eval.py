@@ -1,7 +1,7 @@
 """Benchmark ``bim-init eval``: trials per minute on the three samples, and the projected time of
 the full 3 sites x 100 starts x 4 methods evaluation (goal: under 20 minutes on 2 cores).
 
-    python benchmarks/bench_eval.py [--starts 10] [--workers 2] [--reality ideal|construction]
+    python benchmarks/bench_eval.py [--quick] [--starts 10] [--workers 2] [--reality ideal|construction]
 
 The reality issue's goal: >= 200 trials/min on 2 cores under ``--reality construction`` too.
 """
@@ -16,7 +16,7 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+from _common import SAMPLES, parse_args
 
 
 def main() -> None:
@@ -26,14 +26,14 @@ def main() -> None:
     parser.add_argument("--starts", type=int, default=10)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--reality", choices=["ideal", "construction"], default="ideal")
-    args = parser.parse_args()
+    args = parse_args(parser, quick={"starts": 1})
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "eval"
         command = [
             str(Path(sys.executable).parent / "bim-init"),
             "eval",
             "--config",
-            str(ROOT / "sample_models" / "eval.yaml"),
+            str(SAMPLES / "eval.yaml"),
             "--starts",
             str(args.starts),
             "--workers",
@@ -44,7 +44,9 @@ def main() -> None:
             args.reality,
         ]
         started = time.perf_counter()
-        subprocess.run(command, check=True, capture_output=True)
+        done = subprocess.run(command, capture_output=True, text=True)
+        if done.returncode != 0:
+            raise SystemExit(f"bim-init eval failed (exit {done.returncode}):\n{done.stderr[-2000:]}")
         elapsed = time.perf_counter() - started
         rows = [json.loads(line) for line in (out / "results.jsonl").read_text().splitlines()]
     per_method: dict[str, list[float]] = {}

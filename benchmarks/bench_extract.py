@@ -4,9 +4,11 @@ For each IFC file: seconds and peak memory of a full ``bim-extract`` run (open, 
 sections, features, maps, previews, writing), and of a bare ``ifcopenshell.geom.iterator`` pass
 (open + iterate) over the same elements; prints the ratio ours / bare. Goal: ratio <= 1.3.
 
-    python benchmarks/bench_extract.py ../shared/ifc/*.ifc sample_models/*.ifc [--repeat 1]
+    python benchmarks/bench_extract.py [--quick] [MODEL.ifc ...] [--repeat 1]
 
-Each measurement runs in a fresh process so peak memory (ru_maxrss) is its own.
+Without models: the real IFC models in ../shared/ifc (skipped with a note where that folder is
+absent) and the bundled samples; ``--quick``: the samples only. Each measurement runs in a fresh
+process so peak memory (ru_maxrss) is its own.
 """
 
 from __future__ import annotations
@@ -20,6 +22,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from _common import SAMPLES, SHARED_IFC, parse_args
 
 
 def _child(mode: str, path: str) -> None:
@@ -71,20 +75,30 @@ def measure(mode: str, path: Path, repeat: int) -> dict:
     return best
 
 
+def default_models() -> list[Path]:
+    """The real IFC models in ../shared/ifc, where that folder is, and the bundled samples."""
+    shared = sorted(SHARED_IFC.glob("*.ifc"))
+    if not shared:
+        print(f"({SHARED_IFC} is absent or empty: the real IFC models are skipped, the samples only)")
+    return shared + sorted(SAMPLES.glob("*.ifc"))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    parser.add_argument("models", nargs="*", type=Path)
+    parser.add_argument("models", nargs="*", type=Path, help="IFC files (default: see above)")
     parser.add_argument("--repeat", type=int, default=1, help="runs per measurement; the fastest is kept")
     parser.add_argument("--child", nargs=2, metavar=("MODE", "PATH"), help=argparse.SUPPRESS)
-    args = parser.parse_args()
-    if args.child:
+    if "--child" in sys.argv:
+        args = parser.parse_args()
         _child(*args.child)
         return
+    args = parse_args(parser, quick={"models": sorted(SAMPLES.glob("*.ifc"))})
+    models = args.models or default_models()
     print(f"{'model':55s} {'bare s':>8s} {'ours s':>8s} {'ratio':>6s} {'peak MB':>8s} {'features':>8s}")
     worst = 0.0
-    for path in args.models:
+    for path in models:
         bare = measure("bare", path, args.repeat)
         ours = measure("ours", path, args.repeat)
         ratio = ours["seconds"] / bare["seconds"]

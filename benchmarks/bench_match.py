@@ -5,7 +5,8 @@ Sections (``--only`` picks some):
 - ``incremental``: one more detected feature added to an existing hypothesis set (``Matcher.extend``)
   on synthetic floors of 100, 1,000 and 10,000 features. Goals: <= 5 ms at 1,000, <= 50 ms at 10,000.
 - ``oracle``: the indexed matcher against the plain transcription of Algorithm 1 kept in
-  ``tests/test_match_oracle.py`` -- same matches on random cases, and the speed ratio.
+  ``benchmarks/_oracle.py`` (the tests' oracle too) -- same matches on random cases, and the speed
+  ratio.
 - ``pipeline``: the whole log-to-verdict time (read the log, Eq. 1-2, filter, match, poses, verdict).
 - ``accuracy``: paper (Eq. 10-13) vs rigid (Kabsch) pose error on noisy synthetic logs over the
   sample models (``sample_models/*.ifc`` through ``bim-extract``) and synthetic floors.
@@ -33,9 +34,8 @@ from collections import Counter  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
-
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "tests"))
+from _common import SAMPLES, parse_args  # noqa: E402
+from _oracle import algorithm1, algorithm1_with_outliers  # noqa: E402
 
 from bimtools.site.load import Site, load_site  # noqa: E402
 from initcli.core.geometry import Pose2D  # noqa: E402
@@ -127,11 +127,7 @@ def section_incremental(quick: bool) -> None:
 
 
 def section_oracle(quick: bool) -> None:
-    from test_match_oracle import algorithm1, algorithm1_with_outliers
-
-    print(
-        "\n## oracle: plain Algorithm 1 (tests/test_match_oracle.py) vs the indexed matcher, whole sequence"
-    )
+    print("\n## oracle: plain Algorithm 1 (benchmarks/_oracle.py) vs the indexed matcher, whole sequence")
     for n_feat in (100, 1000) if not quick else (100,):
         floor = make_floor(n_feat, seed=3)
         index = BimIndex(floor.xy, floor.classes)
@@ -211,13 +207,12 @@ def section_pipeline(quick: bool, tmp: Path) -> None:
 def sample_sites(tmp: Path, extra: list[Path]) -> dict[str, Site]:
     sites: dict[str, Site] = {}
     exe = Path(sys.executable).with_name("bim-extract")
-    for ifc in sorted((ROOT / "sample_models").glob("*.ifc")):
+    for ifc in sorted(SAMPLES.glob("*.ifc")):
         out = tmp / ifc.stem
         cmd = [str(exe) if exe.exists() else "bim-extract", str(ifc), "-o", str(out)]
         done = subprocess.run(cmd, capture_output=True, text=True)
         if done.returncode != 0:
-            print(f"  (skipping {ifc.name}: bim-extract failed: {done.stderr.strip()[-200:]})")
-            continue
+            raise SystemExit(f"{ifc}: bim-extract failed (exit {done.returncode}): {done.stderr[-500:]}")
         sites[ifc.stem] = load_site(out)
     for folder in extra:
         sites[folder.name] = load_site(folder)
@@ -321,7 +316,7 @@ def section_accuracy(quick: bool, tmp: Path, extra: list[Path]) -> None:
     )
     print(f"noise: {NOISY}")
     sites = sample_sites(tmp / "sites", extra)
-    n = 10 if quick else 40
+    n = 6 if quick else 40
     totals: dict[str, list[tuple[float, float, float, float]]] = {"paper": [], "rigid": []}
     for name, site in sites.items():
         rows: dict[str, list[tuple[float, float, float, float]]] = {"paper": [], "rigid": []}
@@ -368,7 +363,7 @@ def section_outliers(quick: bool, tmp: Path, extra: list[Path]) -> None:
         "hypotheses, no match"
     )
     sites = sample_sites(tmp / "sites_o", extra)
-    n = 10 if quick else 30
+    n = 5 if quick else 30
     for phantom in (False, True):
         label = "one persistent false door" if phantom else "clean (random non-persistent false boxes only)"
         tallies = {0: Counter(), 1: Counter()}
@@ -395,12 +390,11 @@ def section_outliers(quick: bool, tmp: Path, extra: list[Path]) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="smaller sizes and fewer logs")
     parser.add_argument("--only", default="incremental,oracle,pipeline,accuracy,outliers")
     parser.add_argument(
         "--site", action="append", type=Path, default=[], help="extra site folder for accuracy"
     )
-    args = parser.parse_args()
+    args = parse_args(parser, quick={})  # --quick: smaller sizes and fewer logs in every section
     print(f"bench_match: {pin_one_core()}; python {sys.version.split()[0]}, numpy {np.__version__}")
     only = set(args.only.split(","))
     with tempfile.TemporaryDirectory(prefix="bench_match.") as tmpdir:

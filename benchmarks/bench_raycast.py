@@ -6,7 +6,7 @@ against every static segment the grid index returns within range, plus the worke
 from random free cells of the storey's occupancy map at random headings; the two answers are
 checked to agree. Times are the best of ``--repeats`` passes over the same scans.
 
-Usage: ``.venv/bin/python benchmarks/bench_raycast.py [--scans 200] [--repeats 5]``
+Usage: ``.venv/bin/python benchmarks/bench_raycast.py [--quick] [--scans 200] [--repeats 5]``
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+from _common import SAMPLES, parse_args
 
 from bimtools.site.records import FREE
 from initcli.config import load_config
@@ -28,13 +29,12 @@ from initcli.sim.build import build_sim
 from initcli.sim.world import SimWorld
 from initcli.site import choose_storey, prepare_site
 
-ROOT = Path(__file__).resolve().parent.parent
 STOREYS = ("ntu_hallway", "block_a", "block_b")
 
 
 def load_world(name: str, workdir: Path, seed: int = 0) -> tuple[SimWorld, np.ndarray]:
     """The sample's simulated world and the (n, 2) centres of its storey's free map cells."""
-    config = load_config(ROOT / "sample_models" / f"{name}.site.yaml")
+    config = load_config(SAMPLES / f"{name}.site.yaml")
     site = prepare_site(config, workdir)
     storey, _ = choose_storey(config, site)
     world = build_sim(config, site, storey, seed).world
@@ -93,7 +93,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scans", type=int, default=200)
     parser.add_argument("--repeats", type=int, default=5)
-    args = parser.parse_args()
+    args = parse_args(parser, quick={"scans": 20, "repeats": 1})
     lidar = LidarSpec()
     base = lidar.angle_min + lidar.angle_increment * np.arange(lidar.beams)
     rng = np.random.default_rng(0)

@@ -7,7 +7,8 @@
 - the particle-filter update (predict + likelihood-field update + resampling) with 2,000
   particles and 60 beams (goal <= 10 ms).
 
-    python benchmarks/bench_session.py [--starts 20] [--workers 2] [--models block_a,block_b,ntu_hallway]
+    python benchmarks/bench_session.py [--quick] [--starts 20] [--workers 2]
+                                       [--models block_a,block_b,ntu_hallway]
 """
 
 from __future__ import annotations
@@ -21,8 +22,8 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
+from _common import SAMPLES, parse_args
 
-ROOT = Path(__file__).resolve().parent.parent
 PAPER_DISTANCE = {"ntu_hallway": 44.88, "block_a": 14.81, "block_b": 16.61}
 
 
@@ -32,7 +33,7 @@ def one_session(args: tuple[str, int, str]) -> dict:
     from initcli.session.simulated import sim_session
     from initcli.site import prepare_site
 
-    config = load_config(ROOT / "sample_models" / f"{name}.site.yaml")
+    config = load_config(SAMPLES / f"{name}.site.yaml")
     site = prepare_site(config, Path(workdir) / name)
     result = sim_session(config, site, seed).session.run()
     trans, rot = result.errors()
@@ -57,7 +58,7 @@ def bench_particle_filter(repeats: int = 50) -> float:
     from initcli.core.geometry import Pose2D
     from initcli.core.particle_filter import FilterNoise, LaserModel, LikelihoodField, ParticleFilter
 
-    site = extract_site(ROOT / "sample_models" / "block_a.ifc")
+    site = extract_site(SAMPLES / "block_a.ifc")
     grid = site.storeys[0].grid
     rng = np.random.default_rng(0)
     pf = ParticleFilter(LikelihoodField(grid), 2000, FilterNoise(), LaserModel(), rng)
@@ -79,10 +80,10 @@ def main() -> None:
     parser.add_argument("--starts", type=int, default=20)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--models", default="block_a,block_b,ntu_hallway")
-    args = parser.parse_args()
-    print(
-        f"particle filter update, 2000 particles x 60 beams: {bench_particle_filter():.2f} ms (goal <= 10 ms)"
-    )
+    parser.add_argument("--pf-repeats", type=int, default=50, help="particle-filter updates timed")
+    args = parse_args(parser, quick={"starts": 1, "pf_repeats": 5})
+    pf_ms = bench_particle_filter(args.pf_repeats)
+    print(f"particle filter update, 2000 particles x 60 beams: {pf_ms:.2f} ms (goal <= 10 ms)")
     names = args.models.split(",")
     with tempfile.TemporaryDirectory() as workdir:
         jobs = [(n, s, workdir) for n in names for s in range(1, args.starts + 1)]

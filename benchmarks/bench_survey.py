@@ -1,6 +1,6 @@
 """Benchmark ``bim-init survey`` on the three samples: speed, and agreement with the simulated sessions.
 
-- speed: a storey's samples (1 m spacing x 4 headings) surveyed on ``--workers`` processes (goal:
+- speed: a storey's samples (``--spacing`` 1 m x ``--headings`` 4) surveyed on ``--workers`` processes (goal:
   under a minute on 2 cores), and the greedy landmark suggestion;
 - agreement: the survey's distance to a unique match at the eval's own random starts (seed 1 + k,
   the starts ``bim-init eval`` draws) against the eval's measured coarse distance of the ``bim``
@@ -8,7 +8,7 @@
   of an ideal-world eval run its own: the mean and median over its localised ``bim`` starts, and
   per start as well, the share within 25 %).
 
-    python benchmarks/bench_survey.py [--workers 2] [--starts 100] [--models ...] [--results FILE]
+    python benchmarks/bench_survey.py [--quick] [--workers 2] [--starts 100] [--models ...] [--results FILE]
 """
 
 from __future__ import annotations
@@ -21,8 +21,8 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _common import SAMPLES, parse_args
 
-ROOT = Path(__file__).resolve().parent.parent
 EVAL_MEAN = {"ntu_hallway": 30.4, "block_a": 14.3, "block_b": 20.8}  # m, README Results, bim, 100 starts
 EVAL_MEDIAN = {"ntu_hallway": 28.0, "block_a": 3.2, "block_b": 4.3}
 
@@ -52,7 +52,9 @@ def main() -> None:
         "--results", type=Path, default=None, help="an eval results.jsonl for per-start agreement"
     )
     ap.add_argument("--no-landmarks", action="store_true")
-    args = ap.parse_args()
+    ap.add_argument("--spacing", type=float, default=1.0, help="m between surveyed positions")
+    ap.add_argument("--headings", type=int, default=4, help="headings surveyed at each position")
+    args = parse_args(ap, quick={"starts": 5, "spacing": 4.0, "headings": 2})
     measured: dict[tuple[str, int], float] = {}
     if args.results is not None:
         for line in args.results.read_text().splitlines():
@@ -65,10 +67,10 @@ def main() -> None:
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for name in args.models.split(","):
-            config = load_config(ROOT / "sample_models" / f"{name}.site.yaml")
+            config = load_config(SAMPLES / f"{name}.site.yaml")
             site = prepare_site(config, Path(tmp) / name)
             simulated, _ = choose_storey(config, site)
-            params = survey_params(config, 1.0, 4)
+            params = survey_params(config, args.spacing, args.headings)
             t0 = time.perf_counter()
             plan = plan_storey(site.storeys[simulated], params)
             result, views = survey_storey(plan, params, executor)

@@ -1,7 +1,8 @@
 """Algorithm 1 (Eq. 4-9): bottom-up feature matching, indexed, incremental, with outlier tolerance.
 
-Published algorithm (kept literally; ``tests/test_match_oracle.py`` holds a plain transcription
-and checks that this module returns the same set of matches on random cases):
+Published algorithm (kept literally; ``benchmarks/_oracle.py`` holds a plain transcription and
+``tests/initcli/core/test_matching.py`` checks that this module returns the same set of matches on
+random cases):
 
 - every BIM feature b_u with label(b_u) = label(s_1) starts a candidate;
 - s_2 is matched to every b_v != b_u of its label with z_d = 1 (Eq. 7: |d^B_uv - d^S_12| <= alpha);

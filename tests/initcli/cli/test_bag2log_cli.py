@@ -8,9 +8,9 @@ import math
 import pytest
 from typer.testing import CliRunner
 
+from benchmarks._recordings import make_recording, write
 from initcli.cli.main import app
 from initcli.io.detection_log import read_log
-from tests.initcli.ros.rosbag_fixtures import make_recording, write
 
 runner = CliRunner()
 

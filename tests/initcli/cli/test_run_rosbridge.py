@@ -11,9 +11,9 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
+from benchmarks._recordings import make_recording, write
 from initcli.cli.main import app
 from tests.helpers import SAMPLES
-from tests.initcli.ros.rosbag_fixtures import make_recording, write
 from tests.initcli.ros.rosbridge_server import RosbridgeServer
 from tests.initcli.ros.test_rosbridge_driver import _replay, _twists
 

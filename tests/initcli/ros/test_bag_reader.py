@@ -8,6 +8,7 @@ import sqlite3
 import numpy as np
 import pytest
 
+from benchmarks._recordings import CAMERA, MOUNT, POINTS, door_image, make_recording, write
 from bimkit.errors import InputError
 from initcli.core.projection import detections_to_odom
 from initcli.detector.runtime import Detector
@@ -15,7 +16,6 @@ from initcli.io.detection_log import Detections, Meta, Odom, Scan
 from initcli.ros.bag_reader import bag_to_records, parse_class_names
 from initcli.ros.bag_writer import BagMessage, depth_image
 from initcli.ros.records import IMAGE, Bag2LogOptions
-from tests.initcli.ros.rosbag_fixtures import CAMERA, MOUNT, POINTS, door_image, make_recording, write
 
 
 def _split(records):

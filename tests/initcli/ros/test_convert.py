@@ -6,11 +6,11 @@ from pathlib import Path
 
 import pytest
 
+from benchmarks._recordings import make_recording, write
 from bimkit.errors import InputError
 from initcli.io.detection_log import read_log
 from initcli.ros.convert import convert_bag, is_bag, log_or_bag
 from initcli.ros.records import Bag2LogOptions
-from tests.initcli.ros.rosbag_fixtures import make_recording, write
 
 
 def test_is_bag(tmp_path: Path) -> None:

@@ -8,11 +8,11 @@ import time
 
 import pytest
 
+from benchmarks._recordings import CAMERA, MOUNT, POINTS, make_recording, write
 from bimkit.errors import InputError
 from initcli.config import RosbridgeSection
 from initcli.ros.bag_reader import BagSource
 from initcli.ros.msgdefs import to_dict
-from tests.initcli.ros.rosbag_fixtures import CAMERA, MOUNT, POINTS, make_recording, write
 from tests.initcli.ros.rosbridge_server import RosbridgeServer
 
 pytest.importorskip("roslibpy")

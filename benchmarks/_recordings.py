@@ -1,4 +1,9 @@
-"""Synthetic robot recordings written with rosbags' writers (ROS 1, ROS 2 sqlite3, ROS 2 MCAP)."""
+"""Synthetic robot recordings written with rosbags' writers (ROS 1, ROS 2 sqlite3, ROS 2 MCAP).
+
+Shared by ``benchmarks/bench_bag2log.py`` and the tests of the ROS readers, ``bim-init bag2log``
+and the rosbridge driver (``tests/initcli/ros``, ``tests/initcli/cli``), which import it as
+``benchmarks._recordings``.
+"""
 
 from __future__ import annotations
 
