@@ -23,7 +23,7 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
 DOCS = ROOT / "docs"
-SCHEMA = ROOT / "bimtools/schemas/site_config.schema.json"
+SCHEMA = ROOT / "bimkit/schemas/site_config.schema.json"
 MINIMAL_SITE = DOCS / "examples/site.yaml"
 
 _spec = importlib.util.spec_from_file_location("docgen", DOCS / "gen/docgen.py")
