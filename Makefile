@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install run test lint wheel-check samples bench eval eval-real eval-construction clean sample-bag
+.PHONY: install run test lint schemas wheel-check samples bench eval eval-real eval-construction clean sample-bag
 
 install: $(STAMP)
 
@@ -31,6 +31,10 @@ lint: install
 	$(BIN)/ruff check bimkit bimtools initcli tests benchmarks
 	$(BIN)/ruff format --check bimkit bimtools initcli tests benchmarks
 	$(BIN)/mypy
+
+# The site config's JSON Schema, generated from the settings records (a test fails when it is stale).
+schemas: install
+	$(BIN)/python -m initcli.settings --write
 
 # Build the wheel, install it into a fresh venv outside the source tree and run both commands there.
 wheel-check: install

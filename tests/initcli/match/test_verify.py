@@ -141,7 +141,7 @@ def test_a_long_wall_drive_with_odometry_drift_stays_in_free_space_placed_window
         evidence.add_scan(odom, travel, angles, np.where(ranges < 12.0, ranges, np.inf), 12.0)
         evidence.add_image(odom, travel)
     right = Pose2D(38.75, 0.8, 0.0) * odom.inverse()
-    view = CameraView(CAMERA, CameraMount(0.2, 0.0, 1.0, 0.0, 0.0, 0.0))
+    view = CameraView(CAMERA, CameraMount(0.2, 0.0, 1.0, 0.0, 0.0, 0.0), min_depth=0.5)
     params = VerificationParams()
     check = verify_transform(right, storey, evidence, [], view, params)
     assert check.passed, check.reasons
