@@ -21,7 +21,6 @@ from bimkit.errors import InputError
 from bimkit.schemas import schema_path
 from initcli.core.particle_filter import LaserModel
 from initcli.core.projection import CameraIntrinsics, CameraMount
-from initcli.core.verification_settings import VerificationParams
 from initcli.core.wall_following import WallFollowParams
 from initcli.match.options import MatchingSettings, MatchOptions
 from initcli.settings import schema_of
@@ -84,7 +83,6 @@ __all__ = [
     "start_pose_degrees",
     "turn_in_place_speed",
     "validate_document",
-    "verification_params",
     "wall_follow_params",
     "with_reality",
 ]
@@ -263,11 +261,6 @@ def load_config(path: Path, reality: str | None = None) -> SessionConfig:
 def as_built_params(config: SessionConfig) -> AsBuiltParams:
     """The simulated world's deviations from the design (sim.as_built + sim.detector)."""
     return AsBuiltParams(**dataclasses.asdict(config.sim.as_built), **dataclasses.asdict(config.sim.detector))
-
-
-def verification_params(config: SessionConfig) -> VerificationParams:
-    """The checks of a claim (``verification:``, the record itself)."""
-    return config.verification
 
 
 def start_pose_degrees(config: SessionConfig) -> tuple[float, float, float] | None:

@@ -382,7 +382,7 @@ class FineTuningSection:
     seed_sigma_xy: float = setting(0.5, "m: spread of the seeded particles", minimum=0, maximum=100)
     seed_sigma_yaw: float = setting(10.0, "degrees: spread of the seeded particles", minimum=0, maximum=180)
     landmarks: int = setting(
-        4, "matched features (the latest) that weight the filter's seed", minimum=0, maximum=1000
+        4, "matched features (the latest) that weight the filter's seed", minimum=1, maximum=1000
     )
     landmark_sigma: float = setting(
         0.3,
@@ -432,15 +432,6 @@ class FineTuningSection:
         " it explores on and claims again",
         minimum=1,
         maximum=100,
-    )
-    agree_distance: float = setting(
-        2.0,
-        "m: a final pose farther than this from the coarse pose carried by odometry fails verification ...",
-        minimum=0,
-        maximum=1000,
-    )
-    agree_turn: float = setting(
-        30.0, "degrees: ... as does one turned more than this", minimum=0, maximum=180
     )
 
 
@@ -501,10 +492,20 @@ class RivalSettings:
 
 @dataclass
 class VerificationSection(VerificationParams):
-    """Checks of a unique match before it is claimed (:class:`VerificationParams`), and the session's
-    rival search."""
+    """Checks of a unique match before it is claimed (:class:`VerificationParams`), the session's
+    rival search, and the final pose's agreement with the claim."""
 
     rivals: RivalSettings = section(RivalSettings, "the session's search for a claim's rivals")
+    agree_distance: float = setting(
+        2.0,
+        "m: a fine-tuned pose farther than this from the coarse pose carried by odometry fails"
+        " verification ...",
+        minimum=0,
+        maximum=1000,
+    )
+    agree_turn: float = setting(
+        30.0, "degrees: ... as does one turned more than this", minimum=0, maximum=180
+    )
 
 
 @dataclass

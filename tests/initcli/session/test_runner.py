@@ -136,8 +136,10 @@ def test_a_slow_arc_in_an_open_hall_is_a_loop() -> None:
     """The wall follower with no wall in reach arcs on its 0.7 m radius at about 0.3 m/s (Office_A's
     open plan): the session's loop watch must call that a loop within its window."""
     from initcli.core.confinement import ConfinementWatch
-    from initcli.session.runner import LOOP_LENGTH, LOOP_RADIUS, LOOP_WINDOW_S
+    from initcli.settings_session import LoopSettings
 
+    loops = LoopSettings()  # exploration.loops' defaults
+    LOOP_WINDOW_S, LOOP_LENGTH, LOOP_RADIUS = loops.window, loops.length, loops.radius
     watch = ConfinementWatch(LOOP_WINDOW_S, LOOP_LENGTH, LOOP_RADIUS)
     hits = []
     for k in range(int(2 * LOOP_WINDOW_S * 10)):
@@ -234,10 +236,11 @@ def test_a_failed_fine_stage_explores_on_and_fine_tunes_the_next_claim(
     claim is dropped, exploration goes on, the match is claimed again and fine-tuned from there.
     When the second stage fails too (FINE_TRIES), the session fails with the filter's reason."""
     from initcli.session import fine_tuning
-    from initcli.session.runner import FINE_TRIES
     from initcli.session.simulated import sim_session
+    from initcli.settings_session import FineTuningSection
     from initcli.site import prepare_site
 
+    FINE_TRIES = FineTuningSection().tries  # fine_tuning.tries' default
     assert FINE_TRIES == 2
     real_run = fine_tuning.FineTuning.run
     stages: list[float] = []
