@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 
 from bimtools.site.load import Site, load_site
-from bimtools.site.records import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
 from initcli.core.classes import ClassMap
 from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics
@@ -28,6 +27,7 @@ from initcli.session.result import SessionResult
 from initcli.settings_session import VerificationSection
 from initcli.sim.synthetic_floor import write_site_folder
 from initcli.sim.synthetic_log import SimFeature, SyntheticParams, make_log, path_from_waypoints
+from tests.helpers import rooms_map
 
 DOORS_X = (3.0, 6.0, 13.0, 19.5)  # no mirror image of itself: the reversed corridor matches nothing
 CAMERA = CameraIntrinsics(320.0, 320.0, 320.0, 240.0, 640, 480)
@@ -47,25 +47,6 @@ def lifts(y: float, prefix: str, xs: tuple[float, ...]) -> list[SimFeature]:
 
 def walls(y: float) -> np.ndarray:
     return np.array([[0.0, y - 1.0, 32.0, y - 1.0, 0.0, 1.0], [0.0, y + 1.0, 32.0, y + 1.0, 0.0, -1.0]])
-
-
-def corridors_map(ys: tuple[float, ...]) -> OccupancyGrid:
-    """The map of closed corridors 2 m wide along x in [0, 32] at each of ``ys``; outside unknown."""
-    res, x0, y0 = 0.05, -2.0, -2.0
-    cells = np.full((int(17.0 / res), int(36.0 / res)), UNKNOWN, dtype=np.uint8)
-    rows = cells.shape[0]
-
-    def row(y: float) -> int:
-        return rows - 1 - int((y - y0) / res)
-
-    def col(x: float) -> int:
-        return int((x - x0) / res)
-
-    for y in ys:
-        top, bottom, left, right = row(y + 1.0), row(y - 1.0), col(0.0), col(32.0)
-        cells[top : bottom + 1, left : right + 1] = OCCUPIED
-        cells[top + 1 : bottom, left + 1 : right] = FREE
-    return OccupancyGrid(cells, res, (x0, y0, 0.0))
 
 
 @pytest.fixture(scope="module")
@@ -88,7 +69,13 @@ def drive(tmp_path_factory: pytest.TempPathFactory) -> tuple[Site, Perception, M
     perception.travel = perception.path.image_travel[-1]
     loaded = load_site(Path(site_dir))
     site = Site(
-        loaded.root, {"L1": dataclasses.replace(loaded.storeys["L1"], grid=corridors_map((0.0, 12.0)))}
+        loaded.root,
+        {
+            "L1": dataclasses.replace(
+                loaded.storeys["L1"],
+                grid=rooms_map([(0.0, -1.0, 32.0, 1.0), (0.0, 11.0, 32.0, 13.0)], 36.0, 17.0),
+            )
+        },
     )
     report = match_log(read, site, options, cmap, perception.sightings)
     return site, perception, report

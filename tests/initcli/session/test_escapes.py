@@ -43,8 +43,8 @@ def view(scan: LaserScan) -> ScanView:
 
 
 def test_a_slow_circle_is_a_loop_and_a_straight_drive_is_not() -> None:
-    """The wall follower with no wall in reach arcs on its 0.7 m radius at 0.3 m/s: a loop within
-    ``loops.window`` seconds; the same speed down a corridor is none."""
+    """The wall follower with no wall in reach arcs on its 0.7 m radius at 0.3 m/s (Office_A's open
+    plan): a loop within ``loops.window`` seconds; the same speed down a corridor is none."""
     circling, _ = escapes()
     hits = [
         k / 10.0
