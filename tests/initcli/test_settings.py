@@ -100,6 +100,7 @@ def test_the_committed_site_config_schema_is_the_generated_one() -> None:
     fails here."""
     generated = json.dumps(site_config_schema(), indent=2) + "\n"
     assert SCHEMA_PATH.read_text(encoding="utf-8") == generated, "run `make schemas`"
+    jsonschema.Draft202012Validator.check_schema(site_config_schema())
 
 
 def test_every_session_config_field_is_a_setting_with_a_description() -> None:
