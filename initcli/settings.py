@@ -14,7 +14,7 @@ Everything else is derived from those fields: the JSON Schema of the site config
 the range checks of a record built in code (:func:`check_ranges`, used for ``bim-init match``'s
 options) and the command-line options of ``bim-init match`` (``metavar`` and ``flag``). The bounds
 are JSON Schema's: ``minimum``/``maximum`` inclusive, ``above``/``below`` exclusive
-(``exclusiveMinimum``/``exclusiveMaximum``). Standard library only: the records of
+(``exclusiveMinimum``/``exclusiveMaximum``). The standard library only at import: the records of
 :mod:`initcli.core` declare their fields with it too.
 """
 
@@ -29,9 +29,6 @@ import typing
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
-
-from bimkit.checks import check_number, show_number
-from bimkit.errors import InputError
 
 __all__ = [
     "Meta",
@@ -149,6 +146,8 @@ def _json_type(tp: Any) -> dict[str, Any]:
 
 def range_text(meta: Meta, integer: bool = False) -> str:
     """The range of a setting as a reader writes it: ``(0, 5]``, ``[0, 1]``, ``1-8192``, ``>= 0``."""
+    from bimkit.checks import show_number
+
     lo, lo_open = (meta.above, True) if meta.above is not None else (meta.minimum, False)
     hi, hi_open = (meta.below, True) if meta.below is not None else (meta.maximum, False)
     if lo is None and hi is None:
@@ -204,7 +203,11 @@ def schema_of(record: type, doc: str = "") -> dict[str, Any]:
 
 def check_ranges(record: object, name: Callable[[str], str] = str) -> None:
     """Every setting of ``record`` (a record built in code, not read from a file) within its range
-    and among its allowed values; else one :class:`InputError` naming it as ``name(field)``."""
+    and among its allowed values; else one :class:`~bimkit.errors.InputError` naming it as
+    ``name(field)``."""
+    from bimkit.checks import check_number
+    from bimkit.errors import InputError
+
     for f, meta, _ in settings_of(record):
         value = getattr(record, f.name)
         if value is None or dataclasses.is_dataclass(value):
