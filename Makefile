@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DOCS_STAMP := $(VENV)/.installed-docs
 
-.PHONY: install run test lint docs wheel-check samples bench bench-quick eval eval-real eval-construction clean sample-bag
+.PHONY: install run test lint schemas docs wheel-check samples bench bench-quick eval eval-real eval-construction clean sample-bag
 
 install: $(STAMP)
 
@@ -41,6 +41,10 @@ docs: $(DOCS_STAMP)
 $(DOCS_STAMP): $(STAMP)
 	$(BIN)/python -m pip install --quiet -e ".[docs]"
 	touch $(DOCS_STAMP)
+
+# The site config's JSON Schema, generated from the settings records (a test fails when it is stale).
+schemas: install
+	$(BIN)/python -m initcli.settings --write
 
 # Build the wheel, install it into a fresh venv outside the source tree and run both commands there.
 wheel-check: install

@@ -53,11 +53,12 @@ TRACKED_RIVALS = 24  # rivals of a claim whose path fit is recorded
 _SITES: dict[tuple[str, str, float], Any] = {}
 
 
-def _stats(session: Any, frame: Any, hypothesis: Any, rival: bool) -> dict[str, Any]:
-    """Outliers, rightness, checks, scan fit and the path's fit of one hypothesis at ``frame``."""
+def _stats(claims: Any, frame: Any, hypothesis: Any, rival: bool) -> dict[str, Any]:
+    """Outliers, rightness, checks, scan fit and the path's fit of one hypothesis at ``frame``
+    (``claims``: the session's :class:`initcli.session.claims.ClaimChecks`)."""
     truth = frame.truth
     pose = hypothesis.reported_pose
-    check = session._verify(hypothesis.storey, pose * frame.odom.inverse(), rival=rival)
+    check = claims.verify(hypothesis.storey, pose * frame.odom.inverse(), rival=rival)
     yaw = abs(math.degrees(math.atan2(math.sin(pose.yaw - truth.yaw), math.cos(pose.yaw - truth.yaw))))
     return {
         "outliers": hypothesis.n_outliers,
@@ -66,8 +67,8 @@ def _stats(session: Any, frame: Any, hypothesis: Any, rival: bool) -> dict[str, 
         "error": (round(math.hypot(pose.x - truth.x, pose.y - truth.y), 2), round(yaw, 1)),
         "passed": check.passed,
         "fit": check.scan_fit,
-        "track": session._track(frame, hypothesis, check),
-        "wide": session._track(frame, hypothesis, check, wide=True),
+        "track": claims.track(frame, hypothesis, check),
+        "wide": claims.track(frame, hypothesis, check, wide=True),
     }
 
 
@@ -76,6 +77,7 @@ def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, 
     from initcli.core.verification import TRACK_HYPOTHESES, trails
     from initcli.eval.sweep import apply_sweep, parse_sweep
     from initcli.session import runner
+    from initcli.session.claims import ClaimChecks
     from initcli.session.simulated import sim_session
     from initcli.site import prepare_site
 
@@ -89,7 +91,7 @@ def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, 
     decisions: list[dict[str, Any]] = []
     seen: dict[str, Any] = {}
     where = f"{name} seed {seed}" + (f" {key}={value}" if key else "")
-    verified, credible, match = runner.Session._verified, runner.Session._credible, runner.Session._match
+    verified, credible, match = ClaimChecks.verified, ClaimChecks.credible, runner.Session._match
 
     def spy_credible(
         self: Any, frame: Any, check: Any, track: Any, claim: Any, rivals: int, found: list
@@ -102,12 +104,13 @@ def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, 
         out = verified(self, frame, report, picked)
         claim = _stats(self, frame, report.hypotheses[0], rival=False)
         found = seen.get("found", [])
-        rivals = [_stats(self, frame, h, rival=True) for h in found[: runner.RIVALS_COMPARED]]
+        limits = self.checks.rivals  # verification.rivals
+        rivals = [_stats(self, frame, h, rival=True) for h in found[: limits.compared]]
         n_rivals = seen.get("rivals", 0)
-        checked = rivals[: runner.RIVALS_CHECKED]
-        believed = checked if n_rivals > runner.RIVALS_CHECKED else [r for r in checked if r["passed"]]
+        checked = rivals[: limits.checked]
+        believed = checked if n_rivals > limits.checked else [r for r in checked if r["passed"]]
         passing = [r for r in rivals if r["passed"]]
-        complete = len(found) == n_rivals <= runner.RIVALS_COMPARED
+        complete = len(found) == n_rivals <= limits.compared
         trailing = [r for r in passing if trails(claim["outliers"], r["outliers"], self.checks)]
         decisions.append(
             {
@@ -133,7 +136,7 @@ def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, 
         frame = seen.get("frame")
         several = 1 < report.n_hypotheses <= min(len(report.hypotheses), TRACK_HYPOTHESES)
         if frame is not None and several:
-            hs = [_stats(self, frame, h, rival=True) for h in report.hypotheses]
+            hs = [_stats(self.claims, frame, h, rival=True) for h in report.hypotheses]
             decisions.append({"kind": "several", "hypotheses": hs, "where": where, "t": t})
         return report
 
@@ -143,12 +146,12 @@ def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, 
         seen["frame"] = frame
         return perceive(self, frame)
 
-    runner.Session._verified, runner.Session._credible = spy_verified, spy_credible  # type: ignore[method-assign]
+    ClaimChecks.verified, ClaimChecks.credible = spy_verified, spy_credible  # type: ignore[method-assign]
     runner.Session._match, runner.Session._perceive = spy_match, spy_perceive  # type: ignore[method-assign]
     try:
         sim_session(config, site, seed).session.run()
     finally:
-        runner.Session._verified, runner.Session._credible = verified, credible  # type: ignore[method-assign]
+        ClaimChecks.verified, ClaimChecks.credible = verified, credible  # type: ignore[method-assign]
         runner.Session._match, runner.Session._perceive = match, perceive  # type: ignore[method-assign]
     return decisions
 

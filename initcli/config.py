@@ -10,7 +10,6 @@ import copy
 import dataclasses
 import json
 import math
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -22,272 +21,86 @@ from bimkit.errors import InputError
 from bimkit.schemas import schema_path
 from initcli.core.particle_filter import LaserModel
 from initcli.core.projection import CameraIntrinsics, CameraMount
-from initcli.core.verification import VerificationParams
 from initcli.core.wall_following import WallFollowParams
-from initcli.match.pipeline import MatchOptions
-from initcli.sim.as_built import AsBuiltParams
+from initcli.match.options import MatchingSettings, MatchOptions
+from initcli.settings import schema_of
+from initcli.settings_session import (
+    CameraPose,
+    CameraSection,
+    DetectorSection,
+    ExplorationSection,
+    FineTuningSection,
+    LidarSection,
+    LimitsSection,
+    MatchingSection,
+    RobotSection,
+    RosbridgeSection,
+    SessionConfig,
+    SiteSection,
+    VerificationSection,
+)
+from initcli.settings_sim import (
+    REALITY_PROFILES,
+    AsBuiltParams,
+    AsBuiltSection,
+    OdometryNoiseSection,
+    SimDetectorSection,
+    SimOdometrySection,
+    SimSection,
+)
+
+__all__ = [
+    "REALITY_PROFILES",
+    "SCHEMA_PATH",
+    "AsBuiltSection",
+    "CameraPose",
+    "CameraSection",
+    "DetectorSection",
+    "ExplorationSection",
+    "FineTuningSection",
+    "LidarSection",
+    "LimitsSection",
+    "MatchingSection",
+    "OdometryNoiseSection",
+    "RobotSection",
+    "RosbridgeSection",
+    "SessionConfig",
+    "SimDetectorSection",
+    "SimOdometrySection",
+    "SimSection",
+    "SiteSection",
+    "VerificationSection",
+    "as_built_params",
+    "camera_of",
+    "check_resources",
+    "config_to_dict",
+    "followed_side",
+    "load_config",
+    "match_options",
+    "parse_config",
+    "read_yaml",
+    "site_config_schema",
+    "start_pose_degrees",
+    "turn_in_place_speed",
+    "validate_document",
+    "wall_follow_params",
+    "with_reality",
+]
 
 SCHEMA_PATH = schema_path("site_config.schema.json")
-_MATCH = MatchOptions()  # the one default of every matching setting
+SCHEMA_ID = "https://bim-init.example/schemas/site_config.schema.json"
 
 
-@dataclass
-class SiteSection:
-    path: str = ""  # an IFC file or a bim-extract OUTDIR, relative to the config file
-    storey: str = "auto"
-
-
-@dataclass
-class RosbridgeSection:  # robot.driver: rosbridge (initcli/ros/rosbridge_driver.py)
-    host: str = "localhost"
-    port: int = 9090
-    odom_topic: str = "/odom"  # nav_msgs/Odometry
-    scan_topic: str = "/scan"  # sensor_msgs/LaserScan
-    detections_topic: str = "/detections"  # vision_msgs/Detection2DArray
-    depth_topic: str = "/camera/aligned_depth_to_color/image_raw"  # 16UC1 mm or 32FC1 m
-    cmd_vel_topic: str = "/cmd_vel"  # geometry_msgs/Twist
-
-
-@dataclass
-class RobotSection:
-    driver: str = "sim"  # sim | rosbridge
-    radius: float = 0.3  # m
-    max_linear: float = 0.5  # m/s
-    max_angular: float = 1.0  # rad/s
-    drive: bool = True  # rosbridge: false listens only while a person drives
-    rosbridge: RosbridgeSection = field(default_factory=RosbridgeSection)
-
-
-@dataclass
-class CameraPose:
-    x: float = 0.2
-    y: float = 0.0
-    z: float = 1.0
-    roll: float = 0.0
-    pitch: float = 0.0
-    yaw: float = 0.0
-
-
-@dataclass
-class CameraSection:
-    fx: float = 320.0  # 640x480 at ~90 degrees horizontal field of view (Intel D455 colour)
-    fy: float = 320.0
-    cx: float = 320.0
-    cy: float = 240.0
-    width: int = 640
-    height: int = 480
-    pose: CameraPose = field(default_factory=CameraPose)
-    depth_noise: float = 0.005  # sigma = depth_noise * d^2: 2 % at 4 m (D455)
-    range: float = 6.0  # m: objects are detected up to this distance
-    max_view_angle: float = 75.0  # degrees from an element's normal
-    depth_window: int = 2  # n of the (2n+1)x(2n+1) depth window
-
-
-@dataclass
-class LidarSection:
-    beams: int = 360
-    fov: float = 360.0  # degrees
-    max_range: float = 20.0  # m
-    noise: float = 0.02  # m standard deviation
-    dropout: float = 0.01  # fraction of beams returning nothing
-
-
-@dataclass
-class DetectorSection:
-    kind: str = "simulated"  # simulated | onnx
-    model: str = "default"
-    score_threshold: float = _MATCH.score_threshold
-    rate: float = 5.0  # Hz
-    classes: dict[str, str] = field(default_factory=dict)  # detector class -> feature category
-
-
-@dataclass
-class MatchingSection:
-    """Every matching tunable of ``bim-init match`` (same names, units and defaults: the defaults are
-    :class:`initcli.match.pipeline.MatchOptions`'s), and the session's own ``m_thre`` and
-    ``drift_window``. The detection filter's score threshold is ``detector.score_threshold`` and the
-    wall clearance of Eq. 17 ``exploration.d_thre``."""
-
-    alpha: float = _MATCH.alpha  # m, Eq. 7
-    beta: float = _MATCH.beta  # degrees, Eq. 9
-    max_outliers: int = _MATCH.max_outliers
-    outlier_share: float = _MATCH.outlier_share  # share of the features the budget grows to
-    revisits: bool = _MATCH.revisits
-    pose_method: str = _MATCH.pose_method
-    pose_window: int = _MATCH.pose_window  # rigid: the last N matched features; 0: all
-    min_sightings: int = _MATCH.min_sightings
-    merge_radius: float = _MATCH.merge_radius  # m
-    min_depth: float = _MATCH.min_depth  # m
-    max_depth: float = _MATCH.max_depth  # m
-    edge_margin: float = _MATCH.edge_margin  # px
-    m_thre: int = 40  # active exploration only with fewer hypotheses than this
-    drift_window: float = 50.0  # m: with no consistent match, retry with the features of the last M m
-
-
-@dataclass
-class ExplorationSection:
-    wall_side: str = "left"
-    wall_distance: float = 0.7  # m kept to the followed wall
-    d_thre: float = _MATCH.d_thre  # m, Eq. 17
-    t_thre: float = 25.0  # s without a new feature during active exploration -> recovery
-    # §3.3.4's BIM-based active exploration (several but fewer than matching.m_thre hypotheses, or
-    # a claim's credible rivals); off: wall following until one hypothesis is left
-    active: bool = False
-    max_route: float = 0.0  # m: active exploration takes no target farther along the corridors; 0: any
-    recovery: bool = True
-    initial_look: bool = True  # turn once on the spot before exploring
-    # m of travel without a new feature while following a wall with open space on the other side
-    # (a hall, a car park, an open-plan office) -> turn once on the spot again; 0: never
-    look_every: float = 10.0
-    # after this many such looks since the last new feature (60 m of open floor with the
-    # defaults), drive across the open floor to a wall the lidar sees and follow it; 0: never
-    cross_after: int = 6
-
-
-@dataclass
-class FineTuningSection:
-    enabled: bool = True
-    particles: int = 2000
-    covariance: float = 0.01  # m^2: x and y variance must fall below this
-    yaw_covariance: float = 0.0012  # rad^2 (2 degrees)
-    distance: float = 6.0  # m followed along the wall at most
-    seed_sigma_xy: float = 0.5  # m
-    seed_sigma_yaw: float = 10.0  # degrees
-
-
-@dataclass
-class LimitsSection:
-    max_distance: float = 150.0  # m driven without a unique match -> failure (paper §4.3)
-    max_time: float = 1200.0  # s of session time
-
-
-@dataclass
-class OdometryNoiseSection:
-    """Drift of the robot's odometry (wheels fused with the IMU, as on the paper's robot); variances
-    grow with each step's motion: rotation alpha1 rad^2/rad + alpha2 rad^2/m, translation
-    alpha3 m^2/m + alpha4 m^2/rad (see initcli.sim.robot)."""
-
-    alpha1: float = 0.0001
-    alpha2: float = 0.00001
-    alpha3: float = 0.0004
-    alpha4: float = 0.0001
-
-
-_AS_BUILT = AsBuiltParams()  # the one default of every as-built deviation (all 0: the design)
-_CHECKS = VerificationParams()  # the one default of every verification threshold
-
-
-@dataclass
-class AsBuiltSection:
-    """How the simulated site deviates from its design model (initcli.sim.as_built)."""
-
-    missing_doors: float = _AS_BUILT.missing_doors  # share of doors not installed
-    door_shift: float = _AS_BUILT.door_shift  # m, sigma along the host wall
-    wall_offset: float = _AS_BUILT.wall_offset  # m, sigma per element
-    open_doors: float = _AS_BUILT.open_doors  # share of installed doors standing open
-    hoarding: float = _AS_BUILT.hoarding  # temporary walls per 100 m of corridor
-    extra_doors: float = _AS_BUILT.extra_doors  # doors the model lacks, per 100 m of corridor
-    clutter_in_corridor: float = _AS_BUILT.clutter_in_corridor  # share of stacks out in the corridor
-
-
-@dataclass
-class SimDetectorSection:
-    """What the simulated detector gets wrong persistently (beyond sim.miss_rate per image)."""
-
-    persistent_phantoms: float = _AS_BUILT.persistent_phantoms  # per 100 m: posters detected as doors
-    never_seen: float = _AS_BUILT.never_seen  # share of real features never detected
-
-
-@dataclass
-class SimOdometrySection:
-    """Systematic odometry errors (on top of sim.odometry_noise's random walk)."""
-
-    scale_error: float = 0.0  # share of distance counted too far (0.02: 2 % wheel-radius error)
-    slip: float = 0.0  # wheel-slip events per 100 m
-
-
-# Named realities (sim.reality): values for the keys above that the config does not set itself.
-REALITY_PROFILES: dict[str, dict[str, dict[str, float]]] = {
-    "ideal": {},
-    "construction": {
-        "as_built": {
-            "missing_doors": 0.2,
-            "door_shift": 0.3,
-            "wall_offset": 0.05,
-            "open_doors": 0.3,
-            "hoarding": 1.0,
-            "extra_doors": 0.5,
-            "clutter_in_corridor": 0.5,
-        },
-        "detector": {"persistent_phantoms": 1.0, "never_seen": 0.1},
-        "odometry": {"scale_error": 0.02, "slip": 1.0},
-    },
-}
-
-
-@dataclass
-class SimSection:
-    start: Any = "random"  # "random" or [x, y, yaw_degrees] in the BIM frame
-    world: str = ""  # the building the robot drives in (IFC or bim-extract OUTDIR); "": site.path
-    reality: str = "ideal"  # a named profile of the keys below (REALITY_PROFILES)
-    as_built: AsBuiltSection = field(default_factory=AsBuiltSection)
-    detector: SimDetectorSection = field(default_factory=SimDetectorSection)
-    odometry: SimOdometrySection = field(default_factory=SimOdometrySection)
-    odometry_noise: OdometryNoiseSection = field(default_factory=OdometryNoiseSection)
-    clutter: float = 0.05  # material stacks per metre of corridor wall
-    workers: int = 2
-    miss_rate: float = 0.1  # chance a visible feature is not detected in an image
-    false_positives_per_minute: float = 1.0
-    confusion_rate: float = 0.02  # chance a detection gets another class
-    phantoms: int = 0  # persistent door-like things that are not in the BIM (posters, openings)
-    seed: int = 1
-
-
-@dataclass
-class VerificationSection:
-    """Checks of a unique match before it is claimed (initcli.core.verification)."""
-
-    enabled: bool = _CHECKS.enabled
-    predict_range: float = _CHECKS.predict_range  # m
-    min_frames: int = _CHECKS.min_frames  # images in view before a miss counts
-    match_radius: float = _CHECKS.match_radius  # m
-    p_right: float = _CHECKS.p_right  # miss chance of a predicted feature at the right place
-    p_wrong: float = _CHECKS.p_wrong  # ... and at a wrong place
-    log_odds: float = _CHECKS.log_odds  # likelihood ratio (natural log) that rejects
-    min_scan_fit: float = _CHECKS.min_scan_fit  # share of beams on mapped walls
-    min_fine_scan_fit: float = _CHECKS.min_fine_scan_fit  # ... at the fine pose
-    min_path_free: float = _CHECKS.min_path_free  # share of the recent path on free BIM cells
-    scan_tolerance: float = _CHECKS.scan_tolerance  # m
-    min_claim_inliers: int = _CHECKS.min_claim_inliers  # matched features before a claim
-    rival_outliers: int = _CHECKS.rival_outliers  # extra outliers the claim must stay unique under
-    outrank_outliers: int = _CHECKS.outrank_outliers  # a credible rival this many outliers worse ...
-    outrank_scan_fit: float = _CHECKS.outrank_scan_fit  # ... and this much worse a scan fit: no doubt
-    track_m: float = _CHECKS.track_m  # m of the path whose scans are fitted window by window ...
-    track_lead: float = _CHECKS.track_lead  # ... a place fitting some window this much better ...
-    track_slack: float = _CHECKS.track_slack  # ... and none this much worse outranks another ...
-    min_track_fit: float = _CHECKS.min_track_fit  # ... when it fits every window at least this well
-    track_lead_trailing: float = _CHECKS.track_lead_trailing  # the lead over one outrank_outliers worse
-    min_track_windows: int = _CHECKS.min_track_windows  # windows two places are compared on, at least
-
-
-@dataclass
-class SessionConfig:
-    site: SiteSection = field(default_factory=SiteSection)
-    robot: RobotSection = field(default_factory=RobotSection)
-    camera: CameraSection = field(default_factory=CameraSection)
-    lidar: LidarSection = field(default_factory=LidarSection)
-    detector: DetectorSection = field(default_factory=DetectorSection)
-    matching: MatchingSection = field(default_factory=MatchingSection)
-    exploration: ExplorationSection = field(default_factory=ExplorationSection)
-    fine_tuning: FineTuningSection = field(default_factory=FineTuningSection)
-    limits: LimitsSection = field(default_factory=LimitsSection)
-    sim: SimSection = field(default_factory=SimSection)
-    verification: VerificationSection = field(default_factory=VerificationSection)
-    source: Path | None = None  # the YAML file
-
-    def site_path(self) -> Path:
-        base = self.source.parent if self.source else Path.cwd()
-        return (base / self.site.path).resolve()
+def site_config_schema() -> dict[str, Any]:
+    """The JSON Schema of site.yaml, generated from the records (``python -m initcli.settings
+    --write`` writes it to :data:`SCHEMA_PATH`; a test fails when the committed file differs)."""
+    body = schema_of(SessionConfig)
+    return {
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "$id": SCHEMA_ID,
+        "title": "bim-init run session config (site.yaml)",
+        **body,
+    }
 
 
 def _describe(value: Any) -> str:
@@ -447,14 +260,7 @@ def load_config(path: Path, reality: str | None = None) -> SessionConfig:
 
 def as_built_params(config: SessionConfig) -> AsBuiltParams:
     """The simulated world's deviations from the design (sim.as_built + sim.detector)."""
-    a, d = config.sim.as_built, config.sim.detector
-    return AsBuiltParams(
-        **dataclasses.asdict(a), persistent_phantoms=d.persistent_phantoms, never_seen=d.never_seen
-    )
-
-
-def verification_params(config: SessionConfig) -> VerificationParams:
-    return dataclasses.replace(_CHECKS, **dataclasses.asdict(config.verification))
+    return AsBuiltParams(**dataclasses.asdict(config.sim.as_built), **dataclasses.asdict(config.sim.detector))
 
 
 def start_pose_degrees(config: SessionConfig) -> tuple[float, float, float] | None:
@@ -471,26 +277,17 @@ def config_to_dict(config: SessionConfig) -> dict:
 
 
 def match_options(config: SessionConfig, storey: str | None) -> MatchOptions:
-    """The session's matching options: the ``matching:`` section, ``detector.score_threshold`` and
-    ``exploration.d_thre``; enough hypotheses are kept to decide on active exploration (``m_thre``)."""
+    """The session's matching options: the ``matching:`` section's share of them, with
+    ``detector.score_threshold`` and ``exploration.d_thre``; enough hypotheses are kept to decide on
+    active exploration (``m_thre``)."""
     m = config.matching
+    shared = {f.name: getattr(m, f.name) for f in dataclasses.fields(MatchingSettings)}
     return MatchOptions(
+        **shared,
         storey=storey,
-        alpha=m.alpha,
-        beta=m.beta,
-        top=max(m.m_thre, _MATCH.top),
-        max_outliers=m.max_outliers,
-        outlier_share=m.outlier_share,
-        revisits=m.revisits,
-        pose_method=m.pose_method,
-        pose_window=m.pose_window,
+        top=max(m.m_thre, MatchOptions.top),
         d_thre=config.exploration.d_thre,
-        merge_radius=m.merge_radius,
-        min_sightings=m.min_sightings,
         score_threshold=config.detector.score_threshold,
-        min_depth=m.min_depth,
-        max_depth=m.max_depth,
-        edge_margin=m.edge_margin,
     )
 
 
@@ -505,13 +302,13 @@ def wall_follow_params(config: SessionConfig) -> WallFollowParams:
         distance=config.exploration.wall_distance,
         speed=config.robot.max_linear,
         max_turn=config.robot.max_angular,
-        front_stop=config.robot.radius + 0.2,
+        front_stop=config.robot.radius + config.exploration.front_clearance,
     )
 
 
 def turn_in_place_speed(config: SessionConfig) -> float:
     """rad/s of the look round at the start and of the recovery rotation (§3.3.4)."""
-    return 0.6 * config.robot.max_angular
+    return config.exploration.turn_rate * config.robot.max_angular
 
 
 def camera_of(config: SessionConfig) -> tuple[CameraIntrinsics, CameraMount]:

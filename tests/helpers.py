@@ -1,5 +1,5 @@
 """Paths the tests share: the repository root, the bundled samples, the real IFC models in ../shared/ifc;
-and how a session's claim replays from its log.
+how a session's claim replays from its log; the map of a few closed rooms.
 
 Test modules import these as ``from tests.helpers import SAMPLES`` (pytest's ``pythonpath`` puts the
 repository root on ``sys.path``); the fixtures built on them live in ``tests/conftest.py``.
@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from bimtools.site.records import OccupancyGrid
     from initcli.match.pipeline import Hypothesis, MatchReport
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -39,3 +40,28 @@ def replayed_claim(log_path: Path, site_dir: Path, report: MatchReport) -> Hypot
     _, favoured = verify_and_favour(read_log(log_path), site, report, site_class_map(site))
     assert favoured is not None, f"{report.verdict}, and the lidar along the path favours none"
     return report.hypotheses[favoured]
+
+
+def rooms_map(
+    rooms: list[tuple[float, float, float, float]], width: float, height: float, res: float = 0.05
+) -> OccupancyGrid:
+    """The occupancy grid of closed rectangular ``rooms`` (x0, y0, x1, y1 m): their walls one cell
+    thick and occupied, inside free, the rest unknown; ``width`` x ``height`` m from (-2, -2)."""
+    import numpy as np
+
+    from bimtools.site.records import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
+
+    x0, y0 = -2.0, -2.0
+    cells = np.full((int(height / res), int(width / res)), UNKNOWN, dtype=np.uint8)
+    rows = cells.shape[0]
+
+    def row(y: float) -> int:
+        return rows - 1 - int((y - y0) / res)
+
+    def col(x: float) -> int:
+        return int((x - x0) / res)
+
+    for left, bottom, right, top in rooms:
+        cells[row(top) : row(bottom) + 1, col(left) : col(right) + 1] = OCCUPIED
+        cells[row(top) + 1 : row(bottom), col(left) + 1 : col(right)] = FREE
+    return OccupancyGrid(cells, res, (x0, y0, 0.0))

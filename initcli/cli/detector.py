@@ -20,6 +20,7 @@ from bimkit.checks import check_output_dir
 from bimkit.cli import error_line, number_option
 from bimkit.errors import EXIT_BAD_INPUT, InputError
 from initcli.cli import PROG
+from initcli.detector import DETECTOR_CONFIDENCE
 
 if TYPE_CHECKING:
     from initcli.detector.metrics import Metrics
@@ -426,7 +427,7 @@ def predict(
         typer.Option(
             "--conf", callback=number_option(PROG, minimum=0, maximum=1), metavar="S", help="Score threshold."
         ),
-    ] = 0.25,
+    ] = DETECTOR_CONFIDENCE,
     iou: Annotated[
         float,
         typer.Option(
@@ -512,7 +513,7 @@ def evaluate(
             metavar="S",
             help="Score for precision and recall.",
         ),
-    ] = 0.25,
+    ] = DETECTOR_CONFIDENCE,
     iou: Annotated[
         float,
         typer.Option(

@@ -6,13 +6,14 @@ Exit codes: 0 unique match, 3 ambiguous (several hypotheses), 4 no consistent ma
 
 from __future__ import annotations
 
+import inspect
 import json
 import math
 import sys
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 from rich.console import Console
@@ -28,6 +29,7 @@ from initcli.io.match_result import report_to_dict
 from initcli.match.pipeline import EXIT_BAD_INPUT, MatchOptions, MatchReport, run_match
 from initcli.match.verify import check_hypotheses
 from initcli.ros.convert import log_or_bag
+from initcli.settings import describe, settings_of
 
 
 def _fail(message: object) -> typer.Exit:
@@ -116,7 +118,25 @@ def print_report(report: MatchReport, console: Console, checks: Sequence[Verific
     console.print(report.verdict, style="bold", highlight=False)
 
 
-_DEFAULTS = MatchOptions()  # every option's default below is the record's
+def _record_options(record: type) -> list[inspect.Parameter]:
+    """An option of the command for each setting of ``record`` with a ``metavar`` (a value) or a
+    ``flag`` (a switch): its name, default, help (the setting's description and range) and type are
+    the field's, so a setting added to :class:`MatchOptions` is an option with no other edit."""
+    params = []
+    for f, meta, tp in settings_of(record):
+        if meta.metavar is None and meta.flag is None:
+            continue
+        text = describe(meta, tp is int)
+        if meta.flag is not None:
+            option = typer.Option(meta.flag, help=text)
+        else:
+            option = typer.Option("--" + f.name.replace("_", "-"), metavar=meta.metavar, help=text)
+        params.append(
+            inspect.Parameter(
+                f.name, inspect.Parameter.KEYWORD_ONLY, default=f.default, annotation=Annotated[tp, option]
+            )
+        )
+    return params
 
 
 def match(
@@ -127,119 +147,21 @@ def match(
     storey: Annotated[
         str,
         typer.Option("--storey", metavar="NAME|auto", help="Storey to match against; auto: every storey."),
-    ] = _DEFAULTS.storey or "auto",
-    alpha: Annotated[
-        float, typer.Option("--alpha", metavar="M", help="Distance threshold of Eq. 7, metres.")
-    ] = _DEFAULTS.alpha,
-    beta: Annotated[
-        float, typer.Option("--beta", metavar="DEG", help="Angle threshold of Eq. 9, degrees.")
-    ] = _DEFAULTS.beta,
-    top: Annotated[int, typer.Option("--top", metavar="K", help="Hypotheses to show.")] = _DEFAULTS.top,
+    ] = "auto",
     json_out: Annotated[
         bool, typer.Option("--json", help="Print one JSON document instead of tables.")
     ] = False,
     plot: Annotated[
         Path | None, typer.Option("--plot", metavar="FILE.png", help="Draw the hypotheses on the floor plan.")
     ] = None,
-    revisits: Annotated[
-        bool,
-        typer.Option(
-            "--revisits/--no-revisits",
-            help="Let a later detection match a BIM feature matched before (the robot came back); "
-            "--no-revisits is the literal Algorithm 1.",
-        ),
-    ] = _DEFAULTS.revisits,
-    max_outliers: Annotated[
-        int, typer.Option("--max-outliers", metavar="N", help="False or misclassified detections tolerated.")
-    ] = _DEFAULTS.max_outliers,
-    outlier_share: Annotated[
-        float,
-        typer.Option(
-            "--outlier-share",
-            metavar="S",
-            help="With no match at --max-outliers, let the outlier budget grow up to this share of the "
-            "features (0-0.5; 0: --max-outliers alone).",
-        ),
-    ] = _DEFAULTS.outlier_share,
-    pose_method: Annotated[
-        str,
-        typer.Option(
-            "--pose-method", metavar="paper|rigid", help="paper: Eq. 10-13; rigid: Kabsch on all matches."
-        ),
-    ] = _DEFAULTS.pose_method,
-    pose_window: Annotated[
-        int,
-        typer.Option(
-            "--pose-window",
-            metavar="N",
-            help="rigid: align the last N matched features (odometry drifts); 0: all of them.",
-        ),
-    ] = _DEFAULTS.pose_window,
-    d_thre: Annotated[
-        float, typer.Option("--d-thre", metavar="M", help="Wall clearance of Eq. 17, metres.")
-    ] = _DEFAULTS.d_thre,
-    min_sightings: Annotated[
-        int, typer.Option("--min-sightings", metavar="K", help="Sightings that confirm a feature.")
-    ] = _DEFAULTS.min_sightings,
-    merge_radius: Annotated[
-        float,
-        typer.Option("--merge-radius", metavar="M", help="Same-class sightings closer than this merge."),
-    ] = _DEFAULTS.merge_radius,
-    score_threshold: Annotated[
-        float, typer.Option("--score-threshold", metavar="S", help="Detections scoring lower are ignored.")
-    ] = _DEFAULTS.score_threshold,
-    min_depth: Annotated[
-        float,
-        typer.Option("--min-depth", metavar="M", help="Detections with a depth below this are ignored."),
-    ] = _DEFAULTS.min_depth,
-    max_depth: Annotated[
-        float,
-        typer.Option("--max-depth", metavar="M", help="Detections with a depth above this are ignored."),
-    ] = _DEFAULTS.max_depth,
-    edge_margin: Annotated[
-        float,
-        typer.Option(
-            "--edge-margin",
-            metavar="PX",
-            help="Boxes this close to the left/right image border are cut off and not used; < 0 keeps them.",
-        ),
-    ] = _DEFAULTS.edge_margin,
-    drift_window: Annotated[
-        float | None,
-        typer.Option(
-            "--drift-window",
-            metavar="M",
-            help="Match only the features confirmed in the last M metres of travel (odometry drift).",
-        ),
-    ] = _DEFAULTS.drift_window,
-    skip_bad: Annotated[
-        bool, typer.Option("--skip-bad", help="Skip malformed log lines (with a count) instead of failing.")
-    ] = _DEFAULTS.skip_bad,
+    **settings: Any,
 ) -> None:
     """Offline feature matching: confirmed features, ranked pose hypotheses and a verdict.
 
     Exit codes: 0 unique match, 3 several hypotheses, 4 no consistent match, 2 bad input.
     """
-    options = MatchOptions(
-        storey=None if storey.strip().lower() == "auto" else storey,
-        alpha=alpha,
-        beta=beta,
-        top=top,
-        max_outliers=max_outliers,
-        outlier_share=outlier_share,
-        revisits=revisits,
-        pose_method=pose_method,
-        pose_window=pose_window,
-        d_thre=d_thre,
-        min_sightings=min_sightings,
-        merge_radius=merge_radius,
-        score_threshold=score_threshold,
-        min_depth=min_depth,
-        max_depth=max_depth,
-        edge_margin=edge_margin,
-        drift_window=drift_window,
-        skip_bad=skip_bad,
-    )
+    options = MatchOptions(storey=None if storey.strip().lower() == "auto" else storey, **settings)
+    top = options.top
     checks = None
     verify = site.is_dir()  # the checks need the site's maps; a bare features.csv has none
     try:
@@ -267,3 +189,11 @@ def match(
         except OSError as exc:
             raise _fail(f"{plot}: cannot write the plot: {exc.strerror or exc}") from None
     raise typer.Exit(report.exit_code)
+
+
+# The command's parameters: the ones above, then an option per setting of MatchOptions (typer reads
+# the signature).
+_HAND = list(inspect.signature(match, eval_str=True).parameters.values())[:-1]
+match.__signature__ = inspect.Signature(  # type: ignore[attr-defined]
+    [*_HAND, *_record_options(MatchOptions)], return_annotation=None
+)

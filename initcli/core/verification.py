@@ -39,6 +39,7 @@ from bimtools.site.records import FREE, OccupancyGrid
 from initcli.core.geometry import Pose2D, poses_to_array, transform_poses
 from initcli.core.particle_filter import LikelihoodField
 from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.core.verification_settings import VerificationParams
 from initcli.core.visibility import CameraModel, FeatureArrays, visible
 
 RIVAL_MARGIN = 2  # more outliers than a noisy claim was found with that its rival search allows, at least
@@ -49,70 +50,13 @@ WIDE_STEP_M, WIDE_STEP_DEG = 0.5, 5.0  # grid of tracked_scan_fit's widened firs
 
 
 @dataclass(frozen=True)
-class VerificationParams:
-    """Thresholds of the two checks (units in the comments)."""
-
-    predict_range: float = 4.5  # m: a BIM feature farther than this is not predicted to be seen
-    predict_view_angle_deg: float = 70.0  # degrees from the feature's normal (the detector: 75)
-    image_margin: float = 0.1  # share of the image width/height kept clear at the borders
-    min_frames: int = 4  # images a feature must be predicted in view before a miss counts
-    match_radius: float = 1.5  # m: a same-category sighting this close (BIM frame) explains a feature
-    p_right: float = 0.4  # chance that a predicted feature is missed at the right place
-    p_wrong: float = 0.9  # ... and at a wrong place
-    log_odds: float = 2.3  # natural log of the likelihood ratio that rejects (about 10:1)
-    min_scan_fit: float = 0.65  # share of beams on mapped walls below which the place is wrong
-    min_fine_scan_fit: float = 0.6  # the same for the fine pose (fine tuning's own rule)
-    scan_tolerance: float = 0.25  # m: a beam end point this close to an occupied cell fits
-    scan_search_xy: float = 0.3  # m: the fit is the best over shifts of the pose up to this ...
-    # ... and turns up to this, in 3-degree steps: a coarse pose is decimetres and, from doors built
-    # off their place, up to 15 degrees off (the fit at a wrong place gains little from turning)
-    scan_search_yaw_deg: float = 12.0
-    min_path_free: float = 0.85  # share of the recent path on (or near) free BIM cells
-    path_margin: float = 0.3  # m: a path point this close to a free cell counts as free
-    min_claim_inliers: int = 4  # matched features a unique match needs before it is claimed
-    rival_outliers: int = 1  # a claim stays unique with this many more outliers (0: noisy claims only) ...
-    rival_distance: float = 2.0  # m: ... counting rivals this far from it (or turned rival_turn_deg)
-    rival_turn_deg: float = 30.0
-    # A rival that passes the checks is still no reason to doubt a claim that it trails by at least
-    # this many outliers and this much scan fit (both; 0.0 fit margin and 0 outliers would let any
-    # equal rival through, a fit margin of 1 turns it off): see ``outranks``.
-    outrank_outliers: int = 1
-    outrank_scan_fit: float = 0.05
-    # The lidar along the path (``tracked_scan_fit``): the scans of the last ``track_m`` of travel
-    # in windows of ``track_window_m``, each aligned by a small move (up to ``track_search_xy`` m and
-    # ``track_search_yaw_deg``) from the alignment of the window after it, so odometry drift is
-    # followed back along the path while a place one corridor bay off is not.
-    track_m: float = 80.0
-    track_window_m: float = 5.0
-    track_search_xy: float = 0.3
-    track_search_yaw_deg: float = 6.0
-    # One hypothesis outranks another by the path's scans (``track_outranks``) when it fits some
-    # window at least ``track_lead`` better, no window more than ``track_slack`` worse, and none of
-    # its own windows below ``min_track_fit``.
-    track_lead: float = 0.2
-    track_slack: float = 0.05
-    min_track_fit: float = 0.65
-    # ... a lead of track_lead_trailing is enough over a place that needs outrank_outliers more
-    # outliers (two weaker pieces of evidence, the doors and the lidar, that agree); and no
-    # comparison on fewer than min_track_windows windows (the path of the first few metres is no
-    # path: a wrong place outranked the right one on a single window at the initial look).
-    track_lead_trailing: float = 0.1
-    min_track_windows: int = 3
-    # The place to be outranked may be the true one found imprecisely (doors built off their place):
-    # before it is, its newest window is searched this far (about rival_distance / rival_turn_deg) and
-    # its path fitted from there; it is outranked only if it still trails.
-    track_rival_xy: float = 2.0
-    track_rival_yaw_deg: float = 30.0
-    enabled: bool = True
-
-
-@dataclass(frozen=True)
 class CameraView:
-    """What the camera can see: intrinsics, mount, the detector's minimum depth."""
+    """What the camera can see: intrinsics, mount, and the depth below which detections are not
+    used (the detection filter's ``min_depth``)."""
 
     camera: CameraIntrinsics
     mount: CameraMount
-    min_depth: float = 0.5  # m
+    min_depth: float  # m
 
 
 @dataclass(frozen=True)

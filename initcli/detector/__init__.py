@@ -22,6 +22,10 @@ from __future__ import annotations
 from pathlib import Path
 
 CLASS_NAMES: tuple[str, ...] = ("door", "lift", "stairs")
+# The detector's own score threshold: boxes the network scores lower are dropped where it runs (the
+# ONNX runtime, bag2log, the reported precision and recall). The detection filter of the match
+# (``detector.score_threshold`` / ``--score-threshold``, 0.5) filters the logged boxes again.
+DETECTOR_CONFIDENCE = 0.25
 MODELS_DIR = Path(__file__).resolve().parent / "models"
 DEFAULT_MODEL = MODELS_DIR / "default.onnx"
 

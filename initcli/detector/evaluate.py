@@ -15,6 +15,7 @@ import numpy as np
 
 from bimkit.errors import InputError
 from initcli.core.classes import ClassMap
+from initcli.detector import DETECTOR_CONFIDENCE
 from initcli.detector.datasets import load_dataset
 from initcli.detector.metrics import MetricAccumulator, Metrics
 from initcli.detector.runtime import Detector
@@ -38,7 +39,7 @@ def evaluate_model(
     model: str | Path,
     data: Path,
     split: str = "val",
-    conf: float = 0.25,
+    conf: float = DETECTOR_CONFIDENCE,
     iou: float = 0.5,
     max_images: int = 0,
     threads: int = 2,

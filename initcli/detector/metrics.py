@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from initcli.detector import DETECTOR_CONFIDENCE
 from initcli.detector.layouts import iou_matrix
 
 
@@ -120,7 +121,7 @@ class MetricAccumulator:
                 self.tp[c].append(hit)
                 self.scores[c].append(float(ps[k]))
 
-    def compute(self, names: list[str], conf: float = 0.25) -> Metrics:
+    def compute(self, names: list[str], conf: float = DETECTOR_CONFIDENCE) -> Metrics:
         out = []
         aps = []
         for c in range(self.nc):

@@ -19,7 +19,7 @@ import numpy as np
 import onnxruntime as ort
 
 from bimkit.errors import InputError
-from initcli.detector import DEFAULT_MODEL, resolve_model_path
+from initcli.detector import DEFAULT_MODEL, DETECTOR_CONFIDENCE, resolve_model_path
 from initcli.detector.layouts import LayoutError, decode, infer_layout, nms
 from initcli.detector.preprocess import PAD_VALUE, Letterbox, letterbox
 
@@ -115,7 +115,7 @@ class Detector:
     def __init__(
         self,
         model: str | Path = "default",
-        conf: float = 0.25,
+        conf: float = DETECTOR_CONFIDENCE,
         iou: float = 0.5,
         max_det: int = 100,
         threads: int = 2,

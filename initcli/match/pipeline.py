@@ -20,13 +20,12 @@ from pathlib import Path
 
 import numpy as np
 
-from bimkit.checks import check_number, read_yaml
+from bimkit.checks import read_yaml
 from bimkit.errors import InputError
 from bimtools.site.load import Site, StoreyModel, load_site
 from initcli.core.classes import ClassMap
 from initcli.core.detection_filter import (
     ConfirmedFeature,
-    FilterParams,
     GivenFeature,
     Sighting,
     filter_detections,
@@ -43,9 +42,10 @@ from initcli.core.hypotheses import (
     verdict_text,
 )
 from initcli.core.matching import OUTLIER, BimIndex, Matcher, MatchOverflow, MatchParams
-from initcli.core.pose import POSE_METHODS, estimate_pose, rigid_align_batch
+from initcli.core.pose import estimate_pose, rigid_align_batch
 from initcli.core.rectify import WallArray, rectify_pose
 from initcli.io.detection_log import DetectionLog, read_log
+from initcli.match.options import MatchOptions
 from initcli.match.sightings import sightings_from_log
 
 EXIT_UNIQUE = 0
@@ -53,118 +53,7 @@ EXIT_BAD_INPUT = 2
 EXIT_AMBIGUOUS = 3
 EXIT_NO_MATCH = 4
 
-# Measured on noisy synthetic logs over the three sample models (benchmarks/bench_match.py, "pose
-# accuracy", 43 unique correct matches): rigid 0.062 m / 0.84 deg mean error, paper (Eq. 10-13)
-# 0.115 m / 2.20 deg. The paper's method uses only the last three features and wins slightly in
-# position where odometry drift dominates (ntu_hallway: 0.075 vs 0.093 m), never in heading.
-DEFAULT_POSE_METHOD = "rigid"
 ESCALATED_PARTIALS = 2_000_000  # partial-match cap once the outlier budget grows (memory, time)
-
-
-OPTION_RANGES: dict[str, dict[str, float]] = {
-    "alpha": {"maximum": 50.0},  # m
-    "beta": {"maximum": 180.0},  # degrees
-    "top": {"maximum": 10000},
-    "max_outliers": {"maximum": 10},  # the search grows combinatorially
-    "outlier_share": {"minimum": 0.0, "maximum": 0.5},
-    "pose_window": {"maximum": 10000},
-    "drift_window": {"maximum": 100000.0},  # m
-    "d_thre": {"maximum": 10.0},  # m
-    "pose_radius": {"maximum": 100.0},  # m
-    "merge_radius": {"maximum": 50.0},  # m
-    "min_sightings": {"maximum": 1000},
-    "score_threshold": {"minimum": 0.0, "maximum": 1.0},
-    "min_depth": {"maximum": 100.0},  # m
-    "max_depth": {"maximum": 100.0},  # m
-    "edge_margin": {"minimum": -10000.0, "maximum": 10000.0},  # px
-}
-
-
-@dataclass(frozen=True)
-class MatchOptions:
-    """Every tunable of ``bim-init match``, each with its one default.
-
-    The command's options (``initcli.cli.match``), the ``matching:`` section of the session config
-    (``initcli.config``) and the defaults written in ``schemas/site_config.schema.json`` all read
-    (or are tested against) these fields. Units are the user's: metres, degrees (``beta``), pixels.
-    """
-
-    storey: str | None = None  # None or "auto": every storey when the site has several
-    # m, Eq. 7. The paper uses 0.5; on sites as built (doors 0.3 m off their place, a 2 % odometry
-    # scale error) 0.8 initialised 49 of 60 construction starts against 44 at 0.5, with no wrong
-    # claim at either and 59 against 60 of 60 in the ideal world (eval, 20 starts per sample).
-    alpha: float = 0.8
-    beta: float = 15.0  # degrees, Eq. 9 (radians only inside initcli.core)
-    top: int = 5  # hypotheses shown
-    max_outliers: int = 1  # false/misclassified detections tolerated
-    # When no match tolerates max_outliers, the budget grows one outlier at a time up to this share
-    # of the confirmed features (the fewest outliers that explain the sequence win): on a site as
-    # built, extra doors, posters and shifted doors are a steady share of a long sequence, not a
-    # constant count. 0: the budget is max_outliers alone.
-    outlier_share: float = 0.34
-    revisits: bool = True  # a later detection may match an already matched BIM feature (came back)
-    min_inliers: int = 3  # matched features needed for a hypothesis (§3.3.4)
-    pose_method: str = DEFAULT_POSE_METHOD  # 'paper' (Eq. 10-13) or 'rigid'
-    pose_window: int = 4  # rigid: align the last N matched features (odometry drifts); 0: all
-    drift_window: float | None = None  # m: match only features confirmed in the last M m of travel
-    d_thre: float = 0.5  # m, wall clearance of Eq. 17
-    pose_radius: float = 1.0  # m, hypotheses closer than this (and within beta in yaw) are one
-    merge_radius: float = 1.0  # m, detection filter
-    min_sightings: int = 3  # k, detection filter
-    score_threshold: float = 0.5  # detection filter
-    min_depth: float = 0.1  # m, detection filter: depth window readings outside [min, max] are ignored
-    max_depth: float = 10.0  # m, detection filter
-    edge_margin: float = 2.0  # px, detection filter: boxes cut by the left/right border are dropped
-    skip_bad: bool = False
-
-    def outlier_budget(self, features: int) -> int:
-        """The most outliers a match of ``features`` confirmed features may declare: max_outliers,
-        grown to outlier_share of them."""
-        return max(self.max_outliers, int(self.outlier_share * features))
-
-    def match_params(self) -> MatchParams:
-        return MatchParams(
-            alpha=self.alpha,
-            beta=math.radians(self.beta),
-            max_outliers=self.max_outliers,
-            min_inliers=self.min_inliers,
-            revisits=self.revisits,
-        )
-
-    def filter_params(self) -> FilterParams:
-        return FilterParams(
-            merge_radius=self.merge_radius,
-            min_sightings=self.min_sightings,
-            score_threshold=self.score_threshold,
-            min_depth=self.min_depth,
-            max_depth=self.max_depth,
-            edge_margin=self.edge_margin,
-        )
-
-    def validate(self) -> None:
-        """Every option finite and within its range (the same ranges as the ``matching:`` section of
-        ``schemas/site_config.schema.json``); else one :class:`InputError` naming the option."""
-        for name, bounds in OPTION_RANGES.items():
-            value = getattr(self, name)
-            if value is not None:
-                check_number(value, f"--{name.replace('_', '-')}", **bounds)
-        checks = [
-            (self.alpha > 0, "--alpha must be > 0"),
-            (0 < self.beta <= 180, "--beta must be in (0, 180] degrees"),
-            (self.top >= 1, "--top must be >= 1"),
-            (self.drift_window is None or self.drift_window > 0, "--drift-window must be > 0"),
-            (self.max_outliers >= 0, "--max-outliers must be >= 0"),
-            (self.min_inliers >= 2, "min_inliers must be >= 2"),
-            (self.pose_method in POSE_METHODS, f"--pose-method must be one of {', '.join(POSE_METHODS)}"),
-            (self.pose_window >= 0, "--pose-window must be >= 0"),
-            (self.d_thre >= 0, "--d-thre must be >= 0"),
-            (self.merge_radius > 0, "--merge-radius must be > 0"),
-            (self.min_sightings >= 1, "--min-sightings must be >= 1"),
-            (0 <= self.min_depth < self.max_depth, "--min-depth must be >= 0 and below --max-depth"),
-        ]
-        for ok, message in checks:
-            if not ok:
-                raise InputError(message)
 
 
 @dataclass

@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
+from initcli.detector import DETECTOR_CONFIDENCE
+
 # Message types, ROS 2 spelling (rosbags names ROS 1 types the same way).
 IMAGE = "sensor_msgs/msg/Image"
 COMPRESSED_IMAGE = "sensor_msgs/msg/CompressedImage"
@@ -83,7 +85,7 @@ class Bag2LogOptions:
     rate: float | None = None  # Hz: images used at most this often; None: every image
     class_names: tuple[str, ...] | dict[str, str] | None = None  # numeric class ids -> names
     depth_window: int = 2  # n: (2n+1)^2 window of Eq. 1
-    score_threshold: float = 0.25  # detector confidence kept in the log (match filters again)
+    score_threshold: float = DETECTOR_CONFIDENCE  # the detector's confidence (the match filters again)
     threads: int = 2
 
 

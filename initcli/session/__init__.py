@@ -6,6 +6,11 @@ One module per job:
   coarse, fine, done) that drives the robot;
 - :mod:`~initcli.session.perception` -- the detection log it writes, the sightings (Eq. 1-2) and
   confirmed features (Eq. 3), and the match step (Algorithm 1) on the log so far;
+- :mod:`~initcli.session.claims` -- the checks a unique match passes before it is claimed (its
+  rivals, negative evidence, the lidar), and the final pose's;
+- :mod:`~initcli.session.escapes` -- out of loops and shuttling, and across open floors;
+- :mod:`~initcli.session.looks` -- turning in place: the initial look, looks on open floors, the
+  recovery rotation;
 - :mod:`~initcli.session.exploration` -- active exploration toward the features that tell the
   hypotheses apart (Eq. 15-16);
 - :mod:`~initcli.session.fine_tuning` -- the particle filter seeded at the rectified pose (Eq. 18);

@@ -26,19 +26,6 @@ from initcli.core.wall_following import ScanView, WallFollowParams
 from initcli.drivers.base import SensorFrame
 from initcli.match.pipeline import Hypothesis
 
-VIEW_DISTANCE = 1.8  # m in front of a target feature where active exploration goes to look at it
-ACTIVE_TOP = 5  # hypotheses (most probable first) whose targets active exploration validates
-DISCRIMINATION_RADIUS = 1.5  # m: another hypothesis predicting a same-category feature this close agrees
-VISITED_RADIUS = 2.0  # m: an active-exploration target this close to a visited one is skipped
-PLANNER_MARGIN = 0.1  # m of clearance added to the robot radius when planning routes
-STALL_S = 15.0  # s without getting closer to the route's next waypoint: the route is blocked
-PROGRESS_STEP = 0.5  # m closer to the waypoint that counts as progress
-WAYPOINT_COST = 2.0  # m added to the remaining distance for each waypoint still ahead
-TRAVEL_CAP_S = 120.0  # s of travel allowed toward one target on top of t_thre
-TRAVEL_SLACK = 1.5  # route length / max speed times this: the time allowed to get to a target
-LOOK_S = 2.0  # s spent at a reached target looking for its feature
-MAX_FRUITLESS = 3  # active-exploration targets in a row without a new feature -> random exploration
-
 
 @dataclass(frozen=True)
 class Target:
@@ -48,6 +35,15 @@ class Target:
     hypothesis: Hypothesis
     route_m: float  # length of the route along the BIM's corridors
 
+    def record(self) -> dict[str, object]:
+        """What the session's ``active`` state record says about the target."""
+        return {
+            "target": [round(float(c), 3) for c in self.viewpoint],
+            "hypothesis": self.hypothesis.rank,
+            "route_m": round(self.route_m, 1),
+            "matches": self.hypothesis.matches,
+        }
+
 
 class ActiveExploration:
     """The hypotheses to validate, the targets visited, and the route being followed."""
@@ -55,6 +51,7 @@ class ActiveExploration:
     def __init__(self, config: SessionConfig, site: Site, follow: WallFollowParams) -> None:
         self.site = site
         self.follow = follow
+        self.settings = config.exploration.targets
         self.t_thre = config.exploration.t_thre  # s to find something at a target
         self.max_linear = config.robot.max_linear  # m/s
         self.robot_radius = config.robot.radius  # m
@@ -72,12 +69,12 @@ class ActiveExploration:
 
     @property
     def exhausted(self) -> bool:
-        """Have MAX_FRUITLESS targets in a row brought nothing new?"""
-        return self.fruitless >= MAX_FRUITLESS
+        """Have ``targets.max_fruitless`` targets in a row brought nothing new?"""
+        return self.fruitless >= self.settings.max_fruitless
 
     def validate(self, hypotheses: list[Hypothesis]) -> None:
         """Validate the most probable hypotheses first, then the next ones (§3.3.3)."""
-        self.plan = list(hypotheses[:ACTIVE_TOP])
+        self.plan = list(hypotheses[: self.settings.hypotheses])
         self.plan_all = list(hypotheses)
 
     def _planner(self, storey: str) -> PlanningGrid | None:
@@ -92,7 +89,9 @@ class ActiveExploration:
                 ]
                 grid = with_doors_closed(grid, np.array(doors).reshape(-1, 5))
             self._planners[storey] = (
-                PlanningGrid.of(grid, self.robot_radius + PLANNER_MARGIN) if grid is not None else None
+                PlanningGrid.of(grid, self.robot_radius + self.settings.planner_margin)
+                if grid is not None
+                else None
             )
         return self._planners[storey]
 
@@ -115,9 +114,10 @@ class ActiveExploration:
             for f in features:
                 if f.category != category or f.id in matched:
                     continue
-                view_bim = np.array([f.x + VIEW_DISTANCE * f.norm_x, f.y + VIEW_DISTANCE * f.norm_y])
+                d = self.settings.view_distance
+                view_bim = np.array([f.x + d * f.norm_x, f.y + d * f.norm_y])
                 view = hypothesis.transform.apply_inverse(view_bim)
-                if any(math.hypot(*(view - v)) <= VISITED_RADIUS for v in self.visited):
+                if any(math.hypot(*(view - v)) <= self.settings.visited_radius for v in self.visited):
                     continue
                 if not self._discriminates(hypothesis, f):
                     continue
@@ -146,7 +146,7 @@ class ActiveExploration:
                 g
                 for g in self.site.storeys[other.storey].features
                 if g.category == feature.category
-                and math.hypot(g.x - p[0], g.y - p[1]) < DISCRIMINATION_RADIUS
+                and math.hypot(g.x - p[0], g.y - p[1]) < self.settings.discrimination_radius
             ]
             if not same:
                 return True
@@ -174,7 +174,8 @@ class ActiveExploration:
         self.navigator = RouteNavigator(route, BugParams(follow=self.follow))
         # t_thre to find something, plus the time to get there (capped: under a wrong hypothesis the
         # route may run into walls).
-        self.target_budget = self.t_thre + min(TRAVEL_SLACK * length / self.max_linear, TRAVEL_CAP_S)
+        t = self.settings
+        self.target_budget = self.t_thre + min(t.travel_slack * length / self.max_linear, t.travel_cap)
         self.target_started = frame.t
         self.target_reached_t = None
         self.progress = (frame.t, math.inf)
@@ -194,7 +195,8 @@ class ActiveExploration:
     def give_up(self, frame: SensorFrame, last_feature_t: float) -> str | None:
         """Why the current target is given up (counted as fruitless), or None to keep going."""
         since = max(last_feature_t, self.target_started)
-        reached_and_looked = self.target_reached_t is not None and frame.t - self.target_reached_t > LOOK_S
+        reached = self.target_reached_t
+        reached_and_looked = reached is not None and frame.t - reached > self.settings.look
         stalled = self.target_reached_t is None and self._stalled(frame)
         if not (reached_and_looked or stalled or frame.t - since > self.target_budget):
             return None
@@ -206,15 +208,15 @@ class ActiveExploration:
         return "time budget passed"
 
     def _stalled(self, frame: SensorFrame) -> bool:
-        """No progress toward the route's current waypoint for STALL_S seconds."""
+        """No progress toward the route's current waypoint for ``targets.stall`` seconds."""
         assert self.navigator is not None
         if not self.navigator.waypoints:
             return False
-        remaining = math.hypot(*(self.navigator.waypoints[0] - frame.odom.xy)) + WAYPOINT_COST * len(
-            self.navigator.waypoints
-        )
+        remaining = math.hypot(
+            *(self.navigator.waypoints[0] - frame.odom.xy)
+        ) + self.settings.waypoint_cost * len(self.navigator.waypoints)
         since, best = self.progress
-        if remaining < best - PROGRESS_STEP:
+        if remaining < best - self.settings.progress_step:
             self.progress = (frame.t, remaining)
             return False
-        return frame.t - since > STALL_S
+        return frame.t - since > self.settings.stall

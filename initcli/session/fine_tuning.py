@@ -16,44 +16,36 @@ from typing import Literal
 import numpy as np
 
 from bimtools.site.records import Feature, OccupancyGrid
-from initcli.config import FineTuningSection
 from initcli.core.detection_filter import ConfirmedFeature
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.motion import motion_delta
 from initcli.core.particle_filter import FilterNoise, LaserModel, ParticleFilter, likelihood_field, scan_fit
 from initcli.core.wall_following import ScanView, WallFollowParams, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
-
-PF_UPDATE_D = 0.25  # m (AMCL update_min_d)
-PF_UPDATE_A = 0.2  # rad (AMCL update_min_a)
-LOST_LIKELIHOOD = 0.12  # per-beam likelihood (geometric mean, best particle) below which an update is lost
-LOST_UPDATES = 5  # lost updates in a row: the filter is lost
-MIN_TRAVEL_M = 1.0  # m followed before the covariance may count as converged
-LANDMARKS = 4  # matched features that weight the particle filter's seed
-LANDMARK_SIGMA = 0.3  # m: how far a matched feature may land from its BIM feature
-MIN_SCAN_FIT = 0.6  # fraction of beams on mapped walls at the final pose (0.76-0.99 when right)
-DRIFTED_M, DRIFTED_DEG = (
-    1.0,
-    20.0,
-)  # m, degrees: the filter moved this far from the carried rectified pose ...
-KEEP_RECTIFIED_MARGIN = (
-    0.1  # scan fit (fraction of beams) by which the carried rectified pose must beat the filter
-)
-RESEED_SIGMA_XY = 2.0  # m: the spread of a second try when the first settled on the wrong side
+from initcli.settings_session import FineTuningSection
 
 Settlement = Literal["keep rectified", "reseed", "lost", "accept"]
 
 
-def settle(estimate: Pose2D, fit: float, carried: Pose2D, carried_fit: float, reseeded: bool) -> Settlement:
+def settle(
+    estimate: Pose2D,
+    fit: float,
+    carried: Pose2D,
+    carried_fit: float,
+    reseeded: bool,
+    params: FineTuningSection,
+    min_scan_fit: float,
+) -> Settlement:
     """What to do once the filter settled at ``estimate`` (``fit``: its fraction of the scan on the
-    map), given the rectified pose ``carried`` along by odometry (``carried_fit``)."""
-    apart = estimate.distance_to(carried) > DRIFTED_M or abs(
+    map), given the rectified pose ``carried`` along by odometry (``carried_fit``); ``min_scan_fit``:
+    the fit a pose needs (``verification.min_fine_scan_fit``)."""
+    apart = estimate.distance_to(carried) > params.drifted_distance or abs(
         float(wrap_angle(estimate.yaw - carried.yaw))
-    ) > math.radians(DRIFTED_DEG)
-    if apart and carried_fit >= max(fit + KEEP_RECTIFIED_MARGIN, MIN_SCAN_FIT):
+    ) > math.radians(params.drifted_turn)
+    if apart and carried_fit >= max(fit + params.keep_rectified_margin, min_scan_fit):
         # A filter that drifted off a good coarse result fits the scan worse than the carried pose.
         return "keep rectified"
-    if fit < MIN_SCAN_FIT:
+    if fit < min_scan_fit:
         # The cloud settled where only the beams it kept agree (the far side of a wall, say).
         return "lost" if reseeded else "reseed"
     return "accept"
@@ -101,17 +93,20 @@ def matched_pairs(
 
 
 class FineTuning:
-    """Eq. 18 on one storey's occupancy grid, wall following on ``side`` meanwhile."""
+    """Eq. 18 on one storey's occupancy grid, wall following on ``side`` meanwhile; a pose needs
+    ``min_scan_fit`` of the scan on the map (``verification.min_fine_scan_fit``)."""
 
     def __init__(
         self,
         params: FineTuningSection,
+        min_scan_fit: float,
         grid: OccupancyGrid,
         rng: np.random.Generator,
         side: int,
         follow: WallFollowParams,
     ) -> None:
         self.params = params
+        self.min_scan_fit = min_scan_fit
         self.grid = grid
         self.rng = rng
         self.side = side
@@ -132,7 +127,8 @@ class FineTuning:
         pf = ParticleFilter(likelihood_field(self.grid), cfg.particles, FilterNoise(), LaserModel(), self.rng)
         pf.seed(seed, cfg.seed_sigma_xy, math.radians(cfg.seed_sigma_yaw))
         odom_xy, bim_xy = landmarks
-        pf.weight_by_landmarks(frame.odom, odom_xy[-LANDMARKS:], bim_xy[-LANDMARKS:], LANDMARK_SIGMA)
+        k = cfg.landmarks
+        pf.weight_by_landmarks(frame.odom, odom_xy[-k:], bim_xy[-k:], cfg.landmark_sigma)
         start_distance = driver.distance
         reseeded = False
         last_update = frame.odom
@@ -153,23 +149,23 @@ class FineTuning:
             if scan is None:
                 continue  # nothing to update the filter with; its motion update waits for a scan
             moved = motion_delta(last_update, frame.odom)
-            if abs(moved[1]) < PF_UPDATE_D and abs(moved[0] + moved[2]) < PF_UPDATE_A:
+            if abs(moved[1]) < cfg.update_min_d and abs(moved[0] + moved[2]) < cfg.update_min_a:
                 continue
             pf.predict(moved)
             last_update = frame.odom
             pf.update(scan.angles, scan.ranges, scan.range_max)
-            lost = lost + 1 if pf.last_likelihood < LOST_LIKELIHOOD else 0
+            lost = lost + 1 if pf.last_likelihood < cfg.lost_likelihood else 0
             estimate = pf.estimate()
             cov = estimate.covariance
             hooks.emit(frame, {"covariance": float(max(cov[0, 0], cov[1, 1]))})
-            if lost >= LOST_UPDATES:
+            if lost >= cfg.lost_updates:
                 return FineLost(frame, "lost during fine tuning (laser scans do not fit the map)")
             travelled = driver.distance - start_distance
             if (
                 cov[0, 0] < cfg.covariance
                 and cov[1, 1] < cfg.covariance
                 and cov[2, 2] < cfg.yaw_covariance
-                and travelled >= MIN_TRAVEL_M
+                and travelled >= cfg.min_travel
             ):
                 converged_at = frame.t
             if converged_at is None and travelled < cfg.distance:
@@ -177,7 +173,7 @@ class FineTuning:
             fit = scan_fit(estimate.pose, scan.angles, scan.ranges, scan.range_max, pf.field)
             carried = transform * frame.odom
             carried_fit = scan_fit(carried, scan.angles, scan.ranges, scan.range_max, pf.field)
-            verdict = settle(estimate.pose, fit, carried, carried_fit, reseeded)
+            verdict = settle(estimate.pose, fit, carried, carried_fit, reseeded, cfg, self.min_scan_fit)
             if verdict == "keep rectified":
                 hooks.note(
                     frame.t, f"filter drifted (scan fit {fit:.0%}); rectified pose kept ({carried_fit:.0%})"
@@ -189,7 +185,7 @@ class FineTuning:
                 # Spread the cloud wider around the estimate and track again.
                 reseeded = True
                 hooks.note(frame.t, f"scan fit {fit:.0%}, reseeded")
-                pf.seed(estimate.pose, RESEED_SIGMA_XY, math.radians(cfg.seed_sigma_yaw))
+                pf.seed(estimate.pose, cfg.reseed_sigma_xy, math.radians(cfg.seed_sigma_yaw))
                 start_distance, converged_at = driver.distance, None
                 continue
             return FineTuned(frame, estimate.pose, cov, converged=converged_at is not None)

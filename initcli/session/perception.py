@@ -33,7 +33,6 @@ from initcli.match.pipeline import Hypothesis, MatchOptions, MatchReport, match_
 from initcli.match.sightings import image_sightings
 from initcli.match.verify import PathEvidence
 
-SCAN_LOG_EVERY = 5  # control steps between logged scans (2 Hz at 10 Hz control)
 HYPOTHESES_LOGGED = 5  # hypotheses (most probable first) written with each match step
 
 
@@ -42,12 +41,19 @@ class Perception:
     sightings and confirmed features of the images recorded while ``detecting``."""
 
     def __init__(
-        self, meta: Meta, log_path: Path | None, cmap: ClassMap, options: MatchOptions, drift_window: float
+        self,
+        meta: Meta,
+        log_path: Path | None,
+        cmap: ClassMap,
+        options: MatchOptions,
+        drift_window: float,
+        scan_every: int,
     ) -> None:
         self.meta = meta
         self.cmap = cmap
         self.options = options
         self.drift_window = drift_window  # m of recent path matched when the whole path fits nothing
+        self.scan_every = scan_every  # control steps between logged scans (lidar.log_every)
         self.log = DetectionLog(path=log_path or Path("session.jsonl"), meta=meta, records=[], lines=[])
         self._writer = LogWriter(log_path) if log_path else None
         self.write(meta, keep=False)
@@ -111,7 +117,7 @@ class Perception:
             self._writer = None
 
     def record_frame(self, frame: SensorFrame, step: int) -> None:
-        """Log one control period: odometry, truth, every SCAN_LOG_EVERY-th scan, the image's detections."""
+        """Log one control period: odometry, truth, every ``scan_every``-th scan, the image's detections."""
         t = round(frame.t, 3)
         if self._last_odom is not None:
             self.travel += self._last_odom.distance_to(frame.odom)
@@ -119,7 +125,7 @@ class Perception:
         self.write(Odom(t, frame.odom.x, frame.odom.y, frame.odom.yaw))
         if frame.truth is not None:
             self.write(Truth(t, frame.truth.x, frame.truth.y, frame.truth.yaw))
-        if frame.scan is not None and step % SCAN_LOG_EVERY == 0:
+        if frame.scan is not None and step % self.scan_every == 0:
             s = frame.scan
             ranges = tuple(np.round(np.asarray(s.ranges, dtype=float), 3).tolist())
             self.write(Scan(t, s.angle_min, s.angle_increment, s.range_max, ranges), keep=False)

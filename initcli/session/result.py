@@ -3,13 +3,17 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from initcli.core.detection_filter import ConfirmedFeature
 from initcli.core.geometry import Pose2D, wrap_angle
+
+if TYPE_CHECKING:
+    from initcli.match.pipeline import Hypothesis
 
 
 @dataclass
@@ -67,6 +71,69 @@ class SessionResult:
     # The first coarse claim: where the coarse-only method ends (the fields above describe the
     # last claim, which differs after a failed fine stage and a second claim).
     first_claim: CoarseClaim | None = None
+
+    def claimed(
+        self,
+        best: Hypothesis,
+        truth: Pose2D | None,
+        distance_m: float,
+        wall_seconds: float,
+        features: Sequence[ConfirmedFeature],
+    ) -> None:
+        """A coarse claim of hypothesis ``best`` (its rectified pose, Eq. 17) after ``distance_m`` of
+        driving and ``wall_seconds``; ``features``: the ones matched (a drift window may leave old
+        ones out)."""
+        self.storey = best.storey
+        self.coarse_pose = best.pose
+        self.rectified_pose = best.reported_pose
+        self.truth_at_coarse = truth
+        self.distance_coarse_m = round(distance_m, 3)
+        self.wall_seconds_coarse = wall_seconds
+        if self.first_claim is None:
+            self.first_claim = CoarseClaim(best.reported_pose, truth, self.distance_coarse_m, wall_seconds)
+        self.matched_ids = list(best.matches)
+        self.features = list(features)
+
+    def initialised(
+        self,
+        pose: Pose2D,
+        covariance: np.ndarray | None,
+        odom: Pose2D,
+        truth: Pose2D | None,
+        t: float,
+        distance_m: float,
+    ) -> None:
+        """The session ends initialised at ``pose`` (``covariance`` None: no fine tuning), the robot
+        at ``odom`` in its odometry frame, at time ``t`` after ``distance_m`` of driving."""
+        self.success = True
+        if covariance is None:
+            self.reason = "initialised (no fine tuning)"
+        elif self.fine_converged:
+            self.reason = "initialised"
+        else:
+            self.reason = (
+                "initialised (fine tuning stopped at its distance limit above the covariance threshold)"
+            )
+        self.pose, self.covariance = pose, covariance
+        self.transform = pose * odom.inverse()
+        self.truth_pose = truth
+        self.distance_total_m = round(distance_m, 3)
+        self.duration_s = round(t, 2)
+
+    def failed(
+        self,
+        reason: str,
+        truth: Pose2D | None,
+        t: float,
+        distance_m: float,
+        features: Sequence[ConfirmedFeature],
+    ) -> None:
+        """The session ends without a pose, for ``reason``, at time ``t`` after ``distance_m``."""
+        self.success, self.reason = False, reason
+        self.distance_total_m = distance_m
+        self.duration_s = t
+        self.truth_pose = truth
+        self.features = list(features)
 
     def errors(self) -> tuple[dict[str, float | None], dict[str, float | None]]:
         """Translational (m) and rotational (deg) errors of the coarse, rectified and fine poses."""

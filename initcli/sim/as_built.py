@@ -40,6 +40,7 @@ import numpy as np
 
 from bimtools.site.records import UNKNOWN, Feature, Obstacle
 from initcli.core.raycast import ray_segment_distances
+from initcli.settings_sim import AsBuiltParams
 from initcli.sim.scenario import Circulation
 from initcli.sim.synthetic_log import SimFeature
 from initcli.sim.world import polygon_edges
@@ -50,21 +51,6 @@ LEAF_THICKNESS = 0.04  # m: a closed door leaf
 LEAF_CLASS = "DoorLeaf"
 HOARDING_CLASS = "Hoarding"
 DOOR_CLASSES = ("door",)  # canonical feature classes that can be missing, shifted or open
-
-
-@dataclass(frozen=True)
-class AsBuiltParams:
-    """How the site deviates from its design model (see the module docstring for units)."""
-
-    missing_doors: float = 0.0
-    door_shift: float = 0.0
-    wall_offset: float = 0.0
-    open_doors: float = 0.0
-    hoarding: float = 0.0
-    extra_doors: float = 0.0
-    clutter_in_corridor: float = 0.0
-    persistent_phantoms: float = 0.0
-    never_seen: float = 0.0
 
 
 @dataclass

@@ -128,9 +128,18 @@ def build_sim(
     if not detect_features:
         detector = _no_detections
     elif config.detector.kind == "onnx":
-        from initcli.sim.onnx_camera import OnnxCamera
+        from initcli.sim.onnx_camera import OnnxCamera, OnnxCameraSpec
 
-        detector = OnnxCamera(config, model, world, camera, mount, rng).detect
+        onnx = OnnxCameraSpec(
+            config.detector.model,
+            config.detector.score_threshold,
+            config.camera.depth_window,
+            config.camera.depth_noise,
+            config.camera.min_range,
+            config.camera.range,
+            config.detector.classes,
+        )
+        detector = OnnxCamera(onnx, model, world, camera, mount, rng).detect
     else:
         detector = SimulatedDetector(
             features + phantoms, camera, mount, noise, config.detector.rate, world, rng

@@ -1,25 +1,46 @@
 """``detector: {kind: onnx}``: the simulated camera renders the view at the robot's true pose and a
 real network (ONNX, the shipped default or the user's) detects doors, lifts and stairs in it; the
 rendered depth (with D455-like noise) gives the depth of Eq. 1. The whole sensor-to-pose loop with
-a network in it."""
+a network in it.
+
+It takes the settings it needs (the ``detector:`` and ``camera:`` sections') as values: the simulator
+does not import the session config."""
 
 from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from bimkit.errors import InputError
 from bimtools.site.load import StoreyModel
-from initcli.config import SessionConfig
 from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.io.detection_log import DetectedObject
 from initcli.sim.world import SimWorld
 
 
+@dataclass(frozen=True)
+class OnnxCameraSpec:
+    """The network and the rendered depth camera: ``detector.model``, ``detector.score_threshold``
+    (the network's confidence here), ``detector.classes``, ``camera.depth_window``,
+    ``camera.depth_noise`` and the depth camera's range ``[camera.min_range, camera.range]``."""
+
+    model: str | Path
+    score_threshold: float
+    depth_window: int
+    depth_noise: float
+    min_range: float  # m
+    max_range: float  # m
+    classes: Mapping[str, str] = field(default_factory=dict)
+
+
 class OnnxCamera:
     def __init__(
         self,
-        config: SessionConfig,
+        spec: OnnxCameraSpec,
         storey: StoreyModel,
         world: SimWorld,
         camera: CameraIntrinsics,
@@ -36,13 +57,13 @@ class OnnxCamera:
                 storey,
                 camera,
                 mount,
-                model=config.detector.model,
-                score_threshold=config.detector.score_threshold,
-                window=int(config.camera.depth_window),
-                depth_noise=config.camera.depth_noise,
-                min_depth=0.3,
-                max_depth=config.camera.range,
-                class_map=config.detector.classes,
+                model=spec.model,
+                score_threshold=spec.score_threshold,
+                window=int(spec.depth_window),
+                depth_noise=spec.depth_noise,
+                min_depth=spec.min_range,
+                max_depth=spec.max_range,
+                class_map=spec.classes,
                 rng=rng,
             )
         except InputError as exc:

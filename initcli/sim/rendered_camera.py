@@ -19,6 +19,7 @@ import numpy as np
 from bimtools.site.load import StoreyModel
 from initcli.core.depth import window_depth
 from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.detector import DETECTOR_CONFIDENCE
 from initcli.detector.runtime import Detection, Detector
 from initcli.detector.synth.look import Look
 from initcli.detector.synth.render import View, render_view
@@ -65,14 +66,10 @@ def to_detected_objects(objects: Sequence[dict]) -> list[DetectedObject]:
 
 
 def d455_depth(
-    depth: np.ndarray,
-    rng: np.random.Generator,
-    noise_quad: float = 0.005,
-    min_depth: float = 0.6,
-    max_depth: float = 6.0,
+    depth: np.ndarray, rng: np.random.Generator, noise_quad: float, min_depth: float, max_depth: float
 ) -> np.ndarray:
-    """A depth-camera reading of a true depth image: sigma = noise_quad * d^2 (D455: ~2 % at 4 m),
-    0 (no return) outside [min_depth, max_depth]."""
+    """A depth-camera reading of a true depth image: sigma = noise_quad * d^2 (``camera.depth_noise``;
+    D455: ~2 % at 4 m), 0 (no return) outside the camera's range [min_depth, max_depth] m."""
     d = depth.astype(np.float32)
     noisy = d + rng.normal(0.0, 1.0, d.shape).astype(np.float32) * (noise_quad * d * d)
     return np.where((d >= min_depth) & (d <= max_depth), noisy, 0.0).astype(np.float32)
@@ -108,7 +105,9 @@ class RenderedCamera:
     The camera is ``mount`` on the robot (its height ``mount.z`` above the floor; pitch and roll
     are taken as 0); the view is rendered with :func:`render_view`, passed to the ONNX
     :class:`Detector` and converted with :func:`detections_to_objects` (the rendered depth,
-    optionally with D455 noise and range limits when ``rng`` is given).
+    optionally with D455 noise when ``rng`` is given). ``min_depth`` and ``max_depth`` are the depth
+    camera's range (``camera.min_range`` and ``camera.range`` in a session); the defaults, 0 and
+    infinity, are a camera without limits.
     """
 
     def __init__(
@@ -142,7 +141,7 @@ class RenderedCamera:
         intrinsics: CameraIntrinsics,
         mount: CameraMount,
         model: str | Path = "default",
-        score_threshold: float = 0.5,
+        score_threshold: float = DETECTOR_CONFIDENCE,
         threads: int = 2,
         **kwargs: object,
     ) -> RenderedCamera:

@@ -24,20 +24,24 @@ from initcli.core.verification import VerificationParams
 from initcli.match.pipeline import MatchOptions
 
 AMBIGUOUS = 1 << 30  # the count given to a pattern that overflowed the matcher
+_MATCH = MatchOptions()  # the matching settings' one default each
+_CHECKS = VerificationParams()
 
 
 @dataclass(frozen=True)
 class UniquenessParams:
-    alpha: float = MatchOptions.alpha  # m, Eq. 7
-    beta_deg: float = 15.0  # degrees, Eq. 9 (and the yaw tolerance of rule 3)
-    max_outliers: int = 1
-    min_inliers: int = 3
-    revisits: bool = True
-    pose_radius: float = 1.0  # m, rule 3
-    max_partials: int = 2_000_000
+    """The matching of ``bim-init match`` (its settings, defaults from :class:`MatchOptions`)."""
+
+    alpha: float = _MATCH.alpha  # m, Eq. 7
+    beta_deg: float = _MATCH.beta  # degrees, Eq. 9 (and the yaw tolerance of rule 3)
+    max_outliers: int = _MATCH.max_outliers
+    min_inliers: int = _MATCH.min_inliers
+    revisits: bool = _MATCH.revisits
+    pose_radius: float = _MATCH.pose_radius  # m, rule 3
+    max_partials: int = 2_000_000  # the survey's own cap on partial matches (memory, time)
     # matched features a unique match needs before the session claims it (its verification's
     # min_claim_inliers): the survey predicts the session, so it waits as long
-    min_claim: int = VerificationParams().min_claim_inliers
+    min_claim: int = _CHECKS.min_claim_inliers
 
     def match_params(self) -> MatchParams:
         return MatchParams(

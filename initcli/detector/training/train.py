@@ -24,6 +24,7 @@ from torch.utils.data import DataLoader, WeightedRandomSampler
 from torch.utils.data import Dataset as TorchDataset
 
 from bimkit.errors import InputError
+from initcli.detector import DETECTOR_CONFIDENCE
 from initcli.detector.datasets import Dataset, DatasetItem, load_dataset
 from initcli.detector.layouts import decode, nms
 from initcli.detector.metrics import MetricAccumulator, Metrics
@@ -56,7 +57,7 @@ class TrainOptions:
     device: str = "auto"
     seed: int = 0
     val_max: int = 500  # validate on at most this many images per epoch
-    conf: float = 0.25  # precision / recall are reported at this score
+    conf: float = DETECTOR_CONFIDENCE  # precision / recall are reported at this score
     scale: tuple[float, float] = (0.6, 1.4)
     flip: float = 0.5
     hsv: tuple[float, float, float] = (0.015, 0.6, 0.35)
@@ -219,7 +220,7 @@ def evaluate(
     names: list[str],
     imgsz: int,
     device: torch.device,
-    conf: float = 0.25,
+    conf: float = DETECTOR_CONFIDENCE,
     batch: int = 16,
 ) -> Metrics:
     """Precision / recall (at ``conf``) and AP@0.5 per class, through the exported graph's decoding."""

@@ -28,7 +28,9 @@ from initcli.core.verification import (
     verify_hypothesis,
 )
 
-VIEW = CameraView(CameraIntrinsics(600.0, 600.0, 320.0, 240.0, 640, 480), CameraMount(0.2, 0.0, 1.0, 0, 0, 0))
+VIEW = CameraView(
+    CameraIntrinsics(600.0, 600.0, 320.0, 240.0, 640, 480), CameraMount(0.2, 0.0, 1.0, 0, 0, 0), min_depth=0.5
+)
 # A corridor 2 m wide along +x (y in [0, 2]); doors on the north wall (y = 2) every 4 m, facing -y.
 DOORS_X = np.arange(2.0, 40.0, 4.0)
 DOOR_XY = np.column_stack([DOORS_X, np.full(len(DOORS_X), 2.0)])

@@ -13,7 +13,10 @@ from initcli.drivers.base import LaserScan, SensorFrame
 from initcli.io.detection_log import DetectedObject, Detections, Meta, Scan, read_log
 from initcli.match.pipeline import MatchOptions
 from initcli.match.sightings import image_sightings, sightings_from_log
-from initcli.session.perception import SCAN_LOG_EVERY, Perception
+from initcli.session.perception import Perception
+from initcli.settings_session import LidarSection
+
+SCAN_LOG_EVERY = LidarSection().log_every
 
 CAMERA = CameraIntrinsics(320.0, 320.0, 320.0, 240.0, 640, 480)
 MOUNT = CameraMount(x=0.2, z=1.0)
@@ -43,7 +46,7 @@ def test_the_logged_session_replays_to_the_same_sightings(tmp_path):
     options = MatchOptions(storey=None)
     meta = Meta(camera=CAMERA, camera_pose=MOUNT, depth_window=2, source="test")
     path = tmp_path / "session.jsonl"
-    perception = Perception(meta, path, ClassMap({}), options, drift_window=0.0)
+    perception = Perception(meta, path, ClassMap({}), options, drift_window=0.0, scan_every=SCAN_LOG_EVERY)
     for step, frame in enumerate(frames()):
         perception.record_frame(frame, step)
     perception.close()

@@ -89,26 +89,11 @@ def test_the_path_keeps_a_scan_every_half_metre_for_its_last_hundred_metres() ->
 
 def _corridor_storey() -> StoreyEvidence:
     """A closed corridor 1.6 m wide and 40 m long (x in [0, 40], y in [0, 1.6]); outside is unknown."""
-    from bimtools.site.records import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
     from initcli.core.particle_filter import LikelihoodField
     from initcli.core.verification import FreeSpace
+    from tests.helpers import rooms_map
 
-    res, x0, y0 = 0.05, -2.0, -2.0
-    cells = np.full((int(5.6 / res), int(44.0 / res)), UNKNOWN, dtype=np.uint8)
-    rows = cells.shape[0]
-
-    def row(y: float) -> int:
-        return rows - 1 - int((y - y0) / res)
-
-    def col(x: float) -> int:
-        return int((x - x0) / res)
-
-    cells[row(1.6) : row(0.0) + 1, col(0.0) : col(40.0) + 1] = FREE
-    cells[row(0.0), col(0.0) : col(40.0) + 1] = OCCUPIED
-    cells[row(1.6), col(0.0) : col(40.0) + 1] = OCCUPIED
-    cells[row(1.6) : row(0.0) + 1, col(0.0)] = OCCUPIED
-    cells[row(1.6) : row(0.0) + 1, col(40.0)] = OCCUPIED
-    grid = OccupancyGrid(cells, res, (x0, y0, 0.0))
+    grid = rooms_map([(0.0, 0.0, 40.0, 1.6)], 44.0, 5.6)
     empty = np.zeros((0, 2))
     return StoreyEvidence(
         [], empty, empty, np.zeros(0), [], np.zeros((0, 4)), LikelihoodField(grid), FreeSpace(grid, 0.3)
@@ -141,7 +126,7 @@ def test_a_long_wall_drive_with_odometry_drift_stays_in_free_space_placed_window
         evidence.add_scan(odom, travel, angles, np.where(ranges < 12.0, ranges, np.inf), 12.0)
         evidence.add_image(odom, travel)
     right = Pose2D(38.75, 0.8, 0.0) * odom.inverse()
-    view = CameraView(CAMERA, CameraMount(0.2, 0.0, 1.0, 0.0, 0.0, 0.0))
+    view = CameraView(CAMERA, CameraMount(0.2, 0.0, 1.0, 0.0, 0.0, 0.0), min_depth=0.5)
     params = VerificationParams()
     check = verify_transform(right, storey, evidence, [], view, params)
     assert check.passed, check.reasons

@@ -16,8 +16,17 @@ from initcli.core.geometry import Pose2D
 from initcli.core.wall_following import WallFollowParams
 from initcli.drivers.base import SensorFrame
 from initcli.match.pipeline import Hypothesis
-from initcli.session.exploration import LOOK_S, MAX_FRUITLESS, STALL_S, VIEW_DISTANCE, ActiveExploration
+from initcli.session.exploration import ActiveExploration
+from initcli.settings_session import TargetSettings
 from tests.helpers import SAMPLES
+
+TARGETS = TargetSettings()  # exploration.targets' defaults
+VIEW_DISTANCE, STALL_S, LOOK_S, MAX_FRUITLESS = (
+    TARGETS.view_distance,
+    TARGETS.stall,
+    TARGETS.look,
+    TARGETS.max_fruitless,
+)
 
 
 def _site() -> Site:

@@ -9,18 +9,21 @@ import numpy as np
 from bimtools.site.records import Feature
 from initcli.core.detection_filter import ConfirmedFeature
 from initcli.core.geometry import Pose2D
-from initcli.session.fine_tuning import (
-    DRIFTED_DEG,
-    DRIFTED_M,
-    KEEP_RECTIFIED_MARGIN,
-    MIN_SCAN_FIT,
-    matched_pairs,
-    settle,
-)
+from initcli.core.verification_settings import VerificationParams
+from initcli.session.fine_tuning import Settlement, matched_pairs
+from initcli.session.fine_tuning import settle as settle_with
+from initcli.settings_session import FineTuningSection
 
+PARAMS = FineTuningSection()  # the defaults
+KEEP_RECTIFIED_MARGIN = PARAMS.keep_rectified_margin
+MIN_SCAN_FIT = VerificationParams().min_fine_scan_fit  # the fine pose's own scan-fit rule
 HERE = Pose2D(10.0, 5.0, 0.3)
-FAR = Pose2D(10.0 + 2 * DRIFTED_M, 5.0, 0.3)
-TURNED = Pose2D(10.0, 5.0, 0.3 + math.radians(2 * DRIFTED_DEG))
+FAR = Pose2D(10.0 + 2 * PARAMS.drifted_distance, 5.0, 0.3)
+TURNED = Pose2D(10.0, 5.0, 0.3 + math.radians(2 * PARAMS.drifted_turn))
+
+
+def settle(estimate: Pose2D, fit: float, carried: Pose2D, carried_fit: float, reseeded: bool) -> Settlement:
+    return settle_with(estimate, fit, carried, carried_fit, reseeded, PARAMS, MIN_SCAN_FIT)
 
 
 def test_a_filter_that_fits_the_scan_is_accepted_even_first_time():

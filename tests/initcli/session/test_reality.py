@@ -155,7 +155,7 @@ def test_a_rival_that_passed_the_checks_is_still_looked_for_after_more_features(
     built = sim_session(config, site, 97)
     result = built.session.run()
     assert_never_wrong(result)
-    assert built.session.doubted_at is not None, (
+    assert built.session.claims.doubted_at is not None, (
         "no claim held back by a credible rival any more: pick another seed"
     )
 

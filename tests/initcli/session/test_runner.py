@@ -132,25 +132,6 @@ def test_an_unresolved_storey_is_named_in_the_reason(config) -> None:
     assert session.result.reason == "moved 1 m without a unique match (0 features, 2 hypotheses)"
 
 
-def test_a_slow_arc_in_an_open_hall_is_a_loop() -> None:
-    """The wall follower with no wall in reach arcs on its 0.7 m radius at about 0.3 m/s (Office_A's
-    open plan): the session's loop watch must call that a loop within its window."""
-    from initcli.core.confinement import ConfinementWatch
-    from initcli.session.runner import LOOP_LENGTH, LOOP_RADIUS, LOOP_WINDOW_S
-
-    watch = ConfinementWatch(LOOP_WINDOW_S, LOOP_LENGTH, LOOP_RADIUS)
-    hits = []
-    for k in range(int(2 * LOOP_WINDOW_S * 10)):
-        t = k / 10.0
-        a = 0.3 * t / 0.7
-        if watch.confined(t, Pose2D(0.7 * math.cos(a), 0.7 * math.sin(a), a + math.pi / 2)):
-            hits.append(t)
-    assert hits and hits[0] <= LOOP_WINDOW_S + 2.0
-    # Driving on down a corridor at the same speed is not a loop.
-    straight = ConfinementWatch(LOOP_WINDOW_S, LOOP_LENGTH, LOOP_RADIUS)
-    assert not any(straight.confined(k / 10.0, Pose2D(0.03 * k, 0.0, 0.0)) for k in range(900))
-
-
 def test_the_initial_look_turns_all_the_way_round_before_exploring(tmp_path: Path) -> None:
     """block_a, seed 69: two doors are confirmed 2 s into the look, with 8 hypotheses. The look goes
     on (what is behind the robot costs no distance) and the features seen on the rest of the turn
@@ -234,10 +215,11 @@ def test_a_failed_fine_stage_explores_on_and_fine_tunes_the_next_claim(
     claim is dropped, exploration goes on, the match is claimed again and fine-tuned from there.
     When the second stage fails too (FINE_TRIES), the session fails with the filter's reason."""
     from initcli.session import fine_tuning
-    from initcli.session.runner import FINE_TRIES
     from initcli.session.simulated import sim_session
+    from initcli.settings_session import FineTuningSection
     from initcli.site import prepare_site
 
+    FINE_TRIES = FineTuningSection().tries  # fine_tuning.tries' default
     assert FINE_TRIES == 2
     real_run = fine_tuning.FineTuning.run
     stages: list[float] = []

@@ -1,0 +1,135 @@
+"""Ways out of the wall follower's traps (beyond the paper): loops, shuttling, open floors.
+
+Wall following circles an island of clutter or an open hall with no wall in reach (a *loop*), or
+shuttles over the same few metres for minutes (a dead end behind a material stack, targets that
+keep failing). Out of a loop the robot drives to the nearest unexplored opening the lidar has
+seen (a frontier of :class:`~initcli.core.frontier.LocalMap`), else along the most open direction;
+when shuttling it follows the other wall. A crossing drives across an open floor to a wall the
+lidar sees (:func:`~initcli.core.bug_navigation.cross_floor`). While one of them is under way it
+steers instead of the wall follower.
+
+The settings are ``exploration.loops``, ``exploration.shuttles`` and ``exploration.frontier`` of
+the session config.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from initcli.core.bug_navigation import BugNavigator, BugParams, FloorCrossing, RouteNavigator, cross_floor
+from initcli.core.confinement import ConfinementWatch
+from initcli.core.frontier import LocalMap
+from initcli.core.wall_following import ScanView, WallFollowParams
+from initcli.drivers.base import SensorFrame
+from initcli.session.result import SessionResult
+from initcli.settings_session import FrontierSettings, LoopSettings, ShuttleSettings
+
+__all__ = ["Escapes", "open_point"]
+
+
+def open_point(frame: SensorFrame, scan: ScanView | None, loops: LoopSettings) -> np.ndarray:
+    """An odom point ``open_reach`` along the longest free beam (or ``open_short`` short of the
+    obstacle it hit); ``blind_reach`` straight ahead with no scan."""
+    if scan is None or len(scan.ranges) == 0:
+        return frame.odom.apply(np.array([loops.blind_reach, 0.0]))
+    i = int(np.argmax(scan.ranges))
+    reach = min(loops.open_reach, float(scan.ranges[i]) - loops.open_short)
+    return frame.odom.apply(reach * np.array([math.cos(scan.angles[i]), math.sin(scan.angles[i])]))
+
+
+class Escapes:
+    """The watches for loops and shuttling, the local map of what the lidar has seen, and the escape
+    or crossing under way (counted in ``result``)."""
+
+    def __init__(
+        self,
+        loops: LoopSettings,
+        shuttles: ShuttleSettings,
+        frontier: FrontierSettings,
+        follow: WallFollowParams,
+        result: SessionResult,
+    ) -> None:
+        self.settings = loops
+        self.frontier = frontier
+        self.follow = follow
+        self.result = result
+        self.loops = ConfinementWatch(loops.window, loops.length, loops.radius)
+        self.shuttles = ConfinementWatch(shuttles.window, shuttles.length, shuttles.radius)
+        self.local_map = LocalMap()  # what the lidar has seen, for frontier-guided loop escapes
+        self.navigator: BugNavigator | RouteNavigator | None = None  # the escape or crossing
+        self.until = -1.0  # s: when it ends
+
+    def see(self, frame: SensorFrame, step: int) -> None:
+        """Write every ``frontier.scan_every``-th scan into the local map (every ``beam_step``-th beam)."""
+        if frame.scan is not None and step % self.frontier.scan_every == 0:
+            s = frame.scan
+            k = self.frontier.beam_step
+            self.local_map.integrate(frame.odom, s.angles[::k], s.ranges[::k], s.range_max)
+
+    def under_way(self, frame: SensorFrame) -> bool:
+        """Does an escape or a crossing steer the robot now?"""
+        return self.navigator is not None and frame.t < self.until
+
+    def step(self, frame: SensorFrame, scan: ScanView) -> tuple[float, float]:
+        """The command (v m/s, w rad/s) of the escape under way; it ends when it arrives."""
+        assert self.navigator is not None
+        v, w, arrived = self.navigator.step(frame.odom, scan)
+        if arrived:
+            self.navigator = None
+        return v, w
+
+    def cancel(self) -> None:
+        """Drop the escape or crossing under way (the robot goes on from elsewhere)."""
+        self.navigator = None
+
+    def looping(self, frame: SensorFrame) -> bool:
+        """Has the robot, with no escape under way, driven a long way in the last ``loops.window``
+        seconds while staying in a small area?"""
+        return frame.t >= self.until and self.loops.confined(frame.t, frame.odom)
+
+    def shuttling(self, frame: SensorFrame) -> bool:
+        """Has the robot shuttled over the same ground for ``shuttles.window`` seconds?"""
+        return self.shuttles.confined(frame.t, frame.odom)
+
+    def after_shuttling(self, frame: SensorFrame, side: int, exploring: bool) -> str:
+        """The robot shuttled and follows the wall on ``side`` now (+1 left, -1 right); ``exploring``
+        (random exploration, not active): head for the nearest opening the lidar has seen and not yet
+        reached first, as out of a loop (shuttling in a corridor section a stack or a hoarding narrows).
+        Returns why, for the log."""
+        heading = exploring and self.head_for_frontier(frame)
+        then = "heading for an unexplored opening, then " if heading else ""
+        wall = "left" if side > 0 else "right"
+        return f"shuttling over the same ground; {then}following the {wall} wall"
+
+    def out_of_loop(self, frame: SensorFrame, scan: ScanView | None) -> None:
+        """Drive to the nearest unexplored opening the lidar has seen, else out along the most open
+        direction (:func:`open_point`)."""
+        if not self.head_for_frontier(frame):
+            toward = open_point(frame, scan, self.settings)
+            self.start(frame, BugNavigator(toward, BugParams(follow=self.follow)))
+
+    def head_for_frontier(self, frame: SensorFrame) -> bool:
+        """Drive to the nearest unexplored opening of the local map; False if there is none."""
+        route = self.local_map.plan(frame.odom)
+        if route:
+            self.start(frame, RouteNavigator(route, BugParams(follow=self.follow)))
+        return bool(route)
+
+    def start(self, frame: SensorFrame, navigator: BugNavigator | RouteNavigator) -> None:
+        """Follow ``navigator`` for ``loops.escape`` seconds instead of the wall (a loop escape)."""
+        self.navigator = navigator
+        self.until = frame.t + self.settings.escape
+        self.result.loop_escapes += 1
+
+    def cross(self, frame: SensorFrame, scan: ScanView, side: int) -> FloorCrossing | None:
+        """Drive across the open floor on the side away from the followed wall (``side``) to a wall
+        the lidar sees (:func:`cross_floor`); None when there is none to drive to."""
+        crossing = cross_floor(frame.odom, scan, side, self.follow)
+        if crossing is None:
+            return None
+        self.navigator = crossing.navigator
+        self.until = frame.t + crossing.seconds
+        self.result.crossings += 1
+        return crossing
