@@ -9,7 +9,7 @@
   levels and aliases that may add at most :data:`~bimkit.limits.MAX_YAML_ALIAS_NODES` nodes (a
   "billion laughs" document is refused before it is expanded);
 - :func:`parse_json` / :func:`read_json`: the same depth and digit limits, and no NaN or infinity
-  anywhere (``NaN``, ``Infinity``, ``1e999``).
+  anywhere (``NaN``, ``Infinity``, ``1e999``: refused naming their path in the document).
 
 Every problem is one :class:`~bimkit.errors.InputError` naming the file (and line or path).
 """
@@ -281,15 +281,8 @@ def _json_int(text: str) -> int:
     return int(text)
 
 
-def _json_float(text: str) -> float:
-    value = float(text)
-    if not math.isfinite(value):
-        raise _Limit(f"{text[:20]} is not a finite number")
-    return value
-
-
 def _json_constant(name: str) -> float:
-    raise _Limit(f"{name} is not a finite number")
+    return float(name)  # NaN, Infinity, -Infinity: refused by name after the parse
 
 
 def _depth(doc: Any) -> int:
@@ -306,12 +299,13 @@ def _depth(doc: Any) -> int:
     return deepest
 
 
-def parse_json(text: str | bytes, where: str, line: int | None = None) -> Any:
-    """The JSON document in ``text`` within the limits (depth, integer digits, finite numbers);
-    an error names ``where`` and the line (``line``: the text is that line of the file)."""
+def parse_json(text: str | bytes, where: str, line: int | None = None, finite: bool = True) -> Any:
+    """The JSON document in ``text`` within the limits (depth, integer digits) and, with ``finite``,
+    every number finite (``NaN``, ``Infinity``, ``1e999`` refused naming their path); an error names
+    ``where`` and the line (``line``: the text is that line of the file)."""
     at = where if line is None else f"{where}:{line}"
     try:
-        doc = json.loads(text, parse_int=_json_int, parse_float=_json_float, parse_constant=_json_constant)
+        doc = json.loads(text, parse_int=_json_int, parse_constant=_json_constant)
     except _Limit as exc:
         raise InputError(f"{at}: {exc.problem}") from None
     except RecursionError:
@@ -324,6 +318,8 @@ def parse_json(text: str | bytes, where: str, line: int | None = None) -> Any:
         raise InputError(f"{at}: not valid JSON ({type(exc).__name__})") from None
     if _depth(doc) > MAX_DEPTH:
         raise InputError(f"{at}: JSON nested deeper than {MAX_DEPTH} levels")
+    if finite:
+        check_finite_tree(doc, at)
     return doc
 
 

@@ -85,9 +85,10 @@ def test_json_limits_name_the_file_and_line() -> None:
         parse_json("[" * 70 + "]" * 70, "log.jsonl", line=7)
     with pytest.raises(InputError, match=r"^s.json: an integer of 5000 digits"):
         parse_json('{"t": ' + "1" * 5000 + "}", "s.json")
-    for text in ('{"x": NaN}', '{"x": -Infinity}', '{"x": 1e999}'):
-        with pytest.raises(InputError, match=r"^s.json: .* is not a finite number$"):
+    for text in ('{"x": NaN}', '{"x": [-Infinity]}', '{"x": {"y": 1e999}}'):
+        with pytest.raises(InputError, match=r"^s.json: x(.0|.y)?: (nan|-?inf) is not a finite number$"):
             parse_json(text, "s.json")
+    assert parse_json('{"x": NaN}', "s.json", finite=False)["x"] != 0
     with pytest.raises(InputError, match=r"^s.json:2: not valid JSON"):
         parse_json('{"a":\n}', "s.json")
     assert parse_json('{"a": [1, 2.5, -3e2]}', "s.json") == {"a": [1, 2.5, -300.0]}
@@ -96,7 +97,7 @@ def test_json_limits_name_the_file_and_line() -> None:
 def test_read_json_is_bounded_too(tmp_path: Path) -> None:
     path = tmp_path / "summary.json"
     path.write_text('{"success": true, "covariance": [[NaN]]}')
-    with pytest.raises(InputError, match="summary.json: NaN is not a finite number"):
+    with pytest.raises(InputError, match=r"summary.json: covariance.0.0: nan is not a finite number$"):
         read_json(path)
     with pytest.raises(InputError, match=r"^/dev/zero: is a device"):
         read_json(Path("/dev/zero"))
