@@ -31,6 +31,7 @@ from bimkit.limits import MAX_DEPTH, MAX_INT_DIGITS, MAX_TEXT_BYTES, MAX_YAML_AL
 
 __all__ = [
     "check_finite_tree",
+    "check_regular",
     "open_input",
     "parse_json",
     "parse_yaml",
@@ -82,6 +83,12 @@ def open_input(path: Path, what: str, limit: int) -> int:
         os.close(fd)
         raise
     return fd
+
+
+def check_regular(path: Path, what: str, limit: int) -> None:
+    """``path`` is a regular file of at most ``limit`` bytes (for a reader that opens it itself: a
+    library, an image decoder); else one :class:`InputError`."""
+    os.close(open_input(path, what, limit))
 
 
 def read_bytes(path: Path, what: str, limit: int) -> bytes:

@@ -17,6 +17,7 @@ MAX_IFC_BYTES = 2 * GiB  # an IFC model
 MAX_MAP_BYTES = 1 * GiB  # an occupancy map's PGM image
 MAX_IMAGE_BYTES = 256 * MiB  # a photo for the detector
 MAX_MODEL_BYTES = 2 * GiB  # a detector checkpoint or ONNX model
+MAX_BAG_BYTES = 1024 * GiB  # a ROS bag file (read message by message, never whole)
 
 MAX_DEPTH = 64  # levels of nesting in a JSON or YAML document
 MAX_INT_DIGITS = 40  # digits of an integer in a JSON or YAML document (2**64 has 20)
@@ -24,6 +25,7 @@ MAX_YAML_ALIAS_NODES = 10_000  # nodes the aliases of a YAML document may add to
 
 __all__ = [
     "GiB",
+    "MAX_BAG_BYTES",
     "MAX_DEPTH",
     "MAX_IFC_BYTES",
     "MAX_IMAGE_BYTES",

@@ -44,8 +44,9 @@ from typing import Any
 
 import numpy as np
 
-from bimkit.checks import read_text, read_yaml
+from bimkit.checks import read_bytes, read_text, read_yaml
 from bimkit.errors import InputError
+from bimkit.limits import MAX_TEXT_BYTES
 
 IMAGE_SUFFIXES = {".jpg", ".jpeg", ".png", ".bmp", ".webp", ".tif", ".tiff"}
 
@@ -167,7 +168,8 @@ def read_yolo_labels(path: Path, nc: int) -> tuple[np.ndarray, np.ndarray]:
     if not path.exists():
         return np.zeros(0, dtype=np.int64), np.zeros((0, 4), dtype=np.float32)
     classes, boxes = [], []
-    for lineno, line in enumerate(path.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
+    text = read_bytes(path, "a YOLO label file", MAX_TEXT_BYTES).decode("utf-8", errors="replace")
+    for lineno, line in enumerate(text.splitlines(), 1):
         parts = line.split()
         if not parts:
             continue

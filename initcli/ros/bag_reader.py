@@ -21,7 +21,9 @@ from typing import Any
 
 import numpy as np
 
+from bimkit.documents import check_regular
 from bimkit.errors import InputError
+from bimkit.limits import MAX_BAG_BYTES
 from initcli.core.depth import window_depth
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.projection import CameraMount, mount_from_optical
@@ -73,6 +75,8 @@ def bag_paths(path: Path) -> list[Path]:
         if len(mcaps) == 1:
             return mcaps
         raise InputError(f"{path}: a folder without metadata.yaml; expected a ROS 2 bag folder")
+    if not path.is_dir():
+        check_regular(path, "a ROS bag (.bag, .mcap or .db3)", MAX_BAG_BYTES)
     return [path]
 
 
