@@ -87,6 +87,9 @@ def run_cli(app: Any, prog: str) -> None:
         from click import exceptions as cx  # type: ignore[no-redef]
 
     signal.signal(signal.SIGTERM, _on_sigterm)
+    reconfigure = getattr(sys.stdout, "reconfigure", None)
+    if reconfigure is not None:  # a file name that is not UTF-8 is printed as its bytes, not a crash
+        reconfigure(errors="surrogateescape")
     try:
         code = app(standalone_mode=False)
     except getattr(cx, "NoArgsIsHelpError", ()) as exc:  # a bare command: its help, as before

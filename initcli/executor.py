@@ -10,6 +10,7 @@ joins the cluster this machine belongs to, ``ray://host:10001`` a remote one.
 
 from __future__ import annotations
 
+import logging
 import multiprocessing
 import os
 import signal
@@ -123,7 +124,11 @@ class RayExecutor:
         self._ray = ray
         self._owned = not ray.is_initialized()
         if self._owned:
-            kwargs: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False}
+            kwargs: dict[str, Any] = {
+                "include_dashboard": False,
+                "log_to_driver": False,
+                "logging_level": logging.ERROR,
+            }
             if address is None:
                 kwargs["num_cpus"] = num_cpus
             else:
@@ -185,10 +190,27 @@ def _deadline(address: str | None, seconds: float | None) -> Iterator[None]:
     """While ``ray.init`` blocks in native code (where Python's signal handlers cannot run), a watcher
     thread ends the process with one line when ``seconds`` pass (exit 2), or at once on SIGTERM
     (143) or Ctrl-C (130): the signals reach it through :func:`signal.set_wakeup_fd`. Nothing is
-    written before the cluster is joined, so there is nothing to clean up."""
+    written before the cluster is joined, so there is nothing to clean up. What Ray's core prints
+    while it tries (its own retries and warnings) goes to /dev/null: the one line is ours."""
     if seconds is None or threading.current_thread() is not threading.main_thread():
         yield
         return
+    sys.stderr.flush()
+    stderr = os.dup(2)
+    quiet = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(quiet, 2)
+    os.close(quiet)
+    try:
+        with _watched(address, seconds, stderr):
+            yield
+    finally:
+        sys.stderr.flush()
+        os.dup2(stderr, 2)
+        os.close(stderr)
+
+
+@contextmanager
+def _watched(address: str | None, seconds: float, stderr: int) -> Iterator[None]:
     receiver, sender = socket.socketpair()
     sender.setblocking(False)
     previous = signal.set_wakeup_fd(sender.fileno(), warn_on_full_buffer=False)
@@ -206,10 +228,11 @@ def _deadline(address: str | None, seconds: float | None) -> Iterator[None]:
                 return
             if signal.SIGTERM in got or signal.SIGINT in got:
                 code = EXIT_TERMINATED if signal.SIGTERM in got else EXIT_INTERRUPTED
-                _exit_now("bim-init: " + ("terminated" if code == EXIT_TERMINATED else "interrupted"), code)
+                word = "terminated" if code == EXIT_TERMINATED else "interrupted"
+                _exit_now(stderr, f"bim-init: {word}", code)
             if time.monotonic() > until:
                 message = f"--address {address}: the Ray cluster did not answer within {seconds:.0f} s"
-                _exit_now(error_line("bim-init", message), EXIT_BAD_INPUT)
+                _exit_now(stderr, error_line("bim-init", message), EXIT_BAD_INPUT)
 
     watcher = threading.Thread(target=watch, name="ray-connect-deadline", daemon=True)
     watcher.start()
@@ -223,8 +246,8 @@ def _deadline(address: str | None, seconds: float | None) -> Iterator[None]:
         sender.close()
 
 
-def _exit_now(line: str, code: int) -> None:
-    print(line, file=sys.stderr, flush=True)
+def _exit_now(fd: int, line: str, code: int) -> None:
+    os.write(fd, (line + "\n").encode("utf-8", "backslashreplace"))
     os._exit(code)
 
 

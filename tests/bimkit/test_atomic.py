@@ -82,7 +82,9 @@ def test_a_new_file_landing_on_a_file_the_tool_did_not_write_is_refused(tmp_path
     target = tmp_path / "mine"
     target.mkdir()
     (target / "features.csv").write_text("the user's own table")
-    with pytest.raises(InputError, match=r"features.csv: would be replaced, but was not written by this tool"):
+    with pytest.raises(
+        InputError, match=r"features.csv: would be replaced, but was not written by this tool"
+    ):
         with staged_directory(target) as stage:
             (stage / "features.csv").write_text("new")
     assert _listing(target) == ["features.csv"]

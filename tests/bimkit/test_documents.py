@@ -61,7 +61,9 @@ def test_a_few_aliases_are_fine_and_a_recursive_one_is_refused() -> None:
 
 
 def test_duplicate_keys_are_refused_with_the_line() -> None:
-    with pytest.raises(InputError, match=r"^c.yaml:3: duplicate key 'site' \(the later one would silently win\)"):
+    with pytest.raises(
+        InputError, match=r"^c.yaml:3: duplicate key 'site' \(the later one would silently win\)"
+    ):
         parse_yaml("site:\n  path: a.ifc\nsite:\n  path: b.ifc\n", "c.yaml", "a site config")
     with pytest.raises(InputError, match=r"^c.yaml:3: duplicate key 'fx'"):
         parse_yaml("camera:\n  fx: 1\n  fx: 2\n", "c.yaml", "a site config")
@@ -69,7 +71,9 @@ def test_duplicate_keys_are_refused_with_the_line() -> None:
 
 
 def test_long_integers_and_deep_nesting_are_refused() -> None:
-    with pytest.raises(InputError, match=rf"^c.yaml:1: an integer of 5000 digits \(at most {MAX_INT_DIGITS}\)"):
+    with pytest.raises(
+        InputError, match=rf"^c.yaml:1: an integer of 5000 digits \(at most {MAX_INT_DIGITS}\)"
+    ):
         parse_yaml("seed: " + "9" * 5000, "c.yaml", "a config")
     assert parse_yaml("seed: 4294967295", "c.yaml", "a config") == {"seed": 4294967295}
     with pytest.raises(InputError, match=rf"nested deeper than {MAX_DEPTH} levels"):

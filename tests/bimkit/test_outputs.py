@@ -38,7 +38,9 @@ def test_a_folder_of_other_files_needs_force_and_a_clash_is_refused_even_then(tm
         check_outputs([], [out])
     check_outputs([], [out], force=True)  # notes.txt will be kept
     (other / "map_L1.pgm").write_text("not the tool's")
-    with pytest.raises(InputError, match=r"map_L1.pgm would be written over and was not written by this tool"):
+    with pytest.raises(
+        InputError, match=r"map_L1.pgm would be written over and was not written by this tool"
+    ):
         check_outputs([], [out], force=True)
 
 

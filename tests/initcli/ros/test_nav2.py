@@ -137,7 +137,10 @@ def test_read_summary(tmp_path: Path) -> None:
         ({"pose": "here"}, r"pose: "),
         ({"pose": {"x": 4.0, "y": "5", "yaw_deg": 0}}, r"pose.y: expected a number, got \"5\""),
         ({"pose": None}, r"pose: "),
-        ({"covariance": [[-0.1, 0, 0], [0, 0.2, 0], [0, 0, 0.3]]}, r"covariance.0.0: -0.1 is a negative variance"),
+        (
+            {"covariance": [[-0.1, 0, 0], [0, 0.2, 0], [0, 0, 0.3]]},
+            r"covariance.0.0: -0.1 is a negative variance",
+        ),
         ({"covariance": [[0.1, 5, 0], [0, 0.2, 0], [0, 0, 0.3]]}, r"covariance: not a covariance"),
         ({"covariance": [[0.1, 0], [0, 0.2]]}, r"covariance: "),
         ({"duration_s": -3}, r"duration_s: -3 is below the minimum 0"),
