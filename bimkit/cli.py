@@ -3,9 +3,11 @@ error line, and the console-script runner that turns usage errors into that line
 
 from __future__ import annotations
 
+import os
 import signal
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import Any, NoReturn
 
 import typer
@@ -19,6 +21,7 @@ __all__ = [
     "Terminated",
     "error_line",
     "fail",
+    "native_stderr_silenced",
     "number_option",
     "run_cli",
 ]
@@ -69,6 +72,24 @@ def number_option(
         return value
 
     return callback
+
+
+@contextmanager
+def native_stderr_silenced() -> Iterator[int]:
+    """Native libraries (libpng, OpenCV's logger, Ray's core) print to file descriptor 2 past
+    Python; around a call into one that is fed a bad input, their lines go to /dev/null so that
+    the error stays the one line the command prints. Yields a descriptor of the real stderr."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    quiet = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(quiet, 2)
+    os.close(quiet)
+    try:
+        yield saved
+    finally:
+        sys.stderr.flush()
+        os.dup2(saved, 2)
+        os.close(saved)
 
 
 def fail(prog: str, message: object) -> NoReturn:

@@ -262,7 +262,8 @@ def parse_yaml(text: str, where: str, what: str) -> Any:
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         line = f":{mark.line + 1}" if mark is not None else ""
-        raise InputError(f"{where}{line}: invalid YAML in {what} ({getattr(exc, 'problem', exc)})") from None
+        problem = " ".join(str(getattr(exc, "problem", None) or exc).split())
+        raise InputError(f"{where}{line}: invalid YAML in {what} ({problem})") from None
     except RecursionError:
         raise InputError(f"{where}: YAML nested deeper than {MAX_DEPTH} levels in {what}") from None
     except (ValueError, TypeError, OverflowError) as exc:  # pathological documents

@@ -15,7 +15,6 @@ import multiprocessing
 import os
 import signal
 import socket
-import sys
 import threading
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
@@ -23,7 +22,7 @@ from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wai
 from contextlib import contextmanager
 from typing import Any, Protocol
 
-from bimkit.cli import EXIT_INTERRUPTED, EXIT_TERMINATED, error_line
+from bimkit.cli import EXIT_INTERRUPTED, EXIT_TERMINATED, error_line, native_stderr_silenced
 from bimkit.errors import EXIT_BAD_INPUT, InputError
 
 EXECUTORS = ("local", "ray")
@@ -195,18 +194,8 @@ def _deadline(address: str | None, seconds: float | None) -> Iterator[None]:
     if seconds is None or threading.current_thread() is not threading.main_thread():
         yield
         return
-    sys.stderr.flush()
-    stderr = os.dup(2)
-    quiet = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(quiet, 2)
-    os.close(quiet)
-    try:
-        with _watched(address, seconds, stderr):
-            yield
-    finally:
-        sys.stderr.flush()
-        os.dup2(stderr, 2)
-        os.close(stderr)
+    with native_stderr_silenced() as stderr, _watched(address, seconds, stderr):
+        yield
 
 
 @contextmanager

@@ -8,6 +8,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from bimkit.cli import native_stderr_silenced
 from bimkit.documents import read_bytes
 from bimkit.errors import InputError
 from bimkit.limits import MAX_IMAGE_BYTES
@@ -23,7 +24,8 @@ def read_image(path: Path) -> np.ndarray:
     path = Path(path)
     data = np.frombuffer(read_bytes(path, "an image", MAX_IMAGE_BYTES), dtype=np.uint8)
     try:
-        image = cv2.imdecode(data, cv2.IMREAD_COLOR) if data.size else None
+        with native_stderr_silenced():  # libpng and OpenCV print their complaints past Python
+            image = cv2.imdecode(data, cv2.IMREAD_COLOR) if data.size else None
     except cv2.error:
         image = None
     if image is None:

@@ -9,6 +9,7 @@ from typing import Any
 import cv2
 import numpy as np
 
+from bimkit.cli import native_stderr_silenced
 from bimkit.errors import InputError
 from initcli.core.projection import CameraIntrinsics
 from initcli.ros.tf import msg_transform
@@ -33,7 +34,8 @@ def stamp_seconds(msg: Any, bag_ns: int) -> float:
 def decode_image(msg: Any) -> np.ndarray:
     """sensor_msgs/Image or CompressedImage -> BGR uint8 (H, W, 3)."""
     if hasattr(msg, "format"):  # CompressedImage
-        img = cv2.imdecode(np.frombuffer(bytes(msg.data), np.uint8), cv2.IMREAD_COLOR)
+        with native_stderr_silenced():  # libpng's complaints about a broken image: our one line
+            img = cv2.imdecode(np.frombuffer(bytes(msg.data), np.uint8), cv2.IMREAD_COLOR)
         if img is None:
             raise InputError(f"a CompressedImage ({msg.format}) could not be decoded")
         return img
