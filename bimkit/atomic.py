@@ -115,16 +115,27 @@ def claim(folder: Path, patterns: Iterable[str]) -> None:
 
 @contextmanager
 def _signals_held() -> Iterator[None]:
-    """SIGINT and SIGTERM wait while a replacement moves files (they arrive right after)."""
-    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
+    """SIGINT and SIGTERM wait while a replacement moves files: they are noted and delivered to
+    their handlers (KeyboardInterrupt, :class:`bimkit.cli.Terminated`) right after. Python runs
+    signal handlers in the main thread whichever thread the kernel picked, so the handlers are
+    swapped, not the thread's signal mask."""
+    if threading.current_thread() is not threading.main_thread():
         yield
         return
-    held = {signal.SIGINT, signal.SIGTERM}
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    noted: list[int] = []
+    held = (signal.SIGINT, signal.SIGTERM)
+    previous = {s: signal.signal(s, lambda signum, frame: noted.append(signum)) for s in held}
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+        for s, handler in previous.items():
+            signal.signal(s, handler if handler is not None else signal.SIG_DFL)
+        for number in dict.fromkeys(noted):
+            handler = previous[signal.Signals(number)]
+            if callable(handler):
+                handler(number, None)
+            elif handler != signal.SIG_IGN:
+                os.kill(os.getpid(), number)  # the default action, now that the files are in place
 
 
 @contextmanager
@@ -138,8 +149,8 @@ def staged_directory(target: Path, markers: Iterable[str] = ()) -> Iterator[Path
     the stage is removed and ``target`` is as it was. Callers check ``target`` before any work
     starts (:func:`bimkit.outputs.check_outputs`).
     """
-    target = Path(os.path.abspath(target))
-    if target.is_dir() and not target.is_symlink():
+    target = Path(os.path.realpath(target))  # a link to a folder: the folder it names
+    if target.is_dir():
         stage = Path(tempfile.mkdtemp(prefix=STAGE_PREFIX, dir=target))
     else:
         target.parent.mkdir(parents=True, exist_ok=True)

@@ -537,6 +537,7 @@ def bag_to_records(
             )
             stats.images += 1
             stats.objects += len(objects)
+            stats.objects_without_depth += sum(o.depth is None for o in objects)
 
         for name, bag_ns, msg in source.messages([topics.perception.name, topics.depth.name]):
             tick()
@@ -574,6 +575,11 @@ def bag_to_records(
         raise InputError(f"{path}: no image on {topics.perception.name}")
     if stats.without_depth:
         stats.warnings.append(f"{stats.without_depth} image(s) without an aligned depth image skipped")
+    if stats.objects and stats.objects_without_depth == stats.objects:
+        stats.warnings.append(
+            f"none of the {stats.objects} detections has a depth ({topics.depth.name} holds no valid value "
+            "at any box centre: NaN, 0 or out of range); bim-init match cannot place them"
+        )
     if stats.outside_odometry:
         stats.warnings.append(f"{stats.outside_odometry} image(s) outside the odometry's time span skipped")
     records.sort(key=lambda r: r.t)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 from pathlib import Path
 
 import pytest
@@ -180,3 +181,27 @@ def test_staged_directory_leaves_the_target_untouched_on_error(tmp_path):
     assert (target / "a.txt").read_text() == "a"
     assert [p.name for p in tmp_path.iterdir()] == ["site"]
     assert _listing(target) == ["a.txt"]
+
+
+def test_ctrl_c_in_the_middle_of_a_replacement_waits_for_its_end(tmp_path, monkeypatch):
+    target = tmp_path / "site"
+    with staged_directory(target) as stage:
+        for name in ("a.txt", "b.txt"):
+            (stage / name).write_text("old")
+    real = os.replace
+    sent = []
+
+    def interrupted(src, dst):
+        if not sent:  # Ctrl-C between the moves of one replacement
+            sent.append(True)
+            os.kill(os.getpid(), signal.SIGINT)
+        return real(src, dst)
+
+    monkeypatch.setattr(os, "replace", interrupted)
+    with pytest.raises(KeyboardInterrupt), staged_directory(target) as stage:
+        for name in ("a.txt", "b.txt"):
+            (stage / name).write_text("new")
+    monkeypatch.setattr(os, "replace", real)
+    assert sent
+    assert [(target / n).read_text() for n in ("a.txt", "b.txt")] == ["new", "new"]  # whole, not half
+    assert _listing(target) == [RECORD, "a.txt", "b.txt"]

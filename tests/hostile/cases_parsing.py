@@ -16,6 +16,7 @@ from tests.hostile.workspace import (
     manifest,
     map_yaml,
     nan_camera_k,
+    nan_depth,
     nan_detection,
     nan_odometry,
     site_copy,
@@ -425,6 +426,13 @@ DEVICES = [
 ]
 
 BAGS = [
+    Case(
+        "bag with all-NaN depth: a warning, not silence",
+        ("bim-init", "bag2log", "z.mcap", "-o", "x.jsonl"),
+        r"warning: none of the \d+ detections has a depth",
+        bag_with("z.mcap", nan_depth),
+        code=0,
+    ),
     Case(
         "bag CameraInfo K NaN",
         ("bim-init", "bag2log", "k.mcap", "-o", "x.jsonl"),

@@ -7,6 +7,7 @@ from __future__ import annotations
 import os
 import shutil
 import signal
+import socket
 import subprocess
 import time
 from pathlib import Path
@@ -130,3 +131,29 @@ def test_a_signal_during_eval_keeps_the_trials_and_ends_the_workers(
     assert "rerun with --resume" in err
     assert not leftovers(run_config)
     assert results.read_text().strip()
+
+
+@pytest.mark.parametrize(("sig", "code", "word"), SIGNALS, ids=["SIGTERM", "SIGINT"])
+def test_a_signal_while_ray_connects_ends_it_at_once(
+    site_a: Path, tmp_path: Path, sig: int, code: int, word: str
+) -> None:
+    """``ray.init`` blocks in native code, where Python's handlers cannot run: the connect watcher
+    ends the process on the signal (the issue: 29 s to die after SIGTERM)."""
+    pytest.importorskip("ray")
+    listener = socket.socket()
+    listener.bind(("127.0.0.1", 0))
+    listener.listen(8)  # accepts (in the kernel's backlog) and never answers
+    port = listener.getsockname()[1]
+    try:
+        argv = ["bim-init", "survey", str(site_a), "--out", "sv", "--executor", "ray", "--address"]
+        process = _start([*argv, f"127.0.0.1:{port}"], tmp_path)
+        time.sleep(12)  # imports, the site, the TCP probe (it connects), then ray.init waits
+        assert process.poll() is None, process.communicate()
+        returncode, err, took = _interrupt(process, sig, grace=10)
+    finally:
+        listener.close()
+    assert returncode == code, (returncode, err)
+    assert took < 5, took
+    lines = err.strip().splitlines()
+    assert len(lines) <= 1 and set(lines) <= {"bim-init: terminated", "bim-init: interrupted"}, err
+    assert sorted(os.listdir(tmp_path)) == []

@@ -227,6 +227,12 @@ def nan_detection(messages: list[BagMessage]) -> None:
             return
 
 
+def nan_depth(messages: list[BagMessage]) -> None:
+    for m in messages:
+        if m.topic == "/camera/depth/image":
+            m.value["data"] = np.full(m.value["height"] * m.value["width"], np.nan, "<f4").view(np.uint8)
+
+
 def thin_image(name: str, width: int, height: int):
     def setup(folder: Path) -> None:
         cv2.imwrite(str(folder / name), np.full((height, width, 3), 128, np.uint8))
