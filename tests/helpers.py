@@ -7,6 +7,8 @@ repository root on ``sys.path``); the fixtures built on them live in ``tests/con
 
 from __future__ import annotations
 
+import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -39,3 +41,13 @@ def replayed_claim(log_path: Path, site_dir: Path, report: MatchReport) -> Hypot
     _, favoured = verify_and_favour(read_log(log_path), site, report, site_class_map(site))
     assert favoured is not None, f"{report.verdict}, and the lidar along the path favours none"
     return report.hypotheses[favoured]
+
+
+def wait_until(predicate: Callable[[], object], timeout: float) -> bool:
+    """Whether ``predicate()`` came true within ``timeout`` seconds (polled every 20 ms)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        time.sleep(0.02)
+    return False

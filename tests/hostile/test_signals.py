@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from tests.helpers import SAMPLES
+from tests.helpers import SAMPLES, wait_until
 from tests.hostile.harness import BIN, leftovers, snapshot
 
 SIGNALS = [(signal.SIGTERM, 143, "terminated"), (signal.SIGINT, 130, "")]
@@ -30,15 +30,6 @@ def _start(argv: list[str], cwd: Path) -> subprocess.Popen:
         stderr=subprocess.PIPE,
         env={**os.environ, "NO_COLOR": "1"},
     )
-
-
-def _when(predicate, timeout: float) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.02)
-    return False
 
 
 def _interrupt(process: subprocess.Popen, sig: int, grace: float = 20.0) -> tuple[int, str, float]:
@@ -71,7 +62,7 @@ def test_a_signal_during_run_leaves_no_staging_folder(
 ) -> None:
     before = snapshot(run_config)
     process = _start(["bim-init", "run", "--config", "site.yaml", "--out", "r", "--quiet"], run_config)
-    assert _when(lambda: _staging(run_config), 60), "the run never staged its output"
+    assert wait_until(lambda: _staging(run_config), 60), "the run never staged its output"
     returncode, err, took = _interrupt(process, sig)
     assert returncode == code, (returncode, err)
     assert "Traceback" not in err and took < 15
@@ -95,7 +86,7 @@ def test_a_signal_during_a_rerun_keeps_the_earlier_run(
     (run_config / "r" / "notes.txt").write_text("the user's")
     before = snapshot(run_config)
     process = _start(["bim-init", "run", "--config", "site.yaml", "--out", "r", "--quiet"], run_config)
-    assert _when(lambda: _staging(run_config / "r"), 60), "the rerun never staged its output"
+    assert wait_until(lambda: _staging(run_config / "r"), 60), "the rerun never staged its output"
     returncode, err, _ = _interrupt(process, sig)
     assert returncode == code, (returncode, err)
     assert "Traceback" not in err
@@ -109,7 +100,7 @@ def test_a_signal_during_synth_leaves_no_dataset(
 ) -> None:
     argv = ["bim-init", "detector", "synth", "--site", str(site_a), "--out", "ds", "--images", "400"]
     process = _start([*argv, "--workers", "1", "--no-depth"], tmp_path)
-    assert _when(lambda: any(tmp_path.rglob("*.jpg")), 90), "synth never wrote an image"
+    assert wait_until(lambda: any(tmp_path.rglob("*.jpg")), 90), "synth never wrote an image"
     returncode, err, took = _interrupt(process, sig)
     assert returncode == code, (returncode, err)
     assert "Traceback" not in err and took < 15
@@ -124,7 +115,7 @@ def test_a_signal_during_eval_keeps_the_trials_and_ends_the_workers(
     argv = ["bim-init", "eval", "--config", "eval.yaml", "--out", "ev", "--workers", "2", "--methods", "bim"]
     process = _start(argv, run_config)
     results = run_config / "ev" / "results.jsonl"
-    assert _when(lambda: results.is_file() and results.stat().st_size > 0, 240), "no trial finished"
+    assert wait_until(lambda: results.is_file() and results.stat().st_size > 0, 240), "no trial finished"
     returncode, err, took = _interrupt(process, sig)
     assert returncode == code, (returncode, err)
     assert "Traceback" not in err and took < 15, err

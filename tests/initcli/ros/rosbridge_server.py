@@ -17,6 +17,8 @@ import threading
 import time
 from typing import Any
 
+from tests.helpers import wait_until
+
 _GUID = "258EAFA5-E914-47DA-95CA-C5AB0DC85B11"
 
 
@@ -155,12 +157,7 @@ class RosbridgeServer:
             return [o for o in self.ops if o.get("op") == kind]
 
     def wait_for(self, predicate: Any, timeout: float = 5.0) -> bool:
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            if predicate():
-                return True
-            time.sleep(0.02)
-        return False
+        return wait_until(predicate, timeout)
 
     def drop_clients(self) -> None:
         """Close every client connection (the robot's bridge went away)."""
