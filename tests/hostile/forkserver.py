@@ -29,7 +29,9 @@ def _warm() -> dict[str, object]:
     import bimtools.extract.output  # noqa: F401 - imported by the commands when they run
     import bimtools.extract.pipeline  # noqa: F401
     import initcli.cli.main
+    import initcli.cli.plot_hypotheses  # noqa: F401 - matplotlib
     import initcli.config  # noqa: F401
+    import initcli.detector.runtime  # noqa: F401 - onnxruntime
     import initcli.eval.campaign  # noqa: F401
     import initcli.ros.bag_reader  # noqa: F401
     import initcli.session.simulated  # noqa: F401
