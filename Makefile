@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DOCS_STAMP := $(VENV)/.installed-docs
 
-.PHONY: install run test lint schemas docs wheel-check samples bench bench-quick eval eval-real eval-construction clean sample-bag
+.PHONY: install run test lint schemas docs fuzz wheel-check samples bench bench-quick eval eval-real eval-construction clean sample-bag
 
 install: $(STAMP)
 
@@ -45,6 +45,12 @@ $(DOCS_STAMP): $(STAMP)
 # The site config's JSON Schema, generated from the settings records (a test fails when it is stale).
 schemas: install
 	$(BIN)/python -m initcli.settings --write
+
+# Every file reader fed mutated and random files for FUZZ_SECONDS each (14 readers: under 2 minutes);
+# an input that gives anything but the file read or one InputError line fails (tests/fuzz/targets.py).
+FUZZ_SECONDS ?= 6
+fuzz: install
+	$(BIN)/python -m tests.fuzz.run --seconds $(FUZZ_SECONDS)
 
 # Build the wheel, install it into a fresh venv outside the source tree and run both commands there.
 wheel-check: install

@@ -3,8 +3,11 @@ error line, and the console-script runner that turns usage errors into that line
 
 from __future__ import annotations
 
+import os
+import signal
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import Any, NoReturn
 
 import typer
@@ -12,7 +15,33 @@ import typer
 from bimkit.checks import range_problem
 from bimkit.errors import EXIT_BAD_INPUT
 
-__all__ = ["error_line", "fail", "number_option", "run_cli"]
+__all__ = [
+    "EXIT_INTERRUPTED",
+    "EXIT_TERMINATED",
+    "Terminated",
+    "error_line",
+    "fail",
+    "native_stderr_silenced",
+    "number_option",
+    "run_cli",
+]
+
+EXIT_INTERRUPTED = 130  # Ctrl-C (128 + SIGINT)
+EXIT_TERMINATED = 143  # SIGTERM (128 + SIGTERM)
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the program is, like Ctrl-C: every ``finally`` and ``with`` runs (staged
+    outputs removed, partial results kept as after an interrupt)."""
+
+
+_terminated: list[int] = []  # the SIGTERMs received (typer turns the interrupt into exit code 130)
+
+
+def _on_sigterm(signum: int, frame: object) -> None:
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # a second SIGTERM ends the process at once
+    _terminated.append(signum)
+    raise Terminated()
 
 
 def error_line(prog: str, message: object) -> str:
@@ -45,6 +74,24 @@ def number_option(
     return callback
 
 
+@contextmanager
+def native_stderr_silenced() -> Iterator[int]:
+    """Native libraries (libpng, OpenCV's logger, Ray's core) print to file descriptor 2 past
+    Python; around a call into one that is fed a bad input, their lines go to /dev/null so that
+    the error stays the one line the command prints. Yields a descriptor of the real stderr."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    quiet = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(quiet, 2)
+    os.close(quiet)
+    try:
+        yield saved
+    finally:
+        sys.stderr.flush()
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
 def fail(prog: str, message: object) -> NoReturn:
     """Print ``prog: error: message`` as one line on stderr and exit with code 2."""
     typer.echo(error_line(prog, message), err=True)
@@ -53,12 +100,17 @@ def fail(prog: str, message: object) -> NoReturn:
 
 def run_cli(app: Any, prog: str) -> None:
     """Run a typer ``app`` as a console script: a usage error (an unknown option, ``--seed abc``) is
-    one line on stderr and exit 2 like every other bad input, not click's usage block; Ctrl-C is 130."""
+    one line on stderr and exit 2 like every other bad input, not click's usage block; Ctrl-C is 130,
+    SIGTERM takes the same path (:class:`Terminated`) and is 143."""
     try:  # typer >= 0.20 carries its own copy of click
         from typer._click import exceptions as cx
     except ImportError:  # pragma: no cover - older typer on click
         from click import exceptions as cx  # type: ignore[no-redef]
 
+    signal.signal(signal.SIGTERM, _on_sigterm)
+    reconfigure = getattr(sys.stdout, "reconfigure", None)
+    if reconfigure is not None:  # a file name that is not UTF-8 is printed as its bytes, not a crash
+        reconfigure(errors="surrogateescape")
     try:
         code = app(standalone_mode=False)
     except getattr(cx, "NoArgsIsHelpError", ()) as exc:  # a bare command: its help, as before
@@ -74,5 +126,8 @@ def run_cli(app: Any, prog: str) -> None:
         sys.exit(exc.exit_code)
     except KeyboardInterrupt:
         print(f"{prog}: interrupted", file=sys.stderr)
-        sys.exit(130)
+        sys.exit(EXIT_INTERRUPTED)
+    if _terminated:
+        print(f"{prog}: terminated", file=sys.stderr)
+        sys.exit(EXIT_TERMINATED)
     sys.exit(code if isinstance(code, int) else 0)

@@ -13,9 +13,9 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TaskID, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from bimkit.checks import check_output_dir
 from bimkit.cli import number_option
 from bimkit.errors import EXIT_BAD_INPUT, InputError
+from bimkit.outputs import OutputFolder, check_outputs
 from bimtools import __version__
 from bimtools.extract.settings import (
     DEFAULT_RESOLUTION,
@@ -25,7 +25,6 @@ from bimtools.extract.settings import (
 )
 
 PROG = "bim-extract"
-SITE_MARKERS = ("site.json",)  # an output folder holding one was written by bim-extract
 
 app = typer.Typer(add_completion=False, pretty_exceptions_enable=False, rich_markup_mode=None)
 err = Console(stderr=True)
@@ -113,7 +112,10 @@ def extract(
         ),
     ] = DEFAULT_RESOLUTION,
     force: Annotated[
-        bool, typer.Option("--force", help="replace an output folder that holds other files than a site's")
+        bool,
+        typer.Option(
+            "--force", help="write into an output folder that holds other files than a site's (they are kept)"
+        ),
     ] = False,
     as_json: Annotated[
         bool, typer.Option("--json", help="print the manifest (site.json) instead of a table")
@@ -121,7 +123,7 @@ def extract(
     version: Annotated[bool, typer.Option("--version", help="print the version and exit")] = False,
 ) -> None:
     """Extract doors, lifts and stairs (paper Table 1), wall outlines, ROS maps and previews per storey."""
-    from bimtools.extract.output import write_site
+    from bimtools.extract.output import SITE_MARKERS, SITE_WRITES, write_site
     from bimtools.extract.pipeline import extract_site
     from bimtools.ifc.categories import load_categories
 
@@ -131,7 +133,9 @@ def extract(
     progress = LazyProgress("geometry")
     try:
         target = outdir if outdir is not None else Path.cwd() / f"{model.stem}_site"
-        check_output_dir(target, "-o/--outdir", SITE_MARKERS, force)
+        check_outputs(
+            [model, categories], [OutputFolder(target, "-o/--outdir", SITE_MARKERS, SITE_WRITES)], force
+        )
         category_set = load_categories(categories) if categories is not None else load_categories()
         site = extract_site(model, category_set, storey, section_height, resolution, progress=progress)
         progress.close()

@@ -183,7 +183,9 @@ def render_preview(
         counts[f.category] = counts.get(f.category, 0) + 1
     draw_legend(canvas, categories, counts)
     draw_scale_bar(canvas, max(bounds[2] - bounds[0], bounds[3] - bounds[1]))
-    cv2.putText(canvas.image, title, (20, 30), _FONT, 0.6, (0, 0, 0), 1, cv2.LINE_AA)
+    # OpenCV's fonts are ASCII only, and a file name that is not UTF-8 (a lone surrogate) crashes it
+    shown = title.encode("ascii", "replace").decode("ascii")
+    cv2.putText(canvas.image, shown, (20, 30), _FONT, 0.6, (0, 0, 0), 1, cv2.LINE_AA)
     north = (30, canvas.image.shape[0] - 30)
     cv2.arrowedLine(canvas.image, north, (north[0], north[1] - 30), (0, 0, 0), 1, cv2.LINE_AA, tipLength=0.3)
     cv2.putText(canvas.image, "+y", (north[0] + 6, north[1] - 20), _FONT, 0.45, (0, 0, 0), 1, cv2.LINE_AA)

@@ -10,15 +10,24 @@ joins the cluster this machine belongs to, ``ray://host:10001`` a remote one.
 
 from __future__ import annotations
 
+import logging
 import multiprocessing
 import os
+import signal
+import socket
+import threading
+import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from contextlib import contextmanager
 from typing import Any, Protocol
 
-from bimkit.errors import InputError
+from bimkit.cli import EXIT_INTERRUPTED, EXIT_TERMINATED, error_line, native_stderr_silenced
+from bimkit.errors import EXIT_BAD_INPUT, InputError
 
 EXECUTORS = ("local", "ray")
+PROBE_TIMEOUT_S = 5.0  # s: a TCP connection to the Ray address
+CONNECT_TIMEOUT_S = 20.0  # s: ray.init on an address that accepts connections (both within 30 s)
 
 
 def default_workers() -> int:
@@ -44,7 +53,7 @@ class Executor(Protocol):
 
     def result(self, handle: Any) -> Any: ...
 
-    def close(self) -> None: ...
+    def close(self, cancel: bool = False) -> None: ...
 
 
 class _Done:
@@ -85,10 +94,20 @@ class LocalExecutor:
     def result(self, handle: Any) -> Any:
         return handle.value if isinstance(handle, _Done) else handle.result()
 
-    def close(self) -> None:
-        if self._pool is not None:
-            self._pool.shutdown(wait=True)
-            self._pool = None
+    def close(self, cancel: bool = False) -> None:
+        """Wait for the running tasks, or with ``cancel`` (an interrupt) stop the workers at once."""
+        if self._pool is None:
+            return
+        pool, self._pool = self._pool, None
+        if not cancel:
+            pool.shutdown(wait=True)
+            return
+        processes = list(getattr(pool, "_processes", {}).values())  # no public way to stop them
+        pool.shutdown(wait=False, cancel_futures=True)
+        for process in processes:
+            process.terminate()
+        for process in processes:
+            process.join(timeout=5)
 
 
 class RayExecutor:
@@ -104,13 +123,27 @@ class RayExecutor:
         self._ray = ray
         self._owned = not ray.is_initialized()
         if self._owned:
-            kwargs: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False}
+            kwargs: dict[str, Any] = {
+                "include_dashboard": False,
+                "log_to_driver": False,
+                "logging_level": logging.ERROR,
+            }
             if address is None:
                 kwargs["num_cpus"] = num_cpus
+            else:
+                probe_address(address)
+            ours = signal.getsignal(signal.SIGTERM)  # ray.init puts its own handler in
             try:
-                ray.init(address=address, **kwargs)
+                with _deadline(address, CONNECT_TIMEOUT_S if address is not None else None):
+                    ray.init(address=address, **kwargs)
             except (ConnectionError, RuntimeError, ValueError) as exc:
-                raise InputError(f"--address {address}: cannot connect to the Ray cluster ({exc})") from None
+                first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+                raise InputError(
+                    f"--address {address}: cannot connect to the Ray cluster ({first})"
+                ) from None
+            finally:
+                if threading.current_thread() is threading.main_thread():
+                    signal.signal(signal.SIGTERM, ours)
         self.slots = max(1, int(ray.cluster_resources().get("CPU", 1)))
         self._remote: dict[Callable[..., Any], Any] = {}
 
@@ -128,9 +161,83 @@ class RayExecutor:
     def result(self, handle: Any) -> Any:
         return self._ray.get(handle)
 
-    def close(self) -> None:
+    def close(self, cancel: bool = False) -> None:
         if self._owned and self._ray.is_initialized():
             self._ray.shutdown()
+
+
+def probe_address(address: str) -> None:
+    """A Ray address (``host:port``, ``ray://host:port``; ``auto`` is left to Ray) that accepts a TCP
+    connection within :data:`PROBE_TIMEOUT_S`; else one :class:`InputError` (``ray.init`` would
+    retry for minutes)."""
+    if address in ("auto", "local"):
+        return
+    text = address.split("://", 1)[1] if "://" in address else address
+    host, sep, port = text.rpartition(":")
+    host = host.strip("[]")
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise InputError(f"--address {address}: expected host:port, ray://host:port or auto")
+    try:
+        socket.create_connection((host, int(port)), timeout=PROBE_TIMEOUT_S).close()
+    except OSError as exc:
+        why = "no answer" if isinstance(exc, TimeoutError) else exc.strerror or type(exc).__name__
+        raise InputError(f"--address {address}: no Ray cluster answers there ({why})") from None
+
+
+@contextmanager
+def _deadline(address: str | None, seconds: float | None) -> Iterator[None]:
+    """While ``ray.init`` blocks in native code (where Python's signal handlers cannot run), a watcher
+    thread ends the process with one line when ``seconds`` pass (exit 2), or at once on SIGTERM
+    (143) or Ctrl-C (130): the signals reach it through :func:`signal.set_wakeup_fd`. Nothing is
+    written before the cluster is joined, so there is nothing to clean up. What Ray's core prints
+    while it tries (its own retries and warnings) goes to /dev/null: the one line is ours."""
+    if seconds is None or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    with native_stderr_silenced() as stderr, _watched(address, seconds, stderr):
+        yield
+
+
+@contextmanager
+def _watched(address: str | None, seconds: float, stderr: int) -> Iterator[None]:
+    receiver, sender = socket.socketpair()
+    sender.setblocking(False)
+    previous = signal.set_wakeup_fd(sender.fileno(), warn_on_full_buffer=False)
+    finished = threading.Event()
+
+    def watch() -> None:
+        receiver.settimeout(0.1)
+        until = time.monotonic() + seconds
+        while not finished.is_set():
+            try:
+                got = receiver.recv(64)
+            except (TimeoutError, OSError):
+                got = b""
+            if finished.is_set():
+                return
+            if signal.SIGTERM in got or signal.SIGINT in got:
+                code = EXIT_TERMINATED if signal.SIGTERM in got else EXIT_INTERRUPTED
+                word = "terminated" if code == EXIT_TERMINATED else "interrupted"
+                _exit_now(stderr, f"bim-init: {word}", code)
+            if time.monotonic() > until:
+                message = f"--address {address}: the Ray cluster did not answer within {seconds:.0f} s"
+                _exit_now(stderr, error_line("bim-init", message), EXIT_BAD_INPUT)
+
+    watcher = threading.Thread(target=watch, name="ray-connect-deadline", daemon=True)
+    watcher.start()
+    try:
+        yield
+    finally:
+        finished.set()
+        signal.set_wakeup_fd(previous)
+        watcher.join(timeout=1)
+        receiver.close()
+        sender.close()
+
+
+def _exit_now(fd: int, line: str, code: int) -> None:
+    os.write(fd, (line + "\n").encode("utf-8", "backslashreplace"))
+    os._exit(code)
 
 
 def _ray_task(fn: Callable[..., Any], *args: Any) -> Any:

@@ -10,7 +10,7 @@ from bimkit.errors import InputError
 from bimtools.site.load import Site, StoreyModel, load_site
 from initcli.config import SessionConfig
 
-__all__ = ["choose_storey", "prepare_site", "prepare_world", "world_storey"]
+__all__ = ["choose_storey", "input_paths", "prepare_site", "prepare_world", "world_path", "world_storey"]
 
 
 def prepare_site(config: SessionConfig, workdir: Path) -> Site:
@@ -18,12 +18,24 @@ def prepare_site(config: SessionConfig, workdir: Path) -> Site:
     return _prepare(config.site_path(), "site.path", config, workdir / "site")
 
 
-def prepare_world(config: SessionConfig, workdir: Path) -> Site | None:
-    """The building the simulated robot lives in (``sim.world``), or None: the BIM itself."""
+def world_path(config: SessionConfig) -> Path | None:
+    """The path ``sim.world`` names (relative to the config file), or None: the BIM itself."""
     if not config.sim.world:
         return None
     base = config.source.parent if config.source else Path.cwd()
-    return _prepare((base / config.sim.world).resolve(), "sim.world", config, workdir / "world")
+    return (base / config.sim.world).resolve()
+
+
+def input_paths(config: SessionConfig) -> list[Path]:
+    """The files and folders a session reads: the config, ``site.path`` and ``sim.world``."""
+    paths = [config.site_path(), world_path(config)]
+    return [p for p in [config.source, *paths] if p is not None]
+
+
+def prepare_world(config: SessionConfig, workdir: Path) -> Site | None:
+    """The building the simulated robot lives in (``sim.world``), or None: the BIM itself."""
+    world = world_path(config)
+    return None if world is None else _prepare(world, "sim.world", config, workdir / "world")
 
 
 def _prepare(path: Path, key: str, config: SessionConfig, target: Path) -> Site:

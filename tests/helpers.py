@@ -7,6 +7,8 @@ repository root on ``sys.path``); the fixtures built on them live in ``tests/con
 
 from __future__ import annotations
 
+import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -65,3 +67,13 @@ def rooms_map(
         cells[row(top) : row(bottom) + 1, col(left) : col(right) + 1] = OCCUPIED
         cells[row(top) + 1 : row(bottom), col(left) + 1 : col(right)] = FREE
     return OccupancyGrid(cells, res, (x0, y0, 0.0))
+
+
+def wait_until(predicate: Callable[[], object], timeout: float) -> bool:
+    """Whether ``predicate()`` came true within ``timeout`` seconds (polled every 20 ms)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        time.sleep(0.02)
+    return False

@@ -14,6 +14,9 @@ from bimtools.site.occupancy_map import write_map
 from bimtools.site.records import StoreyInfo
 from bimtools.site.walls_geojson import write_walls
 
+SITE_MARKERS = ("site.json",)  # a folder holding one was written by bim-extract
+SITE_WRITES = ("site.json", "features.csv", "walls.geojson", "map_*", "preview_*")  # what it writes there
+
 
 def build_manifest(site: ExtractedSite, files: list[str]) -> SiteManifest:
     storeys = []
@@ -47,8 +50,9 @@ def build_manifest(site: ExtractedSite, files: list[str]) -> SiteManifest:
 
 
 def write_site(outdir: Path, site: ExtractedSite, preview: bool = True) -> SiteManifest:
-    """Write features.csv, walls.geojson, maps, previews and site.json into ``outdir``."""
-    with staged_directory(Path(outdir)) as stage:
+    """Write features.csv, walls.geojson, maps, previews and site.json into ``outdir`` (staged: the
+    files an earlier extraction wrote there are replaced, every other file is kept)."""
+    with staged_directory(Path(outdir), SITE_MARKERS) as stage:
         files = ["features.csv", "walls.geojson"]
         write_features(stage / "features.csv", site.features)
         walls = [w for s in site.storeys for w in s.plan.walls]

@@ -3,13 +3,17 @@
 from __future__ import annotations
 
 import hashlib
+import os
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import ifcopenshell
 import ifcopenshell.util.unit
 
+from bimkit.documents import open_input
 from bimkit.errors import InputError
+from bimkit.limits import MAX_IFC_BYTES
 
 SUPPORTED_SCHEMAS = ("IFC2X3", "IFC4", "IFC4X3")
 
@@ -32,14 +36,27 @@ def file_sha256(path: Path) -> str:
     return digest.hexdigest()
 
 
+def _parse(path: Path) -> ifcopenshell.file:
+    """``ifcopenshell.open``; a file name that is not UTF-8 (Latin-1 bytes from an old archive) is
+    opened through a link with a plain name, which ifcopenshell's C++ side can take."""
+    try:
+        os.fsencode(path).decode("utf-8")
+    except UnicodeDecodeError:
+        with tempfile.TemporaryDirectory(prefix="bim-extract-") as tmp:
+            link = Path(tmp) / "model.ifc"
+            os.symlink(os.path.abspath(path), link)
+            return ifcopenshell.open(str(link))
+    return ifcopenshell.open(str(path))
+
+
 def open_model(path: Path) -> ifcopenshell.file:
     """Open an IFC-SPF file, turning every failure into one :class:`InputError` line."""
     path = Path(path)
-    if not path.exists():
+    if not os.path.lexists(path):
         raise InputError(f"{path}: no such file")
     if path.is_dir():
         raise InputError(f"{path}: is a folder, expected an .ifc file")
-    with open(path, "rb") as handle:
+    with os.fdopen(open_input(path, "an IFC model", MAX_IFC_BYTES), "rb") as handle:
         head = handle.read(64)
         handle.seek(0, 2)
         size = handle.tell()
@@ -50,7 +67,7 @@ def open_model(path: Path) -> ifcopenshell.file:
     if b"END-ISO-10303-21" not in tail:
         raise InputError(f"{path}: truncated IFC file (no END-ISO-10303-21 at the end)")
     try:
-        model = ifcopenshell.open(str(path))
+        model = _parse(path)
     except Exception as exc:  # ifcopenshell raises a variety of types for parse errors
         text = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         if "schema" in text.lower():

@@ -55,13 +55,29 @@ class SiteManifest:
                 unit_scale=float(doc.get("unit_scale", 1.0)),
                 section_height=float(doc["section_height"]),
                 resolution=float(doc.get("resolution", 0.05)),
-                storeys=[StoreyInfo(**s) for s in doc["storeys"]],
+                storeys=[_storey(s, f"{where}: storeys.{i}") for i, s in enumerate(doc["storeys"])],
                 files=list(doc.get("files", [])),
                 tool_version=doc.get("tool", {}).get("version", ""),
                 format=doc.get("format", SITE_FORMAT),
             )
         except (KeyError, TypeError, ValueError) as exc:
             raise InputError(f"{where}: malformed manifest ({exc!s})") from None
+
+
+def _storey(entry: object, where: str) -> StoreyInfo:
+    """One storey of the manifest; its map and preview are plain file names in the site folder."""
+    if not isinstance(entry, dict):
+        raise InputError(f"{where}: expected an object")
+    info = StoreyInfo(**entry)
+    if not isinstance(info.name, str):
+        raise InputError(f"{where}.name: expected text, got {info.name!r}")
+    for key in ("map_yaml", "preview"):
+        value = getattr(info, key)
+        if value is not None and (
+            not isinstance(value, str) or Path(value).name != value or value in ("", ".", "..")
+        ):
+            raise InputError(f"{where}.{key}: expected a file name in the site folder, got {value!r}")
+    return info
 
 
 def format_manifest(manifest: SiteManifest) -> str:

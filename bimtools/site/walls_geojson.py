@@ -73,7 +73,10 @@ def read_walls(path: Path, storey: str | None = None) -> tuple[list[WallSegment]
         raise InputError(f"{path}: expected a GeoJSON FeatureCollection")
     walls: list[WallSegment] = []
     obstacles: list[Obstacle] = []
-    for index, feat in enumerate(doc.get("features", [])):
+    features = doc.get("features", [])
+    if not isinstance(features, list):
+        raise InputError(f"{path}: features: expected a list")
+    for index, feat in enumerate(features):
         try:
             props = feat["properties"]
             geom = feat["geometry"]
@@ -107,6 +110,6 @@ def read_walls(path: Path, storey: str | None = None) -> tuple[list[WallSegment]
                         bool(props.get("glass", False)),
                     )
                 )
-        except (KeyError, TypeError, ValueError) as exc:
-            raise InputError(f"{path}: features[{index}]: malformed wall or obstacle ({exc})") from None
+        except (KeyError, TypeError, ValueError, AttributeError, IndexError) as exc:
+            raise InputError(f"{path}: features[{index}]: malformed wall or obstacle ({exc!r})") from None
     return walls, obstacles

@@ -10,9 +10,9 @@ from typing import Annotated
 
 import typer
 
-from bimkit.checks import check_output_file
 from bimkit.cli import fail, number_option
 from bimkit.errors import InputError
+from bimkit.outputs import OutputFile, check_outputs
 from initcli.cli import PROG
 from initcli.cli.progress import message_progress
 from initcli.ros.convert import convert_bag
@@ -74,7 +74,7 @@ def bag2log(
     from initcli.ros.bag_reader import parse_class_names
 
     try:
-        check_output_file(out, "-o/--out")
+        check_outputs([bag, None if model == "default" else Path(model)], [OutputFile(out, "-o/--out")])
         options = Bag2LogOptions(
             image_topic=image_topic,
             detections_topic=detections_topic,

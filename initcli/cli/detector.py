@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import os
 import sys
+from contextlib import nullcontext
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -16,14 +17,15 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from bimkit.checks import check_output_dir
 from bimkit.cli import error_line, number_option
 from bimkit.errors import EXIT_BAD_INPUT, InputError
+from bimkit.outputs import OutputFile, OutputFolder, check_outputs
 from initcli.cli import PROG
 from initcli.detector import DETECTOR_CONFIDENCE
 
 if TYPE_CHECKING:
     from initcli.detector.metrics import Metrics
+    from initcli.detector.runtime import Detector
 
 detector_app = typer.Typer(
     name="detector",
@@ -147,11 +149,25 @@ def synth(
     ] = 0.0,
 ) -> None:
     """Render a YOLO dataset (RGB, depth, labels) from site models with domain randomisation."""
+    from bimkit.atomic import staged_directory
     from initcli.cli.progress import count_bar
-    from initcli.detector.synth.dataset import SynthOptions, dataset_preview, write_dataset
+    from initcli.detector.synth.dataset import (
+        SYNTH_MARKERS,
+        SYNTH_WRITES,
+        SynthOptions,
+        dataset_preview,
+        write_dataset,
+    )
 
     try:
-        check_output_dir(out, "--out", (), force=True)  # never over a file
+        check_outputs(  # into any folder: the files of others are kept, never written over
+            site,
+            [
+                OutputFolder(out, "--out", SYNTH_MARKERS, SYNTH_WRITES),
+                None if preview is None else OutputFile(preview, "--preview", (".png", ".jpg", ".jpeg")),
+            ],
+            force=True,
+        )
         w, h = _parse_size(size)
         opts = SynthOptions(
             images=images,
@@ -164,14 +180,15 @@ def synth(
             shuffle_classes=shuffle_classes,
             sites=[str(s) for s in site],
         )
-        with count_bar("rendering") as bar:
+        with count_bar("rendering") as bar, staged_directory(out, SYNTH_MARKERS) as stage:
             task = bar.add_task("rendering", total=images)
             doc = write_dataset(
                 site,
-                out,
+                stage,
                 opts,
                 progress=lambda n: bar.advance(task, n),
                 warn=lambda m: typer.echo(f"bim-init: warning: {m}", err=True),
+                final=out,
             )
         if preview is not None:
             dataset_preview(out, preview)
@@ -277,6 +294,9 @@ def train(
 ) -> None:
     """Train the detector; validates precision, recall and AP@0.5 per class each epoch."""
     try:
+        inputs = [data, None if init in (None, "default") else Path(init)]
+        outputs = [OutputFile(out, "--out"), OutputFile(out.with_suffix(".csv"), "--out (its history .csv)")]
+        check_outputs(inputs, outputs)  # --resume reads --out too: the tool's own checkpoint
         _require_torch("train")
     except InputError as exc:
         raise _fail(str(exc)) from None
@@ -377,7 +397,9 @@ def export(
     ] = None,
 ) -> None:
     """Export a single-file ONNX model (static 1x3xHxW input, metadata) and verify it against PyTorch."""
+    target = out or model.with_suffix(".onnx")
     try:
+        check_outputs([model], [OutputFile(target, "-o/--out", (".onnx",))])
         _require_torch("export")
         try:
             import onnx  # noqa: F401
@@ -387,7 +409,7 @@ def export(
             ) from None
         from initcli.detector.training.export import export_onnx
 
-        report = export_onnx(model, out or model.with_suffix(".onnx"), imgsz)
+        report = export_onnx(model, target, imgsz)
     except InputError as exc:
         raise _fail(str(exc)) from None
     typer.echo(
@@ -449,53 +471,62 @@ def predict(
     json_out: Annotated[bool, typer.Option("--json", help="One JSON line per image.")] = False,
 ) -> None:
     """Detect doors, lifts and stairs in images; print the detections, optionally draw them."""
-    import cv2
-
+    from bimkit.atomic import staged_directory
     from initcli.detector.runtime import Detector
-    from initcli.detector.synth.dataset import draw_boxes
 
     try:
-        det = Detector(model, conf=conf, iou=iou, threads=threads)
-        if out is not None:
-            check_output_dir(out, "--out", (), force=True)  # a folder of drawn images, never over a file
         files = _images(images)
-        if out is not None:
-            out.mkdir(parents=True, exist_ok=True)
-        for f in files:
-            img = cv2.imread(str(f), cv2.IMREAD_COLOR)
-            if img is None:
-                raise InputError(f"{f}: cannot read image")
-            found = det.detect(img)
-            if json_out:
-                typer.echo(
-                    json.dumps(
-                        {
-                            "image": str(f),
-                            "detections": [
-                                {
-                                    "class": d.class_name,
-                                    "score": round(d.score, 4),
-                                    "bbox": [round(v, 1) for v in d.box],
-                                }
-                                for d in found
-                            ],
-                        }
-                    )
-                )
-            else:
-                typer.echo(f"{f}: {len(found)} detection{'s' if len(found) != 1 else ''}")
-                for d in found:
-                    b = ", ".join(f"{v:.0f}" for v in d.box)
-                    typer.echo(f"  {d.class_name:<8} {d.score:.2f}  [{b}]")
-            if out is not None:
-                drawn = draw_boxes(
-                    img, [(d.class_id, d.box, f"{d.class_name} {d.score:.2f}") for d in found], thickness=2
-                )
-                target = out / (f.stem + ".jpg")
-                if not cv2.imwrite(str(target), drawn):
-                    raise InputError(f"{target}: cannot write image")
+        drawn_names = tuple(sorted({f.stem + ".jpg" for f in files}))
+        check_outputs(  # a folder of drawn images: into any folder, never over a file of someone else's
+            [*images, None if model == "default" else Path(model)],
+            [None if out is None else OutputFolder(out, "--out", (), drawn_names)],
+            force=True,
+        )
+        det = Detector(model, conf=conf, iou=iou, threads=threads)
+        with staged_directory(out) if out is not None else nullcontext(None) as stage:
+            _predict_all(det, files, stage, json_out)
     except InputError as exc:
         raise _fail(str(exc)) from None
+
+
+def _predict_all(det: Detector, files: list[Path], stage: Path | None, json_out: bool) -> None:
+    """Detect in each image; print the detections, and draw them into ``stage`` when given."""
+    import cv2
+
+    from initcli.detector.synth.dataset import draw_boxes
+    from initcli.io.images import read_image
+
+    for f in files:
+        img = read_image(f)
+        found = det.detect(img)
+        if json_out:
+            typer.echo(
+                json.dumps(
+                    {
+                        "image": str(f),
+                        "detections": [
+                            {
+                                "class": d.class_name,
+                                "score": round(d.score, 4),
+                                "bbox": [round(v, 1) for v in d.box],
+                            }
+                            for d in found
+                        ],
+                    }
+                )
+            )
+        else:
+            typer.echo(f"{f}: {len(found)} detection{'s' if len(found) != 1 else ''}")
+            for d in found:
+                b = ", ".join(f"{v:.0f}" for v in d.box)
+                typer.echo(f"  {d.class_name:<8} {d.score:.2f}  [{b}]")
+        if stage is not None:
+            drawn = draw_boxes(
+                img, [(d.class_id, d.box, f"{d.class_name} {d.score:.2f}") for d in found], thickness=2
+            )
+            target = stage / (f.stem + ".jpg")
+            if not cv2.imwrite(str(target), drawn):
+                raise InputError(f"{target}: cannot write image")
 
 
 @detector_app.command("eval")

@@ -21,12 +21,20 @@ from rich.progress import (
 )
 from rich.table import Table
 
-from bimkit.checks import check_output_dir
-from bimkit.cli import fail, number_option
+from bimkit.atomic import claim
+from bimkit.cli import EXIT_INTERRUPTED, fail, number_option
 from bimkit.errors import InputError
+from bimkit.outputs import OutputFolder, check_outputs
 from initcli.cli import PROG
 from initcli.config import REALITY_PROFILES
-from initcli.eval.campaign import check_start_poses, plan_jobs, prepare_sites, run_jobs
+from initcli.eval.campaign import (
+    campaign_inputs,
+    check_start_poses,
+    plan_jobs,
+    prepare_sites,
+    run_jobs,
+    trial_count,
+)
 from initcli.eval.config import load_eval_config, parse_methods
 from initcli.eval.records import TrialRecord
 from initcli.eval.report import RunStats, write_report
@@ -35,8 +43,9 @@ from initcli.eval.sweep import parse_sweep
 from initcli.eval.tables import NONE, table2, table3
 from initcli.executor import default_workers, make_executor
 
-EXIT_INTERRUPTED = 130
 EVAL_MARKERS = ("results.jsonl", "table.md")  # an --out folder holding one was written by bim-init eval
+EVAL_WRITES = ("results.jsonl", "table.csv", "table.md", "fig9.png", "fig12_*.png", "sweep_*.png", ".sites")
+MAX_TRIALS = 20_000  # a campaign of more trials (about 3 hours on 2 cores) runs only with --yes
 
 
 def _rich_table(title: str, header: list[str], rows: list[list[str]]) -> Table:
@@ -93,7 +102,11 @@ def evaluate(
         bool, typer.Option("--resume", help="Keep DIR/results.jsonl and run only the trials it lacks.")
     ] = False,
     force: Annotated[
-        bool, typer.Option("--force", help="Use an --out folder that holds other files than an eval's.")
+        bool,
+        typer.Option(
+            "--force",
+            help="Write into an --out folder that holds other files than an eval's (they are kept).",
+        ),
     ] = False,
     sweep: Annotated[
         str | None,
@@ -125,6 +138,9 @@ def evaluate(
             "--address", metavar="ADDR", help="Ray cluster (auto, ray://host:10001) [default: a local one]."
         ),
     ] = None,
+    yes: Annotated[
+        bool, typer.Option("--yes", help=f"Run a campaign of more than {MAX_TRIALS} trials.")
+    ] = False,
 ) -> None:
     """Reproduce the paper's Tables 2 and 3: success, distance and error of every method over many starts."""
     console = Console(stderr=False)
@@ -142,7 +158,15 @@ def evaluate(
             if unknown:
                 names = ", ".join(x.name for x in eval_config.sites)
                 raise InputError(f"--sites: no site {unknown[0]!r} in the config (sites: {names})")
-        check_output_dir(out, "--out", EVAL_MARKERS, force)
+        check_outputs(
+            campaign_inputs(eval_config, only), [OutputFolder(out, "--out", EVAL_MARKERS, EVAL_WRITES)], force
+        )
+        size = trial_count(eval_config, chosen, starts, the_sweep, only)
+        if size.trials > MAX_TRIALS and not yes:
+            raise InputError(
+                f"{size}: more than {MAX_TRIALS} trials (hours of work); pass --yes to run them, "
+                "or fewer --starts, --methods or --sites"
+            )
         results_path = out / "results.jsonl"
         previous: list[TrialRecord] = read_results(results_path) if resume and results_path.exists() else []
         with err.status("preparing site models (extracting IFC)..."):
@@ -194,6 +218,9 @@ def evaluate(
 
             run_jobs(jobs, n_workers, finished, runner)
     except KeyboardInterrupt:
+        runner.close(cancel=True)
+        if out.is_dir():
+            claim(out, EVAL_WRITES)
         err.print(
             f"interrupted: {len(records)} trials saved in {results_path}; rerun with --resume to continue"
         )
@@ -202,6 +229,7 @@ def evaluate(
         runner.close()
     stats = RunStats(ran, time.perf_counter() - started, n_workers)
     summaries = write_report(out, records, environments, eval_config.rule, stats, command)
+    claim(out, EVAL_WRITES)
     header, rows = table2(summaries, environments)
     if rows:
         console.print(_rich_table("Table 2: BIM-based initialisation per site, ours (paper)", header, rows))

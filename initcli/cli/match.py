@@ -21,6 +21,7 @@ from rich.table import Table
 
 from bimkit.cli import error_line
 from bimkit.errors import InputError
+from bimkit.outputs import OutputFile, check_outputs
 from initcli.cli import PROG
 from initcli.cli.progress import message_progress
 from initcli.core.geometry import Pose2D
@@ -165,6 +166,10 @@ def match(
     checks = None
     verify = site.is_dir()  # the checks need the site's maps; a bare features.csv has none
     try:
+        if plot is not None:
+            from initcli.cli.plot_hypotheses import PLOT_SUFFIXES
+
+            check_outputs([log, site], [OutputFile(plot, "--plot", PLOT_SUFFIXES)])
         with message_progress() as progress, log_or_bag(log, progress=progress) as log_path:
             options.validate()
             listed = replace(options, top=max(top, TRACK_HYPOTHESES)) if verify else options

@@ -6,6 +6,7 @@ BIM frame with its odom -> BIM transform; the robot's current pose is an arrow a
 
 from __future__ import annotations
 
+import io
 import math
 from pathlib import Path
 
@@ -15,8 +16,10 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from bimkit.atomic import write_bytes_atomic  # noqa: E402
 from initcli.match.pipeline import MatchReport  # noqa: E402
 
+PLOT_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")  # the formats --plot writes
 MARKERS = {"door": "s", "lift": "^", "stairs": "D"}
 
 
@@ -116,7 +119,8 @@ def plot_hypotheses(report: MatchReport, out_path: Path | str, dpi: int = 120) -
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7, borderaxespad=0.0)
     fig.suptitle(f"bim-init match: {report.verdict}")
     fig.tight_layout()
-    out_path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out_path, dpi=dpi)
+    buffer = io.BytesIO()
+    fig.savefig(buffer, dpi=dpi, format=out_path.suffix.lower().lstrip(".") or "png")
     plt.close(fig)
+    write_bytes_atomic(out_path, buffer.getvalue())
     return out_path

@@ -15,17 +15,18 @@ from rich.console import Console
 from rich.live import Live
 from rich.table import Table
 
-from bimkit.checks import check_number, check_output_dir, check_output_file
+from bimkit.checks import check_number
 from bimkit.cli import fail, number_option
 from bimkit.errors import InputError
+from bimkit.outputs import OutputFile, OutputFolder, check_outputs
 from initcli.cli import PROG
 from initcli.config import load_config
 from initcli.core.geometry import Pose2D
-from initcli.session.simulated import run_simulated
+from initcli.session.simulated import RUN_MARKERS, RUN_WRITES, run_simulated
+from initcli.site import input_paths
 
 EXIT_FAILED = 1
 SEED_MAX = 2**32 - 1  # numpy seeds
-RUN_MARKERS = ("summary.json",)  # an --out folder holding one was written by bim-init run
 
 
 def parse_start(text: str) -> Pose2D:
@@ -123,7 +124,10 @@ def run(
     ] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print summary.json.")] = False,
     force: Annotated[
-        bool, typer.Option("--force", help="Replace an --out folder that holds other files than a run's.")
+        bool,
+        typer.Option(
+            "--force", help="Write into an --out folder that holds other files than a run's (they are kept)."
+        ),
     ] = False,
     record: Annotated[
         Path | None,
@@ -137,9 +141,14 @@ def run(
         start_pose = parse_start(start) if start else None
         the_seed = int(cfg.sim.seed if seed is None else seed)
         target = out or Path("runs") / datetime.now().strftime("%Y%m%d-%H%M%S")
-        check_output_dir(target, "--out", RUN_MARKERS, force)
-        if record is not None:
-            check_output_file(record, "--record")
+        check_outputs(
+            input_paths(cfg),
+            [
+                OutputFolder(target, "--out", RUN_MARKERS, RUN_WRITES),
+                None if record is None else OutputFile(record, "--record", (".mcap",)),
+            ],
+            force,
+        )
         if cfg.robot.driver == "rosbridge":
             if start_pose is not None:
                 raise InputError("--start: only for the simulated robot (robot.driver: sim)")

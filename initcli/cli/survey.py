@@ -12,10 +12,10 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from bimkit.atomic import write_text_atomic
-from bimkit.checks import check_output_dir
-from bimkit.cli import fail, number_option
+from bimkit.atomic import claim, write_text_atomic
+from bimkit.cli import EXIT_INTERRUPTED, fail, number_option
 from bimkit.errors import InputError
+from bimkit.outputs import OutputFolder, check_outputs
 from bimtools.site.load import load_site
 from initcli.cli import PROG
 from initcli.config import SessionConfig, camera_of, followed_side, load_config
@@ -24,6 +24,7 @@ from initcli.executor import make_executor
 from initcli.match.pipeline import site_class_map
 from initcli.survey.survey import (
     Landmark,
+    StoreyPlan,
     StoreySurvey,
     SurveyParams,
     plan_storey,
@@ -33,11 +34,10 @@ from initcli.survey.survey import (
 )
 from initcli.survey.uniqueness import UniquenessParams
 
-EXIT_INTERRUPTED = 130
 SURVEY_VERSION = 1
-
-
 SURVEY_MARKERS = ("survey.json",)  # an --out folder holding one was written by bim-init survey
+SURVEY_WRITES = ("survey.json", "survey_*.png")  # what it writes there
+MAX_STARTS = 100_000  # a survey of more starts (positions x headings) runs only with --yes
 
 
 def survey_params(config: SessionConfig, spacing: float, headings: int) -> SurveyParams:
@@ -121,7 +121,12 @@ def survey(
     ] = None,
     force: Annotated[
         bool,
-        typer.Option("--force", help="Use an --out folder holding other files than a survey's."),
+        typer.Option(
+            "--force", help="Write into an --out folder holding other files than a survey's (kept)."
+        ),
+    ] = False,
+    yes: Annotated[
+        bool, typer.Option("--yes", help=f"Run a survey of more than {MAX_STARTS} starts.")
     ] = False,
 ) -> None:
     """Map the distance to a unique match over a floor from its features and walls alone (no noise):
@@ -129,15 +134,28 @@ def survey(
     console = Console()
     err = Console(stderr=True)
     try:
-        check_output_dir(out, "--out", SURVEY_MARKERS, force)
+        check_outputs([site, config], [OutputFolder(out, "--out", SURVEY_MARKERS, SURVEY_WRITES)], force)
         model = load_site(site)
         session = load_config(config) if config is not None else SessionConfig()
         params = survey_params(session, spacing, headings)
         names = list(model.storeys) if storey == "all" else [model.storey(storey).name]
+        cmap = site_class_map(model)
+        plans: dict[str, StoreyPlan] = {}
+        for name in names:
+            try:
+                plans[name] = plan_storey(model.storeys[name], params, cmap)
+            except ValueError as exc:
+                err.print(f"storey {name}: skipped ({exc})")
+        n_starts = sum(len(p.starts) for p in plans.values())
+        if n_starts > MAX_STARTS and not yes:
+            raise InputError(
+                f"{n_starts} starts ({n_starts // headings} positions {spacing:g} m apart x {headings} "
+                f"headings over {len(plans)} storey(s)): more than {MAX_STARTS} (hours of work); pass --yes "
+                "to run them, or a larger --spacing or fewer --headings"
+            )
         runner = make_executor(executor, workers, address)
     except InputError as exc:
         fail(PROG, exc)
-    cmap = site_class_map(model)
     storeys: list[dict[str, object]] = []
     report: dict[str, object] = {
         "version": SURVEY_VERSION,
@@ -168,12 +186,7 @@ def survey(
             TimeElapsedColumn(),
             console=err,
         ) as progress:
-            for name in names:
-                try:
-                    plan = plan_storey(model.storeys[name], params, cmap)
-                except ValueError as exc:
-                    err.print(f"storey {name}: skipped ({exc})")
-                    continue
+            for name, plan in plans.items():
                 task = progress.add_task("starts", total=len(plan.starts), storey=name)
                 result, views = survey_storey(plan, params, runner, partial(progress.advance, task))
                 entry = summarise(result)
@@ -215,11 +228,15 @@ def survey(
                     ", ".join(f"({lm.x:.1f}, {lm.y:.1f})" for lm in chosen) or "-",
                 )
     except KeyboardInterrupt:
+        runner.close(cancel=True)
+        if out.is_dir():
+            claim(out, SURVEY_WRITES)
         err.print("interrupted: nothing written for the unfinished storey")
         raise typer.Exit(EXIT_INTERRUPTED) from None
     finally:
         runner.close()
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(out / "survey.json", json.dumps(report, indent=2) + "\n")
+    claim(out, SURVEY_WRITES)
     console.print(table)
     console.print(f"wrote {out}/survey.json and the maps")

@@ -36,7 +36,6 @@ lone json is split 90/10 (every tenth image is validation).
 from __future__ import annotations
 
 import hashlib
-import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -44,8 +43,9 @@ from typing import Any
 
 import numpy as np
 
-from bimkit.checks import read_text, read_yaml
+from bimkit.checks import parse_json, read_bytes, read_text, read_yaml
 from bimkit.errors import InputError
+from bimkit.limits import MAX_TEXT_BYTES
 
 IMAGE_SUFFIXES = {".jpg", ".jpeg", ".png", ".bmp", ".webp", ".tif", ".tiff"}
 
@@ -167,7 +167,8 @@ def read_yolo_labels(path: Path, nc: int) -> tuple[np.ndarray, np.ndarray]:
     if not path.exists():
         return np.zeros(0, dtype=np.int64), np.zeros((0, 4), dtype=np.float32)
     classes, boxes = [], []
-    for lineno, line in enumerate(path.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
+    text = read_bytes(path, "a YOLO label file", MAX_TEXT_BYTES).decode("utf-8", errors="replace")
+    for lineno, line in enumerate(text.splitlines(), 1):
         parts = line.split()
         if not parts:
             continue
@@ -376,11 +377,9 @@ def _coco_items(json_path: Path, doc: dict, cat_index: dict[int, int]) -> list[D
 def _read_json(path: Path) -> dict:
     text = read_text(path, "a COCO detection file (JSON)")
     try:
-        doc = json.loads(text)
-    except RecursionError:
-        raise InputError(f"{path}: JSON nested too deeply") from None
-    except json.JSONDecodeError as exc:
-        raise InputError(f"{path}:{exc.lineno}: invalid JSON ({exc.msg})") from None
+        doc = parse_json(text, str(path))  # depth, digits bounded; every number finite
+    except InputError as exc:
+        raise InputError(str(exc).replace(": not valid JSON: ", ": invalid JSON: ", 1)) from None
     if not isinstance(doc, dict) or "images" not in doc or "categories" not in doc:
         raise InputError(f"{path}: not a COCO detection file (needs images, annotations, categories)")
     return doc

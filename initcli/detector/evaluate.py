@@ -10,7 +10,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import cv2
 import numpy as np
 
 from bimkit.errors import InputError
@@ -19,6 +18,7 @@ from initcli.detector import DETECTOR_CONFIDENCE
 from initcli.detector.datasets import load_dataset
 from initcli.detector.metrics import MetricAccumulator, Metrics
 from initcli.detector.runtime import Detector
+from initcli.io.images import read_image
 
 
 @dataclass
@@ -60,9 +60,7 @@ def evaluate_model(
         warnings.append(f"the model has no class for {unknown}: they score 0")
     acc = MetricAccumulator(len(ds.names))
     for item in items:
-        img = cv2.imread(str(item.image), cv2.IMREAD_COLOR)
-        if img is None:
-            raise InputError(f"{item.image}: cannot read image")
+        img = read_image(item.image)
         h, w = img.shape[:2]
         found = det.detect(img)
         cls = np.array([model_to_ds.get(d.class_id, -1) for d in found], dtype=np.int64)

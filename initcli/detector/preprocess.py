@@ -38,7 +38,7 @@ def letterbox(
     h, w = image.shape[:2]
     th, tw = size
     r = min(th / h, tw / w)
-    nw, nh = int(round(w * r)), int(round(h * r))
+    nw, nh = max(1, int(round(w * r))), max(1, int(round(h * r)))  # a sliver stays one pixel wide
     if (nw, nh) != (w, h):
         image = cv2.resize(image, (nw, nh), interpolation=cv2.INTER_LINEAR)
     dw, dh = (tw - nw) / 2.0, (th - nh) / 2.0

@@ -18,7 +18,9 @@ import cv2
 import numpy as np
 import onnxruntime as ort
 
+from bimkit.documents import check_regular
 from bimkit.errors import InputError
+from bimkit.limits import MAX_MODEL_BYTES
 from initcli.detector import DEFAULT_MODEL, DETECTOR_CONFIDENCE, resolve_model_path
 from initcli.detector.layouts import LayoutError, decode, infer_layout, nms
 from initcli.detector.preprocess import PAD_VALUE, Letterbox, letterbox
@@ -130,6 +132,7 @@ class Detector:
             raise InputError(f"{path}: no such model file")
         if path.is_dir():
             raise InputError(f"{path}: is a folder, expected an .onnx model file")
+        check_regular(path, "an ONNX model", MAX_MODEL_BYTES)
         self.conf, self.iou, self.max_det = conf, iou, max_det
         try:
             self.session = ort.InferenceSession(

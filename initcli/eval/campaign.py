@@ -15,7 +15,7 @@ from initcli.eval.sweep import Sweep, sweep_label
 from initcli.eval.trial import TrialJob, run_trial, trial_seed
 from initcli.executor import Executor, LocalExecutor, map_unordered
 from initcli.sim.build import check_start
-from initcli.site import choose_storey, prepare_site, prepare_world
+from initcli.site import choose_storey, input_paths, prepare_site, prepare_world
 
 
 @dataclass(frozen=True)
@@ -44,6 +44,50 @@ def prepare_sites(config: EvalConfig, workdir: Path, only: Iterable[str] | None 
             worlds[key] = Path(world.root) if world is not None else None
         out.append(PreparedSite(site, extracted[key], worlds[key]))
     return out
+
+
+def campaign_inputs(config: EvalConfig, only: Iterable[str] | None = None) -> list[Path]:
+    """Every file and folder the campaign reads: the eval config, each site config and what it names."""
+    wanted = set(only) if only is not None else None
+    paths = [config.source] if config.source is not None else []
+    for site in config.sites:
+        if wanted is None or site.name in wanted:
+            paths += input_paths(load_config(site.config))
+    return paths
+
+
+@dataclass(frozen=True)
+class CampaignSize:
+    """How many trials a campaign runs: sites x starts x methods x sweep values."""
+
+    trials: int
+    sites: int
+    starts: int  # over all sites
+    methods: int
+    values: int  # sweep values (1 without a sweep)
+
+    def __str__(self) -> str:
+        sweep = f" x {self.values} sweep values" if self.values > 1 else ""
+        return (
+            f"{self.trials} trials ({self.starts} starts over {self.sites} site(s) x {self.methods} "
+            f"method(s){sweep})"
+        )
+
+
+def trial_count(
+    config: EvalConfig,
+    methods: tuple[str, ...],
+    starts: int | None = None,
+    sweep: Sweep | None = None,
+    only: Iterable[str] | None = None,
+) -> CampaignSize:
+    """The size of the campaign :func:`plan_jobs` would plan, from the config alone (before any
+    site is prepared)."""
+    wanted = set(only) if only is not None else None
+    sites = [s for s in config.sites if wanted is None or s.name in wanted]
+    n_starts = sum(_starts(s, starts) for s in sites)
+    values = len(sweep.values) if sweep is not None else 1
+    return CampaignSize(n_starts * len(methods) * values, len(sites), n_starts, len(methods), values)
 
 
 def check_start_poses(config: EvalConfig, sites: list[PreparedSite]) -> None:

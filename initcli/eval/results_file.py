@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import IO
 
 from bimkit.atomic import write_text_atomic
-from bimkit.checks import read_text
+from bimkit.checks import parse_json, read_text
 from bimkit.errors import InputError
 from initcli.eval.records import TrialRecord
 
@@ -97,11 +97,12 @@ def read_results(path: Path) -> list[TrialRecord]:
         if not line.strip():
             continue
         try:
-            doc = json.loads(line)
-        except json.JSONDecodeError as exc:
+            doc = parse_json(line, str(path), line=number, finite=False)  # depth and digits bounded
+        except InputError as exc:
             if number == len(lines) and not text.endswith("\n"):
                 break  # the interrupted last line: that trial runs again
-            raise InputError(f"{path}:{number}: invalid JSON ({exc.msg})") from None
+            problem = str(exc).removeprefix(f"{path}:{number}: ")
+            raise InputError(f"{path}:{number}: invalid JSON ({problem})") from None
         out.append(parse_record(doc, f"{path}:{number}"))
     return out
 

@@ -6,6 +6,7 @@ import copy
 import dataclasses
 import json
 from dataclasses import dataclass
+from typing import Any
 
 from bimkit.checks import check_number
 from bimkit.errors import InputError
@@ -86,9 +87,23 @@ def parse_sweep(text: str, config: SessionConfig | None = None) -> Sweep:
         current, bool
     ):
         raise InputError(f"--sweep {key}: {path} is not a number")
+    if dataclasses.is_dataclass(current):
+        whole = [
+            f.name for f in dataclasses.fields(current) if not isinstance(getattr(current, f.name), float)
+        ]
+        if whole:  # counts, switches, names: a factor on them is no setting
+            raise InputError(
+                f"--sweep {key}: {path} is a section whose settings do not all scale ({', '.join(whole[:3])} "
+                f"...); sweep one of its numbers, e.g. {path}.{_first_float(current) or 'KEY'}"
+            )
     for value in numbers:
         _check_value(key, path, value, scaled=dataclasses.is_dataclass(current))
     return Sweep(key, path, numbers)
+
+
+def _first_float(section: Any) -> str | None:
+    fields = dataclasses.fields(section)
+    return next((f.name for f in fields if isinstance(getattr(section, f.name), float)), None)
 
 
 def _field_schema(path: str) -> dict:

@@ -21,12 +21,15 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any, Union
 
+from bimkit.documents import check_finite_tree, parse_json, read_bytes
 from bimkit.errors import InputError
+from bimkit.limits import MAX_LOG_BYTES, MAX_LOG_LINE_BYTES, show_bytes
 from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount
 
@@ -348,16 +351,14 @@ def _record_time(rec: Record) -> float | None:
 def read_log(path: Path | str, skip_bad: bool = False) -> DetectionLog:
     """Read a detection log; raise :class:`InputError` (``file:line: problem``) on bad input."""
     path = Path(path)
+    if not os.path.lexists(path):
+        raise InputError(f"{path}: no such file")
+    data = read_bytes(path, "a detection log (.jsonl)", MAX_LOG_BYTES)
     try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise InputError(f"{path}: is a folder, expected a detection log (.jsonl)") from None
+        text = data.decode("utf-8-sig")
     except UnicodeDecodeError:
         raise InputError(f"{path}: not a text file (UTF-8 JSON Lines expected)") from None
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    del data
 
     meta: Meta | None = None
     records: list[Record] = []
@@ -370,11 +371,9 @@ def read_log(path: Path | str, skip_bad: bool = False) -> DetectionLog:
             continue
         saw_any = True
         try:
-            try:
-                value = json.loads(raw)
-            except json.JSONDecodeError as exc:
-                raise _Bad(f"not valid JSON: {exc.msg} (column {exc.colno})") from None
+            value = _decode_line(raw, path, number)
             rec = parse_record(value)
+            _finite(value)
             if rec is None:
                 kind = str(value.get("type"))
                 unknown[kind] = unknown.get(kind, 0) + 1
@@ -429,10 +428,29 @@ def read_log(path: Path | str, skip_bad: bool = False) -> DetectionLog:
     return log
 
 
+def _decode_line(raw: str, path: Path, number: int) -> Any:
+    """One line's JSON value, within the limits of :func:`bimkit.documents.parse_json` (depth,
+    integer digits, no NaN or infinity anywhere) and :data:`MAX_LOG_LINE_BYTES`."""
+    if len(raw) > MAX_LOG_LINE_BYTES:
+        raise _Bad(f"a line of {show_bytes(len(raw))} (at most {show_bytes(MAX_LOG_LINE_BYTES)})")
+    try:
+        return parse_json(raw, str(path), line=number, finite=False)
+    except InputError as exc:
+        raise _Bad(str(exc).removeprefix(f"{path}:{number}: ")) from None
+
+
+def _finite(value: Any) -> None:
+    """NaN or infinity anywhere in a record (the fields read check their own): a bad line."""
+    try:
+        check_finite_tree(value, "")
+    except InputError as exc:
+        raise _Bad(str(exc).removeprefix(": ")) from None
+
+
 def _safe_type(raw: str) -> str | None:
     try:
-        value = json.loads(raw)
-    except ValueError:
+        value = json.loads(raw) if len(raw) <= MAX_LOG_LINE_BYTES else None
+    except (ValueError, RecursionError):
         return None
     return value.get("type") if isinstance(value, dict) else None
 

@@ -19,14 +19,23 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import cv2
 import numpy as np
 
+from bimkit.documents import check_regular
 from bimkit.errors import InputError
+from bimkit.limits import MAX_BAG_BYTES
 from initcli.core.depth import window_depth
 from initcli.core.geometry import Pose2D, wrap_angle
-from initcli.core.projection import CameraIntrinsics, CameraMount, mount_from_optical
+from initcli.core.projection import CameraMount, mount_from_optical
 from initcli.io.detection_log import DetectedObject, Detections, Meta, Odom, Record, Scan
+from initcli.ros.messages import (
+    checked_transform,
+    decode_depth,
+    decode_image,
+    finite,
+    intrinsics,
+    stamp_seconds,
+)
 from initcli.ros.msgdefs import bbox_centre, detection_fields, register_missing, ros2_typestore
 from initcli.ros.records import (
     CAMERA_INFO,
@@ -42,7 +51,7 @@ from initcli.ros.records import (
     BagTopics,
     Topic,
 )
-from initcli.ros.tf import TransformTree, frame_name, msg_transform, quaternion_yaw
+from initcli.ros.tf import TransformTree, frame_name, quaternion_yaw
 
 DEPTH_SYNC_S = 0.05  # s: a depth image this close in time to a colour image is its aligned one
 ODOM_MARGIN_S = 0.2  # s: images this far outside the odometry's time span still get its end pose
@@ -66,6 +75,8 @@ def bag_paths(path: Path) -> list[Path]:
         if len(mcaps) == 1:
             return mcaps
         raise InputError(f"{path}: a folder without metadata.yaml; expected a ROS 2 bag folder")
+    if not path.is_dir():
+        check_regular(path, "a ROS bag (.bag, .mcap or .db3)", MAX_BAG_BYTES)
     return [path]
 
 
@@ -243,77 +254,6 @@ def choose_topics(source: BagSource, options: Bag2LogOptions) -> BagTopics:
     return BagTopics(perception, depth, camera_info, odom, tf, tf_static, scan)
 
 
-# --- message contents ------------------------------------------------------------------------------
-
-
-def stamp_seconds(msg: Any, bag_ns: int) -> float:
-    """The header stamp in seconds; the bag's receive time when the stamp was never set."""
-    header = getattr(msg, "header", None)
-    if header is not None:
-        st = header.stamp
-        sec: Any = getattr(st, "sec", None)  # the message types are not typed
-        nsec: Any = getattr(st, "nanosec", None)
-        if sec is None:  # ROS 1 spelling
-            sec, nsec = getattr(st, "secs", 0), getattr(st, "nsecs", 0)
-        if sec or nsec:
-            return int(sec) + int(nsec) * 1e-9
-    return bag_ns * 1e-9
-
-
-def decode_image(msg: Any) -> np.ndarray:
-    """sensor_msgs/Image or CompressedImage -> BGR uint8 (H, W, 3)."""
-    if hasattr(msg, "format"):  # CompressedImage
-        img = cv2.imdecode(np.frombuffer(bytes(msg.data), np.uint8), cv2.IMREAD_COLOR)
-        if img is None:
-            raise InputError(f"a CompressedImage ({msg.format}) could not be decoded")
-        return img
-    enc = str(msg.encoding).lower()
-    h, w = int(msg.height), int(msg.width)
-    data = np.frombuffer(bytes(msg.data), np.uint8)
-    channels = {"rgb8": 3, "bgr8": 3, "rgba8": 4, "bgra8": 4, "mono8": 1, "8uc1": 1, "8uc3": 3}.get(enc)
-    if channels is None:
-        raise InputError(
-            f"image encoding {msg.encoding!r} is not supported (rgb8, bgr8, rgba8, bgra8, mono8)"
-        )
-    step = int(msg.step) or w * channels
-    img = data[: h * step].reshape(h, step)[:, : w * channels].reshape(h, w, channels)
-    if enc in ("rgb8",):
-        return cv2.cvtColor(img, cv2.COLOR_RGB2BGR)
-    if enc == "rgba8":
-        return cv2.cvtColor(img, cv2.COLOR_RGBA2BGR)
-    if enc == "bgra8":
-        return cv2.cvtColor(img, cv2.COLOR_BGRA2BGR)
-    if channels == 1:
-        return cv2.cvtColor(img, cv2.COLOR_GRAY2BGR)
-    return np.ascontiguousarray(img)
-
-
-def decode_depth(msg: Any) -> np.ndarray:
-    """An aligned depth image -> metres, float32 (H, W); 0 where the camera had no return."""
-    enc = str(msg.encoding)
-    h, w = int(msg.height), int(msg.width)
-    raw = bytes(msg.data)
-    order = ">" if int(getattr(msg, "is_bigendian", 0)) else "<"
-    if enc in ("16UC1", "mono16"):
-        dtype, scale = np.dtype(f"{order}u2"), 1e-3  # millimetres
-    elif enc == "32FC1":
-        dtype, scale = np.dtype(f"{order}f4"), 1.0  # metres
-    else:
-        raise InputError(f"depth image encoding {enc!r}: expected 16UC1 (mm) or 32FC1 (m)")
-    step = int(msg.step) or w * dtype.itemsize
-    rows = np.frombuffer(raw[: h * step], np.uint8).reshape(h, step)[:, : w * dtype.itemsize]
-    values = np.ascontiguousarray(rows).view(dtype).reshape(h, w).astype(np.float32)
-    return values * np.float32(scale) if scale != 1.0 else values
-
-
-def intrinsics(msg: Any) -> CameraIntrinsics:
-    k = [float(v) for v in (msg.k if hasattr(msg, "k") else msg.K)]
-    cam = CameraIntrinsics(fx=k[0], fy=k[4], cx=k[2], cy=k[5], width=int(msg.width), height=int(msg.height))
-    if cam.fx <= 0 or cam.fy <= 0 or cam.width <= 0 or cam.height <= 0:
-        raise InputError("camera_info has no intrinsics (K is zero or the size is 0)")
-    return cam
-
-
 @dataclass
 class _Trajectory:
     """Planar base poses over time, interpolated at image stamps."""
@@ -386,8 +326,9 @@ def parse_class_names(text: str | None) -> tuple[str, ...] | dict[str, str] | No
 class _Perceiver:
     """One perception message + its depth image -> detection-log objects."""
 
-    def __init__(self, kind: str, options: Bag2LogOptions, stats: Bag2LogStats) -> None:
+    def __init__(self, kind: str, options: Bag2LogOptions, stats: Bag2LogStats, topic: str = "") -> None:
         self.kind = kind
+        self.topic = topic
         self.options = options
         self.stats = stats
         self.name = _class_namer(options.class_names)
@@ -416,6 +357,7 @@ class _Perceiver:
                 self.numeric_warned = True
             cu, cv = bbox_centre(det.bbox)
             sx, sy = float(det.bbox.size_x), float(det.bbox.size_y)
+            finite(self.topic, "a Detection2D (bbox or score)", cu, cv, sx, sy, score)
             out.append((self.name(cls), score, (cu - sx / 2, cv - sy / 2, cu + sx / 2, cv + sy / 2)))
         return out
 
@@ -488,11 +430,11 @@ def bag_to_records(
                 continue
             if topics.tf_static is not None and name == topics.tf_static.name:
                 for tr in msg.transforms:
-                    tree.add(msg_transform(tr))
+                    tree.add(checked_transform(name, tr))
                 continue
             if topics.tf is not None and name == topics.tf.name:
                 for tr in msg.transforms:
-                    e = msg_transform(tr)
+                    e = checked_transform(name, tr)
                     tf_edges.append(
                         (stamp_seconds(tr, bag_ns), e.parent, e.child, _planar(e.rotation, e.translation))
                     )
@@ -501,10 +443,18 @@ def bag_to_records(
             clock.setdefault(name, []).append(t)
             if topics.odom is not None and name == topics.odom.name:
                 p, q = msg.pose.pose.position, msg.pose.pose.orientation
+                finite(name, "an Odometry pose", p.x, p.y, q.x, q.y, q.z, q.w)
                 odom_samples.append((t, Pose2D(float(p.x), float(p.y), quaternion_yaw(q.x, q.y, q.z, q.w))))
                 odom_child = frame_name(msg.child_frame_id) or odom_child
             elif topics.scan is not None and name == topics.scan.name:
-                ranges = np.asarray(msg.ranges, dtype=float)
+                finite(
+                    name,
+                    "a LaserScan's angles or range_max",
+                    msg.angle_min,
+                    msg.angle_increment,
+                    msg.range_max,
+                )
+                ranges = np.asarray(msg.ranges, dtype=float)  # NaN, inf: no return (the sensor's way)
                 ranges = np.where(np.isfinite(ranges) & (ranges >= float(msg.range_min)), ranges, math.nan)
                 scans.append(
                     Scan(
@@ -519,7 +469,7 @@ def bag_to_records(
             _check_clock(name, times)
         if camera_msg is None:
             raise InputError(f"{topics.camera_info.name}: no CameraInfo message in the bag")
-        camera = intrinsics(camera_msg)
+        camera = intrinsics(camera_msg, topics.camera_info.name)
         optical_frame = frame_name(camera_msg.header.frame_id)
 
         base = frame_name(options.base_frame) if options.base_frame else None
@@ -559,7 +509,7 @@ def bag_to_records(
         stats.scans = len(scans)
 
         # Pass 2: perception, each with the depth image nearest in time.
-        perceiver = _Perceiver(topics.perception_kind, options, stats)
+        perceiver = _Perceiver(topics.perception_kind, options, stats, topics.perception.name)
         depths: deque[tuple[float, Any]] = deque(maxlen=DEPTH_BUFFER)
         pending: deque[tuple[float, Any]] = deque()
         last_kept = -math.inf
@@ -587,6 +537,7 @@ def bag_to_records(
             )
             stats.images += 1
             stats.objects += len(objects)
+            stats.objects_without_depth += sum(o.depth is None for o in objects)
 
         for name, bag_ns, msg in source.messages([topics.perception.name, topics.depth.name]):
             tick()
@@ -624,6 +575,11 @@ def bag_to_records(
         raise InputError(f"{path}: no image on {topics.perception.name}")
     if stats.without_depth:
         stats.warnings.append(f"{stats.without_depth} image(s) without an aligned depth image skipped")
+    if stats.objects and stats.objects_without_depth == stats.objects:
+        stats.warnings.append(
+            f"none of the {stats.objects} detections has a depth ({topics.depth.name} holds no valid value "
+            "at any box centre: NaN, 0 or out of range); bim-init match cannot place them"
+        )
     if stats.outside_odometry:
         stats.warnings.append(f"{stats.outside_odometry} image(s) outside the odometry's time span skipped")
     records.sort(key=lambda r: r.t)

@@ -34,10 +34,13 @@ def convert_bag(
         out.parent.mkdir(parents=True, exist_ok=True)
         write_log(tmp, records)
         tmp.replace(out)
-    except OSError as exc:
+    except BaseException as exc:  # Ctrl-C or SIGTERM too: no half log left behind
         with contextlib.suppress(OSError):  # a parent that is a file: there is nothing to remove
             tmp.unlink(missing_ok=True)
-        raise InputError(f"{out}: cannot write the log: {exc.strerror or exc}") from None
+        if not isinstance(exc, OSError | ValueError):  # ValueError: a number no log holds (NaN)
+            raise
+        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise InputError(f"{out}: cannot write the log: {why}") from None
     return records, stats
 
 

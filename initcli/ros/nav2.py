@@ -12,6 +12,7 @@ import numpy as np
 
 from bimkit.checks import check_number, read_json
 from bimkit.errors import InputError
+from bimkit.schemas import schema_path
 from initcli.core.geometry import Pose2D
 from initcli.io.detection_log import Detections, HypothesesRecord, Odom, read_log
 from initcli.ros.records import InitialPose
@@ -117,8 +118,28 @@ def session_initial_pose(summary: dict[str, Any], log_path: Path | None) -> Init
     return InitialPose(t, pose.x, pose.y, pose.yaw, cov)
 
 
+SUMMARY_SCHEMA = schema_path("summary.schema.json")
+
+
 def read_summary(path: Path) -> dict[str, Any]:
-    doc = read_json(Path(path))  # text, valid JSON, every number finite
+    """A ``summary.json`` checked against ``summary.schema.json`` (``"success": "false"`` is not a
+    boolean, a pose needs its numbers) and its covariance a covariance (no negative variance)."""
+    from initcli.config import validate_document  # jsonschema, with messages naming the key
+
+    doc = read_json(Path(path), "a bim-init run summary (summary.json)")  # bounded, every number finite
     if not isinstance(doc, dict) or "success" not in doc:
         raise InputError(f"{path}: not a bim-init run summary.json (no 'success')")
+    validate_document(doc, SUMMARY_SCHEMA, str(path))
+    cov = doc.get("covariance")
+    if cov is not None:
+        matrix = np.asarray(cov, dtype=float)
+        variances = np.diag(matrix)
+        if (variances < 0).any():
+            k = int(np.argmax(variances < 0))
+            raise InputError(f"{path}: covariance.{k}.{k}: {variances[k]:g} is a negative variance")
+        if (
+            not np.allclose(matrix, matrix.T, atol=1e-6)
+            or np.linalg.eigvalsh((matrix + matrix.T) / 2).min() < -1e-6
+        ):
+            raise InputError(f"{path}: covariance: not a covariance (not symmetric positive semi-definite)")
     return doc

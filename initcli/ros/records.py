@@ -94,6 +94,7 @@ class Bag2LogStats:
     messages: int = 0
     images: int = 0  # perception messages turned into detections records
     objects: int = 0
+    objects_without_depth: int = 0
     odom: int = 0
     scans: int = 0
     without_depth: int = 0

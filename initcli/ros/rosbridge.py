@@ -18,6 +18,7 @@ from initcli.ros.records import INITIALPOSE_TOPIC, STATE_TOPIC, InitialPose
 
 DEFAULT_PORT = 9090
 CONNECT_TIMEOUT_S = 5.0
+HANDSHAKE_SERVICE = "/bim_init/handshake"  # no robot offers it: rosbridge answers with a failure
 ADVERTISE_SETTLE_S = 0.5  # s: subscribers of a new publisher need a moment before the first message
 
 
@@ -46,6 +47,24 @@ class RosbridgeLink:
         self._publishers: dict[str, Any] = {}
         self._subscribers: list[Any] = []
         self._lock = threading.Lock()
+        try:
+            self._handshake(timeout)
+        except BaseException:
+            self.close()
+            raise
+
+    def _handshake(self, timeout: float) -> None:
+        """A websocket server is not yet a rosbridge: call a service no robot has and wait for the
+        ``service_response`` every rosbridge (ROS 1 and 2) sends back, a failure naming the service.
+        A plain websocket server (or one that echoes) never sends one: an error, not "sent"."""
+        answered = threading.Event()
+        probe = self._roslibpy.Service(self.ros, HANDSHAKE_SERVICE, "std_srvs/Trigger")
+        probe.call(self._roslibpy.ServiceRequest(), lambda _: answered.set(), lambda _: answered.set())
+        if not answered.wait(timeout):
+            raise InputError(
+                f"ws://{self.host}:{self.port} is a websocket server but does not speak rosbridge (no answer "
+                f"to a rosbridge service call in {timeout:g} s)"
+            )
 
     @property
     def connected(self) -> bool:
@@ -94,11 +113,15 @@ class RosbridgeLink:
 
 
 def publish_initial_pose(
-    pose: InitialPose, host: str = "localhost", port: int = DEFAULT_PORT, settle: float = ADVERTISE_SETTLE_S
+    pose: InitialPose,
+    host: str = "localhost",
+    port: int = DEFAULT_PORT,
+    settle: float = ADVERTISE_SETTLE_S,
+    timeout: float = CONNECT_TIMEOUT_S,
 ) -> dict[str, Any]:
     """Send ``pose`` once on ``/initialpose`` (and "initialised" on the state topic); returns the message."""
     message = initial_pose_message(pose)
-    with RosbridgeLink(host, port) as link:
+    with RosbridgeLink(host, port, timeout) as link:
         link.advertise(INITIALPOSE_TOPIC, "geometry_msgs/msg/PoseWithCovarianceStamped")
         link.advertise(STATE_TOPIC, "std_msgs/msg/String")
         time.sleep(settle)

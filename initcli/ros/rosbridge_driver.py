@@ -28,7 +28,8 @@ from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.drivers.base import LaserScan, SensorFrame
 from initcli.io.detection_log import DetectedObject
-from initcli.ros.bag_reader import DEPTH_SYNC_S, decode_depth
+from initcli.ros.bag_reader import DEPTH_SYNC_S
+from initcli.ros.messages import decode_depth
 from initcli.ros.msgdefs import bbox_centre, detection_fields
 from initcli.ros.nav2 import initial_pose_message, pose_array_message, state_message
 from initcli.ros.records import (

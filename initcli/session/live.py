@@ -17,7 +17,7 @@ from initcli.ros.rosbridge_driver import RosbridgeDriver
 from initcli.session.outputs import summary_document, write_summary
 from initcli.session.result import MatchStep
 from initcli.session.runner import Observer, Session
-from initcli.session.simulated import SESSION_RNG_OFFSET
+from initcli.session.simulated import RUN_MARKERS, SESSION_RNG_OFFSET
 from initcli.site import choose_storey, prepare_site
 
 __all__ = ["run_live"]
@@ -27,7 +27,7 @@ def run_live(config: SessionConfig, out: Path, seed: int, view: Observer | None 
     """``robot.driver: rosbridge``: the session on the real robot behind a rosbridge server; its state
     goes to ``/bim_init/state`` while it runs and the result to ``/initialpose`` (Nav2)."""
     r = config.robot
-    with staged_directory(out) as stage:
+    with staged_directory(out, RUN_MARKERS) as stage:
         site = prepare_site(config, stage)
         _, matched = choose_storey(config, site)
         link = RosbridgeLink(r.rosbridge.host, r.rosbridge.port)

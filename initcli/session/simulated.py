@@ -22,7 +22,10 @@ from initcli.session.runner import Observer, Session
 from initcli.sim.build import SimSetup, build_sim
 from initcli.site import choose_storey, prepare_site, prepare_world
 
-__all__ = ["SESSION_RNG_OFFSET", "SimSession", "run_simulated", "sim_session"]
+__all__ = ["RUN_MARKERS", "RUN_WRITES", "SESSION_RNG_OFFSET", "SimSession", "run_simulated", "sim_session"]
+
+RUN_MARKERS = ("summary.json",)  # a folder holding one was written by bim-init run
+RUN_WRITES = ("session.jsonl", "summary.json", "report.png", "site", "world")  # what a run writes there
 
 
 SESSION_RNG_OFFSET = 7919  # the session's own generator (particle filter) is seeded apart from the world
@@ -73,7 +76,7 @@ def run_simulated(
     """Run one session on the simulated robot into ``out`` (staged: nothing half-written on
     failure): ``session.jsonl``, ``summary.json`` and ``report.png``. ``observer`` sees the state
     while it runs, inside the context ``running`` gives (a live console view). Returns the summary."""
-    with staged_directory(out) as stage:
+    with staged_directory(out, RUN_MARKERS) as stage:
         site = prepare_site(config, stage)
         world = prepare_world(config, stage)
         built = sim_session(

@@ -1,4 +1,4 @@
-"""bimkit.checks: number ranges, text and YAML files, output folders, the option callback."""
+"""bimkit.checks: number ranges, text and YAML files, the option callback."""
 
 from __future__ import annotations
 
@@ -12,8 +12,6 @@ import typer
 from bimkit.checks import (
     check_finite_tree,
     check_number,
-    check_output_dir,
-    check_output_file,
     parse_yaml,
     range_problem,
     read_text,
@@ -102,40 +100,6 @@ def test_read_yaml_refuses_non_finite_numbers(tmp_path: Path) -> None:
     path.write_text("fine_tuning:\n  sigma: .nan\n", encoding="utf-8")
     with pytest.raises(InputError, match=r"fine_tuning.sigma: nan is not a finite number"):
         read_yaml(path, "a config")
-
-
-def test_check_output_dir(tmp_path: Path) -> None:
-    check_output_dir(tmp_path / "new" / "deeper", "--out", ["manifest.json"])  # does not exist: fine
-    empty = tmp_path / "empty"
-    empty.mkdir()
-    check_output_dir(empty, "--out", ["manifest.json"])
-    earlier = tmp_path / "earlier"
-    earlier.mkdir()
-    (earlier / "manifest.json").write_text("{}")
-    (earlier / "map.pgm").write_text("x")
-    check_output_dir(earlier, "--out", ["manifest.json"])
-    other = tmp_path / "other"
-    other.mkdir()
-    (other / "notes.txt").write_text("mine")
-    with pytest.raises(InputError, match="pass --force"):
-        check_output_dir(other, "--out", ["manifest.json"])
-    check_output_dir(other, "--out", ["manifest.json"], force=True)
-    a_file = tmp_path / "file.txt"
-    a_file.write_text("x")
-    with pytest.raises(InputError, match="is a file, expected a folder"):
-        check_output_dir(a_file, "--out", ["manifest.json"])
-    with pytest.raises(InputError, match=r"file.txt is a file, expected a folder"):
-        check_output_dir(a_file / "sub", "--out", ["manifest.json"], force=True)
-
-
-def test_check_output_file(tmp_path: Path) -> None:
-    check_output_file(tmp_path / "a" / "result.json", "--json")
-    with pytest.raises(InputError, match="is a folder, expected a file name"):
-        check_output_file(tmp_path, "--json")
-    blocker = tmp_path / "blocker"
-    blocker.write_text("x")
-    with pytest.raises(InputError, match="is a file, not a folder"):
-        check_output_file(blocker / "result.json", "--json")
 
 
 def test_number_option_callback_exits_2_with_one_line(capsys: pytest.CaptureFixture[str]) -> None:

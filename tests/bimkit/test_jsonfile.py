@@ -22,5 +22,5 @@ def test_bad_json_names_the_line(tmp_path):
 
 
 def test_missing_file_is_one_error(tmp_path):
-    with pytest.raises(InputError, match=r"nope\.json: cannot read: No such file"):
+    with pytest.raises(InputError, match=r"nope\.json: cannot read a JSON file: No such file"):
         read_json(tmp_path / "nope.json")

@@ -77,18 +77,23 @@ def test_extract_refuses_bad_input(work: Path, case) -> None:
     assert not [p for p in work.iterdir() if p.name.startswith(".")]
 
 
-def test_an_earlier_site_folder_is_replaced_whole(work: Path) -> None:
+def test_an_earlier_site_folder_gets_the_new_site_and_keeps_what_it_did_not_write(work: Path) -> None:
     out = work / "site"
     out.mkdir()
     (out / "site.json").write_text("{}")
-    (out / "stale.txt").write_text("from an older run")
+    (out / "features.csv").write_text("ID,old\n")
+    (out / "stale.txt").write_text("from an older run, or the user's")
     result = runner.invoke(app, [MODEL, "-o", str(out), "--json"])
     assert result.exit_code == 0, result.output
-    assert (out / "features.csv").is_file() and not (out / "stale.txt").exists()
+    assert (out / "features.csv").read_text().startswith("ID,Category")  # replaced: bim-extract wrote it
+    assert (out / "stale.txt").read_text() == "from an older run, or the user's"  # kept
     assert sorted(p.name for p in work.iterdir() if p.name.startswith(".")) == []
+    result = runner.invoke(app, [MODEL, "-o", str(out), "--json"])  # again: from the record, no --force
+    assert result.exit_code == 0, result.output
+    assert (out / "stale.txt").is_file()
 
 
-def test_force_replaces_a_foreign_folder(work: Path) -> None:
+def test_force_writes_into_a_foreign_folder_and_keeps_its_files(work: Path) -> None:
     result = runner.invoke(app, [MODEL, "-o", str(work / "other"), "--force", "--json"])
     assert result.exit_code == 0, result.output
-    assert (work / "other" / "site.json").is_file() and not (work / "other" / "notes.txt").exists()
+    assert (work / "other" / "site.json").is_file() and (work / "other" / "notes.txt").is_file()

@@ -69,3 +69,43 @@ def test_a_small_campaign_on_a_local_ray_instance_matches_the_local_pool(small_c
         ray_executor.close()
     assert len(local) == 2 and [r.start for r in local] == [0, 1]
     assert on_ray == local
+
+
+def test_a_ray_address_is_probed_before_ray_is_asked(monkeypatch):
+    import socket
+    import time
+
+    from initcli.executor import probe_address
+
+    closed = socket.socket()
+    closed.bind(("127.0.0.1", 0))
+    port = closed.getsockname()[1]
+    closed.close()  # nothing listens there now
+    started = time.monotonic()
+    for address in (f"127.0.0.1:{port}", f"ray://127.0.0.1:{port}"):
+        with pytest.raises(InputError, match=rf"--address {address}: no Ray cluster answers there"):
+            probe_address(address)
+    assert time.monotonic() - started < 5
+    for address in ("no-port", "host:", ":6379", "host:99999", "host:port"):
+        with pytest.raises(InputError, match="expected host:port, ray://host:port or auto"):
+            probe_address(address)
+    listening = socket.socket()
+    listening.bind(("127.0.0.1", 0))
+    listening.listen(1)
+    try:
+        probe_address(f"127.0.0.1:{listening.getsockname()[1]}")  # accepts: over to ray.init
+        probe_address("auto")
+    finally:
+        listening.close()
+
+
+def test_cancel_stops_the_workers_at_once():
+    import time
+
+    executor = LocalExecutor(2)
+    handles = {executor.submit(time.sleep, 60) for _ in range(2)}
+    time.sleep(1.0)
+    started = time.monotonic()
+    executor.close(cancel=True)
+    assert time.monotonic() - started < 10
+    assert all(h.done() for h in handles)

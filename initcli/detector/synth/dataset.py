@@ -54,6 +54,8 @@ from initcli.detector.synth.scene import (
 )
 
 CELL = 0.1  # m, raster of the free space used to place the camera
+SYNTH_MARKERS = ("synth.json",)  # a folder holding one was written by bim-init detector synth
+SYNTH_WRITES = ("images", "labels", "depth", "data.yaml", "synth.json")  # what synth writes there
 
 
 @dataclass
@@ -429,8 +431,10 @@ def write_dataset(
     opts: SynthOptions,
     progress: Callable[[int], None] | None = None,
     warn: Callable[[str], None] | None = None,
+    final: Path | None = None,
 ) -> dict:
-    """Render ``opts.images`` images into a YOLO dataset at ``out``; returns the synth.json document."""
+    """Render ``opts.images`` images into a YOLO dataset at ``out``; returns the synth.json document.
+    ``final``: where the dataset will be once ``out`` (a staging folder) is moved there."""
     if opts.images < 1:
         raise InputError(f"--images: expected at least 1, got {opts.images}")
     if not 0.0 <= opts.val_fraction <= 1.0:
@@ -471,7 +475,7 @@ def write_dataset(
             for done in pool.map(_write_range, [(out, c) for c in chunks]):
                 collect(done)
     data = {
-        "path": str(out.resolve()),
+        "path": str(Path(final or out).resolve()),
         "train": "images/train",
         "val": "images/val",
         "names": list(CLASS_NAMES),

@@ -7,17 +7,14 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from bimkit.errors import InputError
 from initcli.detector.preprocess import PAD_VALUE
+from initcli.io.images import read_image
 
 __all__ = ["augment_hsv", "camera_degrade", "random_letterbox", "read_image_rgb"]
 
 
 def read_image_rgb(path: Path) -> np.ndarray:
-    img = cv2.imread(str(path), cv2.IMREAD_COLOR)
-    if img is None:
-        raise InputError(f"{path}: cannot read image")
-    return cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
+    return cv2.cvtColor(read_image(path), cv2.COLOR_BGR2RGB)
 
 
 def augment_hsv(img: np.ndarray, gains: tuple[float, float, float], rng: np.random.Generator) -> np.ndarray:

@@ -11,7 +11,9 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from bimkit.documents import check_regular
 from bimkit.errors import InputError
+from bimkit.limits import MAX_MODEL_BYTES
 from initcli.detector import DEFAULT_MODEL
 from initcli.detector.training.model import Arch, Detector, upgrade_state_dict
 
@@ -28,6 +30,7 @@ def save_checkpoint(path: Path, state: dict) -> None:
 def load_checkpoint(path: Path) -> dict:
     if not Path(path).exists():
         raise InputError(f"{path}: no such checkpoint")
+    check_regular(Path(path), "a bim-init checkpoint (.pt)", MAX_MODEL_BYTES)
     try:
         ckpt = torch.load(path, map_location="cpu", weights_only=False)
     except Exception as exc:  # noqa: BLE001 - any unpickling problem is a bad input file

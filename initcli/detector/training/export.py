@@ -12,6 +12,7 @@ relative for box coordinates in pixels: ``np.allclose(ort, torch, rtol=1e-4, ato
 from __future__ import annotations
 
 import json
+import os
 import tempfile
 import warnings
 from dataclasses import dataclass
@@ -120,11 +121,17 @@ def export_onnx(
     model.producer_name = "bim-init"
     model.producer_version = package_version()
     onnx.checker.check_model(model)
-    onnx.save_model(model, str(out), save_as_external_data=False)
-    diff = verify_export(head, out, size) if verify else float("nan")
-    if verify and not diff <= atol:
-        out.unlink(missing_ok=True)
-        raise InputError(f"{out}: onnxruntime output differs from PyTorch by {diff:.2e} (> {atol:.0e})")
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".onnx", dir=out.parent)
+    os.close(fd)
+    staged = Path(tmp_name)  # written and verified beside ``out``, then moved there: never half a model
+    try:
+        onnx.save_model(model, str(staged), save_as_external_data=False)
+        diff = verify_export(head, staged, size) if verify else float("nan")
+        if verify and not diff <= atol:
+            raise InputError(f"{out}: onnxruntime output differs from PyTorch by {diff:.2e} (> {atol:.0e})")
+        os.replace(staged, out)
+    finally:
+        staged.unlink(missing_ok=True)
     return ExportReport(out, size, names, diff, out.stat().st_size, meta)
 
 

@@ -10,6 +10,7 @@ validation split, and a checkpoint at ``--out`` that ``--resume`` continues from
 from __future__ import annotations
 
 import csv
+import io
 import math
 import random
 import time
@@ -23,6 +24,7 @@ import torch
 from torch.utils.data import DataLoader, WeightedRandomSampler
 from torch.utils.data import Dataset as TorchDataset
 
+from bimkit.atomic import write_text_atomic
 from bimkit.errors import InputError
 from initcli.detector import DETECTOR_CONFIDENCE
 from initcli.detector.datasets import Dataset, DatasetItem, load_dataset
@@ -462,23 +464,24 @@ def _write_history_csv(path: Path, history: list[dict], names: list[str]) -> Non
     cols = ["epoch", "loss", "hm_loss", "box_loss", "seconds", "map50"]
     for c in names:
         cols += [f"{c}_precision", f"{c}_recall", f"{c}_ap50"]
-    with path.open("w", newline="", encoding="utf-8") as fh:
-        w = csv.writer(fh)
-        w.writerow(cols)
-        for h in history:
-            m = h.get("metrics") or {}
-            row = [
-                h["epoch"],
-                f"{h['loss']:.4f}",
-                f"{h['hm_loss']:.4f}",
-                f"{h['box_loss']:.4f}",
-                f"{h['seconds']:.1f}",
-                _fmt(m.get("map50")),
-            ]
-            for c in names:
-                cm = (m.get("classes") or {}).get(c, {})
-                row += [_fmt(cm.get("precision")), _fmt(cm.get("recall")), _fmt(cm.get("ap50"))]
-            w.writerow(row)
+    table = io.StringIO(newline="")
+    w = csv.writer(table)
+    w.writerow(cols)
+    for h in history:
+        m = h.get("metrics") or {}
+        row = [
+            h["epoch"],
+            f"{h['loss']:.4f}",
+            f"{h['hm_loss']:.4f}",
+            f"{h['box_loss']:.4f}",
+            f"{h['seconds']:.1f}",
+            _fmt(m.get("map50")),
+        ]
+        for c in names:
+            cm = (m.get("classes") or {}).get(c, {})
+            row += [_fmt(cm.get("precision")), _fmt(cm.get("recall")), _fmt(cm.get("ap50"))]
+        w.writerow(row)
+    write_text_atomic(path, table.getvalue())
 
 
 def _fmt(v: float | None) -> str:

@@ -1,7 +1,9 @@
 """A small rosbridge-v2-protocol server for tests: JSON over websocket on 127.0.0.1 (stdlib only).
 
-It records every operation a client sends (advertise, publish, subscribe, ...) and can publish
-messages to the clients subscribed to a topic. Bounded in time: each wait takes a timeout.
+It records every operation a client sends (advertise, publish, subscribe, ...), answers a service
+call as rosbridge answers one for a service nobody offers (``result: false``), and can publish
+messages to the clients subscribed to a topic. ``PlainWebsocketServer``: a websocket server that
+speaks no rosbridge (it records and never answers). Bounded in time: each wait takes a timeout.
 """
 
 from __future__ import annotations
@@ -14,6 +16,8 @@ import struct
 import threading
 import time
 from typing import Any
+
+from tests.helpers import wait_until
 
 _GUID = "258EAFA5-E914-47DA-95CA-C5AB0DC85B11"
 
@@ -117,7 +121,16 @@ class RosbridgeServer:
     def _handle(self, conn: socket.socket, op: dict[str, Any]) -> None:
         with self._lock:
             self.ops.append(op)
-            if op.get("op") == "subscribe":
+            if op.get("op") == "call_service":  # as rosbridge does for a service nobody offers
+                answer = {
+                    "op": "service_response",
+                    "id": op.get("id"),
+                    "service": op.get("service"),
+                    "values": f"Service {op.get('service')} does not exist",
+                    "result": False,
+                }
+                conn.sendall(_frame(json.dumps(answer).encode(), 1))
+            elif op.get("op") == "subscribe":
                 self.subscriptions.setdefault(op["topic"], []).append(conn)
             elif op.get("op") == "unsubscribe":
                 subs = self.subscriptions.get(op["topic"], [])
@@ -144,12 +157,7 @@ class RosbridgeServer:
             return [o for o in self.ops if o.get("op") == kind]
 
     def wait_for(self, predicate: Any, timeout: float = 5.0) -> bool:
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            if predicate():
-                return True
-            time.sleep(0.02)
-        return False
+        return wait_until(predicate, timeout)
 
     def drop_clients(self) -> None:
         """Close every client connection (the robot's bridge went away)."""
@@ -160,6 +168,21 @@ class RosbridgeServer:
                 c.shutdown(socket.SHUT_RDWR)
             except OSError:
                 pass
+
+
+class PlainWebsocketServer(RosbridgeServer):
+    """A websocket server that is no rosbridge: it records what it gets and answers nothing, or with
+    ``echo`` sends every frame back as it came."""
+
+    def __init__(self, echo: bool = False) -> None:
+        super().__init__()
+        self.echo = echo
+
+    def _handle(self, conn: socket.socket, op: dict[str, Any]) -> None:
+        with self._lock:
+            self.ops.append(op)
+        if self.echo:
+            conn.sendall(_frame(json.dumps(op).encode(), 1))
 
 
 def _frame(payload: bytes, opcode: int) -> bytes:

@@ -127,3 +127,29 @@ def test_read_summary(tmp_path: Path) -> None:
     bad.write_text(json.dumps({"pose": {}}))
     with pytest.raises(InputError, match="success"):
         read_summary(bad)
+
+
+@pytest.mark.parametrize(
+    ("change", "expected"),
+    [
+        ({"success": "false"}, r"success: expected true or false, got \"false\""),
+        ({"success": 1}, r"success: expected true or false, got 1"),
+        ({"pose": "here"}, r"pose: "),
+        ({"pose": {"x": 4.0, "y": "5", "yaw_deg": 0}}, r"pose.y: expected a number, got \"5\""),
+        ({"pose": None}, r"pose: "),
+        (
+            {"covariance": [[-0.1, 0, 0], [0, 0.2, 0], [0, 0, 0.3]]},
+            r"covariance.0.0: -0.1 is a negative variance",
+        ),
+        ({"covariance": [[0.1, 5, 0], [0, 0.2, 0], [0, 0, 0.3]]}, r"covariance: not a covariance"),
+        ({"covariance": [[0.1, 0], [0, 0.2]]}, r"covariance: "),
+        ({"duration_s": -3}, r"duration_s: -3 is below the minimum 0"),
+    ],
+)
+def test_a_summary_off_its_schema_is_refused_before_anything_is_sent(
+    tmp_path: Path, change: dict, expected: str
+) -> None:
+    path = tmp_path / "summary.json"
+    path.write_text(json.dumps({**_summary(), **change}))
+    with pytest.raises(InputError, match=expected):
+        read_summary(path)

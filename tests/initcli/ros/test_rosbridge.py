@@ -8,7 +8,7 @@ import pytest
 
 from bimkit.errors import InputError
 from initcli.ros.records import InitialPose
-from tests.initcli.ros.rosbridge_server import RosbridgeServer
+from tests.initcli.ros.rosbridge_server import PlainWebsocketServer, RosbridgeServer
 
 pytest.importorskip("roslibpy")
 
@@ -51,3 +51,12 @@ def test_subscribe_receives_what_the_robot_publishes():
         server.send("/odom", {"pose": {"pose": {"position": {"x": 1.5}}}})
         assert server.wait_for(lambda: got, 5)
     assert got[0]["pose"]["pose"]["position"]["x"] == 1.5
+
+
+@pytest.mark.parametrize("echo", [False, True])
+def test_a_websocket_server_that_is_no_rosbridge_is_an_error_and_nothing_is_published(echo):
+    pose = InitialPose(1.0, 2.0, 3.0, 0.0, tuple([0.0] * 36))
+    with PlainWebsocketServer(echo=echo) as server:
+        with pytest.raises(InputError, match=r"is a websocket server but does not speak rosbridge"):
+            publish_initial_pose(pose, "127.0.0.1", server.port, settle=0.05, timeout=1.0)
+        assert [o["op"] for o in server.ops] == ["call_service"]  # the handshake, and nothing after
