@@ -24,6 +24,7 @@ from bimtools.extract.features import (
     storey_features,
 )
 from bimtools.extract.floorplan import FloorPlan, ObstacleShape, build_floorplan
+from bimtools.extract.landmarks import region_probe, storey_landmarks
 from bimtools.extract.occupancy import rasterise
 from bimtools.extract.placement import opening_in_plan
 from bimtools.extract.section import polygons_of, projected_footprint, section_polygon
@@ -38,7 +39,7 @@ from bimtools.ifc.geometry import Mesh, ProgressCallback, iterate_meshes
 from bimtools.ifc.model import ModelInfo, describe_model, open_model
 from bimtools.ifc.storeys import Storey, container_storey, list_storeys, storey_at_elevation
 from bimtools.ifc.text import element_name
-from bimtools.site.records import Feature, OccupancyGrid
+from bimtools.site.records import Feature, OccupancyGrid, camera_features
 
 OBSTACLE_CLASSES = ("IfcWall", "IfcColumn", "IfcCurtainWall", "IfcDoor", "IfcWindow")
 CURTAIN_PART_CLASSES = ("IfcPlate", "IfcMember")
@@ -261,9 +262,9 @@ def extract_site(
             s, storeys, candidates, meshes, where, categories, section_height, resolution, info.unit_scale
         )
         result.warnings += storey_result.warnings
-        if storey_result.features or storey is not None:
+        if camera_features(storey_result.features) or storey is not None:
             result.storeys.append(storey_result)
-    if not result.features:
+    if not camera_features(result.features):
         asked = "any storey" if storey in (None, "all") else f"storey {storey!r}"
         raise InputError(f"{path}: no features found (no doors, lifts or stairs on {asked})")
     return result
@@ -357,6 +358,9 @@ def _extract_storey(
     order = {c.name: i for i, c in enumerate(categories.categories)}
     features.sort(key=lambda f: (order.get(f.category, 99), round(f.x, 3), round(f.y, 3), f.id))
     features, notes = merge_duplicates(features)
+    if categories.landmarks.enabled:
+        free = region_probe(ctx.regions.label_at, ctx.regions.areas)
+        features += storey_landmarks(plan.walls, categories.landmarks, s.name, s.elevation, free)
     return StoreyResult(s, features, plan, grid, warnings, notes)
 
 
