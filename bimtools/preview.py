@@ -208,4 +208,4 @@ def render_preview(
     Path(path).write_bytes(data.tobytes())
 
 
-__all__ = ["CATEGORY_STYLE", "category_style", "render_preview"]
+__all__ = ["CATEGORY_STYLE", "LANDMARK_MARKER", "category_style", "draw_features", "render_preview"]
