@@ -2,28 +2,34 @@
 bim-extract applies to the BIM (:mod:`bimtools.extract.landmarks`), on the lines of
 :mod:`initcli.core.scan_lines`. The sensor is at the origin, so its side of every line is free space.
 
-- *Corner*: two neighbouring lines of one surface (one cluster) meeting at P, the intersection of
-  the lines ``n_a . p = n_a . c_a`` and ``n_b . p = n_b . c_b``, within ``corner_join`` of both
-  lines' near ends; the angle between the faces (from P to the far ends) in ``corner_angle``; both
-  faces, P to the far end, at least ``min_leg``. *Concave* when the sensor lies inside the wedge
-  the faces span (``-P = alpha a + beta b`` with alpha, beta > 0: it looks into a room's corner),
-  else *convex*. Normal: the bisector into free space, ``(a + b) / |a + b|`` for a concave corner,
-  its opposite for a convex one. A convex corner whose two faces are the whole surface (both far
-  ends are edges with free space or nothing behind) and at most ``column_max_side`` long is a
-  *column corner*.
-- *Opening*: a line A, then the next line B in scan order on the same line (within ``line_angle``
-  and ``line_distance``), both at least ``min_leg``, with a gap of ``opening_width`` between A's
-  end and B's start (each end moved half a beam spacing into the gap: the true edge lies between
-  the last return and the first miss); every beam through the middle ``OPENING_MIDDLE`` of the gap
-  returns at least ``min_recess`` behind the line or nothing. Position: the gap's centre; normal:
-  the line's, towards the sensor.
+- *Corner*: two neighbouring lines a, b of one surface (one cluster) meeting at P, the
+  intersection of ``n_a . p = n_a . c_a`` and ``n_b . p = n_b . c_b``, within ``corner_join`` (or
+  two beam spacings) of the step from a's last return to b's first (a wall seen at grazing
+  incidence starts a long step past P; across an occluding edge P lies beside the step); the
+  angle between the faces (P to their far ends) in ``corner_angle``; both faces at least
+  ``min_leg`` (a face ending in an edge: half a step between returns more than its last return).
+  *Concave* when the sensor lies inside the wedge the faces span (``-P = alpha u_a + beta u_b``
+  with alpha, beta > 0: it looks into a room's corner), else *convex*. Normal: the bisector into
+  free space, ``(u_a + u_b) / |u_a + u_b|`` for a concave corner, its opposite for a convex one.
+  A convex corner whose two faces are the whole surface (both far ends are edges with free space
+  or nothing behind) and at most ``column_max_side`` long is a *column corner*.
+- *Opening*: a line a, then the next line b in scan order on the same line (within ``line_angle``
+  and ``line_distance``), both at least ``min_leg``. Each edge of the gap is carried on over the
+  returns on the line next to it (too few for a line of their own), then moved half a step
+  between returns into the gap (the true edge lies between the last return and the first miss;
+  the step along the line is ``ds = r dphi / cos(incidence)``, and an edge with ``ds`` above
+  ``max_edge_step`` is not placed). The gap must be ``opening_width``; the returns through its
+  middle ``OPENING_MIDDLE`` lie (median, against range noise) at least ``min_recess`` behind the
+  line or are missing, none in front of it; and no two returns in the gap (but ``corner_join`` or
+  two beam spacings at the jambs, for reveals and frames) lie on the line (the wall goes on there).
+  Position: the gap's centre; normal: the line's, towards the sensor.
 
 Covariance (sensor frame). A line's position across itself at a point s metres from its centroid
 has variance ``v = sigma^2 / N + s^2 sigma^2 / S_tt`` (:class:`~initcli.core.scan_lines.LineSegment`).
 A corner solves ``N p = rho`` with the normals as the rows of N, so ``Cov(P) = N^-1 diag(v_a, v_b) N^-T``.
-An opening's centre: along the line ``((r_a dphi)^2 + (r_b dphi)^2) / 48 + sigma^2 / 2`` (each edge
-uniform over a beam spacing, halved by the mean), across it ``(v_a + v_b) / 4``. Centimetres at
-a few metres. Pure numpy, no I/O.
+An opening's centre: along the line ``(ds_a^2 + ds_b^2) / 48 + (sigma_a^2 + sigma_b^2) / 4`` (each
+edge uniform over one step, halved by the mean), across it ``(v_a + v_b) / 4``. Centimetres at a
+few metres. Pure numpy, no I/O.
 """
 
 from __future__ import annotations
@@ -66,6 +72,9 @@ class ScanLandmarkParams:
     line_angle: float = math.radians(4.0)  # an opening's two sides differ in direction at most this
     line_distance: float = 0.06  # m: ... and in offset at most this (3 sigma of 2 cm noise)
     look_ahead: int = 8  # lines after A searched for its other side (room behind a doorway between)
+    max_edge_step: float = (
+        0.15  # m: an opening's edge seen with returns farther apart along the line is not placed
+    )
 
     @staticmethod
     def from_rules(rules: LandmarkRules, **scan: object) -> ScanLandmarkParams:
@@ -118,15 +127,30 @@ def line_intersection(a: LineSegment, b: LineSegment) -> tuple[np.ndarray, np.nd
     return p, inv @ var @ inv.T
 
 
+def _to_segment(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+    """Distance from ``point`` to the segment a-b."""
+    e = b - a
+    s = float(np.clip((point - a) @ e / max(float(e @ e), 1e-18), 0.0, 1.0))
+    return float(np.hypot(*(a + s * e - point)))
+
+
 def _corner(a: LineSegment, b: LineSegment, spacing: float, p: ScanLandmarkParams) -> ScanLandmark | None:
     crossing = line_intersection(a, b)
     if crossing is None:
         return None
     at, cov = crossing
+    # P lies where the surface turns: within corner_join (or two beam spacings) of the step from
+    # a's last return to b's first (long where a wall is seen at grazing incidence; across an
+    # occluding edge P lies off it, beside the step)
     join = max(p.corner_join, 2.0 * spacing * float(np.hypot(*at)))
-    if np.hypot(*(at - a.end)) > join or np.hypot(*(at - b.start)) > join:
+    if _to_segment(at, a.end, b.start) > join:
         return None
     leg_a, leg_b = float(np.hypot(*(a.start - at))), float(np.hypot(*(b.end - at)))
+    # a face that ends in an edge goes on for half a step between returns past its last one
+    if a.before in (FARTHER, NOTHING):
+        leg_a += 0.5 * _step_along(a.start, a.normal, spacing)
+    if b.after in (FARTHER, NOTHING):
+        leg_b += 0.5 * _step_along(b.end, b.normal, spacing)
     if min(leg_a, leg_b) < p.min_leg:
         return None
     ua, ub = _unit(a.start - at), _unit(b.end - at)
@@ -148,6 +172,13 @@ def _corner(a: LineSegment, b: LineSegment, spacing: float, p: ScanLandmarkParam
     )
 
 
+def _step_along(point: np.ndarray, normal: np.ndarray, spacing: float) -> float:
+    """m between neighbouring beams' returns along a line near ``point``: r dphi / cos(incidence)."""
+    r = float(np.hypot(*point))
+    cos = abs(float(normal @ point)) / max(r, 1e-12)
+    return spacing * r / max(cos, 1e-6)
+
+
 def _between(first: int, last: int, n: int) -> np.ndarray:
     """Beam indices strictly after ``first`` and before ``last`` in scan order (wrapping round)."""
     count = (last - first) % n - 1
@@ -166,33 +197,57 @@ def _opening(
     d, n = a.direction, a.normal
     if min(a.length, b.length) < p.min_leg:
         return None
-    # half a beam spacing into the gap at each edge (the edge lies between a return and a miss)
-    end_a = a.end + d * 0.5 * spacing * float(np.hypot(*a.end))
-    start_b = b.start - d * 0.5 * spacing * float(np.hypot(*b.start))
-    gap = float(d @ (start_b - end_a))
-    if not p.opening_width[0] <= gap <= p.opening_width[1]:
-        return None
     beams = _between(a.last, b.first, len(ranges))
     u = np.column_stack([np.cos(angles[beams]), np.sin(angles[beams])])
     towards = u @ n  # < 0: the beam heads for the line
     rho = float(n @ a.centroid)  # < 0: the line lies away from the sensor along -n
     with np.errstate(divide="ignore", invalid="ignore"):
         t_line = rho / towards
-    hit = t_line[:, None] * u
-    s = (hit - end_a) @ d
-    middle = (towards < 0) & (s >= 0.5 * (1 - OPENING_MIDDLE) * gap) & (s <= 0.5 * (1 + OPENING_MIDDLE) * gap)
+    s = (t_line[:, None] * u - a.end) @ d  # where each beam crosses the line, from a's end
+    r = ranges[beams]
+    returned = np.isfinite(r) & (r < range_max)
+    with np.errstate(invalid="ignore"):
+        depth = (r - t_line) * -towards  # how far behind the line each return lies
+    ahead = towards < 0
+    # Returns on the line next to a's end or b's start (too few for a line of their own) are wall:
+    # where they lie along the line (a reveal's return lies at its jamb wherever the beam crosses).
+    with np.errstate(invalid="ignore"):
+        along = (r[:, None] * u - a.end) @ d
+    on_line = np.sort(along[ahead & returned & (np.abs(depth) <= p.line_distance)])
+    step = 3.0 * spacing * float(np.hypot(*a.end))
+    lo, hi = 0.0, float(d @ (b.start - a.end))
+    for v in on_line:
+        if lo < v <= lo + step:
+            lo = float(v)
+    for v in on_line[::-1]:
+        if hi - step <= v < hi:
+            hi = float(v)
+    # Half a beam spacing along the line into the gap at each edge (the edge lies between a return
+    # and a miss); the spacing along the line grows as 1 / cos(incidence): an edge seen at grazing
+    # incidence is too uncertain to place (more than max_edge_step between returns).
+    step_a, step_b = _step_along(a.end + d * lo, n, spacing), _step_along(a.end + d * hi, n, spacing)
+    if max(step_a, step_b) > p.max_edge_step:
+        return None
+    end_a = a.end + d * (lo + 0.5 * step_a)
+    start_b = a.end + d * (hi - 0.5 * step_b)
+    gap = float(d @ (start_b - end_a))
+    if not p.opening_width[0] <= gap <= p.opening_width[1]:
+        return None
+    s = s - float(d @ (end_a - a.end))  # from the gap's first edge
+    edge = max(p.corner_join, 2.0 * spacing * float(np.hypot(*end_a)))  # the jambs' reveals, frames
+    along = along - float(d @ (end_a - a.end))
+    in_gap = ahead & (along >= edge) & (along <= gap - edge)
+    if np.sum(in_gap & returned & (np.abs(depth) <= p.line_distance)) >= 2:
+        return None  # the wall goes on into the gap: a or b was cut short
+    middle = ahead & (s >= 0.5 * (1 - OPENING_MIDDLE) * gap) & (s <= 0.5 * (1 + OPENING_MIDDLE) * gap)
     if middle.sum() < MIN_GAP_BEAMS:
         return None
-    r = ranges[beams][middle]
-    returned = np.isfinite(r) & (r < range_max)
-    # depth behind the line of each return along its beam, as a distance from the line
-    depth = (r - t_line[middle]) * -towards[middle]
-    if np.any(returned & ~(depth >= p.min_recess)):
-        return None
+    behind = np.where(returned, depth, np.inf)[middle]  # no return: nothing behind (a doorway)
+    if float(np.median(behind)) < p.min_recess or np.any(behind < -p.line_distance):
+        return None  # the gap's floor is (half) the wall line, or something stands in front of it
     centre = 0.5 * (end_a + start_b)
     centre = centre - n * (a.distance(centre) + b.distance(centre)) / 2  # onto the two lines' mean
-    along = ((spacing * np.hypot(*end_a)) ** 2 + (spacing * np.hypot(*start_b)) ** 2) / 48.0
-    along += 0.5 * (a.sigma**2 + b.sigma**2) / 2
+    along = (step_a**2 + step_b**2) / 48.0 + (a.sigma**2 + b.sigma**2) / 4.0
     across = (a.normal_variance_at(centre) + b.normal_variance_at(centre)) / 4.0
     frame = np.column_stack([d, n])
     cov = frame @ np.diag([along, across]) @ frame.T
@@ -226,8 +281,11 @@ def landmarks_from_lines(
             corner = _corner(a, b, spacing, p)
             if corner is not None:
                 out.append(corner)
+    full_turn = abs(spacing * len(r) - 2 * math.pi) < 1e-6  # the lines go round: look past the last
+    count = len(segments)
     for i, a in enumerate(segments):
-        for b in segments[i + 1 : i + 1 + p.look_ahead]:
+        ahead = range(i + 1, min(i + 1 + p.look_ahead, i + count if full_turn else count))
+        for b in (segments[k % count] for k in ahead):
             if _collinear(a, b, p):
                 found = _opening(a, b, r, angles, range_max, spacing, p)
                 if found is not None:

@@ -36,7 +36,8 @@ CONTINUES, FARTHER, NEARER, NOTHING = "continues", "farther", "nearer", "nothing
 class LineParams:
     """Settings of the line extraction (scan_landmarks passes its own; these are the defaults)."""
 
-    split_distance: float = 0.08  # m: a point this far off the line splits it (4 sigma at 2 cm)
+    split_distance: float = 0.05  # m: a point this far off the line splits it (2.5 sigma at 2 cm)
+    merge_rms: float = 0.03  # m: neighbours whose joint line fits this well (RMS, 1.5 sigma) are one
     min_points: int = 5  # points a segment needs
     max_missing: int = 2  # dropped beams a surface may have in a row without a break
     incidence: float = math.radians(10.0)  # lambda: the shallowest incidence a surface is followed at
@@ -137,9 +138,13 @@ def _split(points: np.ndarray, p: LineParams) -> list[tuple[int, int]]:
             continue
         a, b = points[i], points[j]
         chord = b - a
-        length = max(float(np.hypot(*chord)), 1e-12)
-        off = np.abs(chord[0] * (points[i : j + 1, 1] - a[1]) - chord[1] * (points[i : j + 1, 0] - a[0]))
-        k = i + int(np.argmax(off[1:-1] / length)) + 1 if j - i >= 2 else i
+        length = float(np.hypot(*chord))
+        run = points[i : j + 1]
+        if length > 1e-9:
+            off = np.abs(chord[0] * (run[:, 1] - a[1]) - chord[1] * (run[:, 0] - a[0])) / length
+        else:  # a closed surface (it ends where it starts): split where it is farthest from there
+            off = np.hypot(run[:, 0] - a[0], run[:, 1] - a[1])
+        k = i + int(np.argmax(off[1:-1])) + 1 if j - i >= 2 else i
         if k <= i or k >= j:
             continue
         stack += [(k, j), (i, k)]  # the corner point lies on both walls
@@ -155,7 +160,7 @@ def _merge(points: np.ndarray, pieces: list[tuple[int, int]], p: LineParams) -> 
         for m in range(len(merged) - 1):
             i, j = merged[m][0], merged[m + 1][1]
             _, _, res = _fit(points[i : j + 1])
-            if np.abs(res).max() <= p.split_distance:
+            if float(np.sqrt(np.mean(res**2))) <= p.merge_rms:
                 merged[m : m + 2] = [(i, j)]
                 changed = True
                 break
@@ -192,19 +197,24 @@ def _refine(points: np.ndarray, pieces: list[tuple[int, int]]) -> list[tuple[int
         i, j = out[m][0], out[m + 1][1]
         if j - i < 3:
             continue
-        k = np.arange(i + 1, j)
-        cost = _sse(cum, np.full(len(k), i), k) + _sse(cum, k, np.full(len(k), j))
+        k = np.arange(i + 1, j - 1)  # the first piece ends at k, the second starts at k + 1
+        cost = _sse(cum, np.full(len(k), i), k) + _sse(cum, k + 1, np.full(len(k), j))
         best = int(k[np.argmin(cost)])
-        out[m], out[m + 1] = (i, best), (best, j)
+        out[m], out[m + 1] = (i, best), (best + 1, j)
     return out
 
 
-def _beyond(ranges: np.ndarray, valid: np.ndarray, beam: int, step: int, here: float, p: LineParams) -> str:
-    """What the scan sees next to ``beam`` (one beam towards ``step``): farther, nearer, nothing."""
+def _beyond(
+    ranges: np.ndarray, valid: np.ndarray, beam: int, step: int, here: float, p: LineParams, wrap: bool
+) -> str:
+    """What the scan sees next to ``beam`` (one beam towards ``step``; round the turn when
+    ``wrap``): farther, nearer, nothing."""
     n = len(ranges)
     for k in range(1, p.max_missing + 2):
         b = beam + step * k
-        if not 0 <= b < n:
+        if wrap:
+            b %= n
+        elif not 0 <= b < n:
             return NOTHING
         if valid[b]:
             return FARTHER if ranges[b] > here + 3.0 * p.range_sigma else NEARER
@@ -273,10 +283,16 @@ def extract_lines(
             along = (q - centroid) @ t
             sigma = max(float(np.sqrt(np.sum(res**2) / max(len(q) - 2, 1))), p.sigma_floor)
             first_o, last_o = int(members[i]), int(members[j])
-            before = CONTINUES if m > 0 or closed else _beyond(r_o, valid_o, first_o, -1, r_o[first_o], p)
+            before = (
+                CONTINUES
+                if m > 0 or closed
+                else _beyond(r_o, valid_o, first_o, -1, r_o[first_o], p, full_turn)
+            )
             last_piece = m == len(pieces) - 1
             after = (
-                CONTINUES if not last_piece or closed else _beyond(r_o, valid_o, last_o, +1, r_o[last_o], p)
+                CONTINUES
+                if not last_piece or closed
+                else _beyond(r_o, valid_o, last_o, +1, r_o[last_o], p, full_turn)
             )
             segments.append(
                 LineSegment(
