@@ -41,6 +41,8 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from bench_match import pin_one_core  # noqa: E402  (benchmarks/ is the script's folder)
+
 from initcli.core.classes import ClassMap  # noqa: E402
 from initcli.core.geometry import Pose2D  # noqa: E402
 from initcli.core.matching import BimIndex, Matcher, MatchState  # noqa: E402
@@ -123,15 +125,6 @@ def walk(floor: Floor, rng: np.random.Generator, n: int, lidar_only: bool) -> tu
     to_odom = Pose2D(*rng.uniform(-50, 50, 2), rng.uniform(-math.pi, math.pi))
     xy = to_odom.apply(floor.xy[seq]) + rng.normal(0.0, NOISE, (len(seq), 2))
     return xy, [floor.classes[i] for i in seq]
-
-
-def pin_one_core() -> str:
-    try:
-        cpu = min(os.sched_getaffinity(0))
-        os.sched_setaffinity(0, {cpu})
-        return f"pinned to CPU {cpu}"
-    except (AttributeError, OSError):
-        return "not pinned"
 
 
 def bench(
