@@ -33,6 +33,7 @@ from bimtools.extract.settings import (
     DEFAULT_SECTION_HEIGHT,
     RESOLUTION_RANGE,
     SECTION_HEIGHT_RANGE,
+    LandmarkSettings,
 )
 from bimtools.ifc.categories import CategorySet, load_categories
 from bimtools.ifc.geometry import Mesh, ProgressCallback, iterate_meshes
@@ -68,6 +69,7 @@ class ExtractedSite:
     resolution: float
     storeys: list[StoreyResult] = field(default_factory=list)
     all_storeys: list[str] = field(default_factory=list)
+    landmarks: LandmarkSettings | None = None  # the rules of the landmark rows (None: none extracted)
 
     warnings: list[str] = field(default_factory=list)
 
@@ -254,7 +256,13 @@ def extract_site(
     meshes = iterate_meshes(model, candidates.all(), progress=progress, threads=threads)
     where = ElementStoreys(storeys, meshes)
 
-    result = ExtractedSite(info, section_height, resolution, all_storeys=[s.name for s in storeys])
+    result = ExtractedSite(
+        info,
+        section_height,
+        resolution,
+        all_storeys=[s.name for s in storeys],
+        landmarks=categories.landmarks if categories.landmarks.enabled else None,
+    )
     for s in storeys:
         if storey not in (None, "all") and s.name != storey:
             continue

@@ -195,5 +195,14 @@ def test_site_folder_with_landmarks_validates_loads_and_splits_by_sensor(tmp_pat
     assert storey.camera_features == [f for f in storey.features if f.category in ("Door", "Lift", "Stairs")]
     assert {f.category for f in storey.lidar_landmarks} <= set(LANDMARK_CATEGORIES)
     assert len(storey.camera_features) + len(storey.lidar_landmarks) == len(storey.features)
-    counts = json.loads((out / "site.json").read_text())["storeys"][0]["counts"]
+    doc = json.loads((out / "site.json").read_text())
+    jsonschema.validate(doc, json.loads((SCHEMAS / "site.schema.json").read_text()))
+    counts = doc["storeys"][0]["counts"]
     assert counts["ConcaveCorner"] == sum(f.category == "ConcaveCorner" for f in storey.features)
+    # the rules travel with the site, for reading scans by them
+    assert site.manifest is not None and site.manifest.landmarks == LandmarkSettings(enabled=True)
+    assert doc["landmarks"]["corner_angle"] == [60.0, 120.0]
+    off = tmp_path / "off"
+    write_site(off, _hallway(False), preview=False)
+    assert "landmarks" not in json.loads((off / "site.json").read_text())
+    assert load_site(off).manifest.landmarks is None
