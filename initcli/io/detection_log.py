@@ -29,8 +29,9 @@ from pathlib import Path
 from typing import IO, Any, Union
 
 from bimkit.errors import InputError
-from bimtools.site.records import CAMERA, SENSORS
+from bimtools.site.records import CAMERA, LIDAR, SENSORS
 from initcli.core.geometry import Pose2D
+from initcli.core.landmark_tracks import LidarLandmark
 from initcli.core.projection import CameraIntrinsics, CameraMount
 
 LOG_VERSION = 1
@@ -540,6 +541,12 @@ class LogWriter:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def landmark_records(landmarks: Iterable[LidarLandmark]) -> list[FeatureRecord]:
+    """Confirmed lidar landmarks as ``feature`` records with ``source: lidar``, at the time each was
+    confirmed (their covariance and normal stay with the landmarks: the record has no field for them)."""
+    return [FeatureRecord(float(m.t_confirmed), m.category, float(m.x), float(m.y), LIDAR) for m in landmarks]
 
 
 def write_log(path: Path | str, records: Iterable[Record]) -> None:

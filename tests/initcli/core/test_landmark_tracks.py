@@ -94,3 +94,16 @@ def test_a_landmark_seen_fewer_than_k_times_is_not_confirmed_and_far_ones_are_dr
     assert sorted(f.category for f in confirmed) == ["ConcaveCorner", "ConvexCorner"]
     far_one = next(f for f in confirmed if f.category == "ConcaveCorner")
     np.testing.assert_allclose(far_one.cov, cov / 5)  # the mean of five sightings
+
+
+def test_confirmed_landmarks_go_into_the_detection_log_as_lidar_features(tmp_path) -> None:
+    from initcli.io.detection_log import Meta, landmark_records, read_log, write_log
+    from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
+
+    found = accumulate_landmarks(_drive(l_room(), [(1.0, 1.0), (7.0, 1.0)]), PARAMS)
+    assert found
+    path = tmp_path / "log.jsonl"
+    write_log(path, [Meta(DEFAULT_CAMERA, DEFAULT_MOUNT), *landmark_records(found)])
+    back = read_log(path).features
+    assert [(f.cls, f.source) for f in back] == [(f.category, "lidar") for f in found]
+    assert [(f.x, f.y, f.t) for f in back] == [(f.x, f.y, f.t_confirmed) for f in found]
