@@ -14,14 +14,20 @@ import numpy as np
 from shapely.geometry.base import BaseGeometry
 
 from bimtools.extract.section import polygons_of
-from bimtools.site.records import Feature, WallSegment
+from bimtools.site.records import LIDAR, Feature, WallSegment
 
 # BGR colours
 CATEGORY_STYLE: dict[str, tuple[tuple[int, int, int], str]] = {
     "Door": ((180, 119, 31), "square"),
     "Lift": ((40, 39, 214), "triangle"),
     "Stairs": ((44, 160, 44), "diamond"),
+    # lidar landmarks: small, without IDs (a storey has hundreds)
+    "ConcaveCorner": ((160, 60, 160), "dot"),
+    "ConvexCorner": ((0, 140, 255), "dot"),
+    "ColumnCorner": ((30, 80, 140), "dot"),
+    "Opening": ((170, 170, 0), "bar"),
 }
+LANDMARK_MARKER = 3  # px: half-size of a landmark's marker
 _EXTRA_COLOURS = [(189, 103, 148), (14, 127, 255), (75, 86, 140), (194, 119, 227), (34, 189, 188)]
 _FONT = cv2.FONT_HERSHEY_SIMPLEX
 _WHITE = (255, 255, 255)
@@ -67,7 +73,9 @@ def _marker(img: np.ndarray, centre: tuple[int, int], shape: str, colour, size: 
     elif shape == "diamond":
         pts = np.array([[x, y - size - 2], [x + size + 2, y], [x, y + size + 2], [x - size - 2, y]], np.int32)
         cv2.fillPoly(img, [pts], colour, cv2.LINE_AA)
-    else:
+    elif shape == "bar":
+        cv2.rectangle(img, (x - size, y - max(size // 2, 1)), (x + size, y + max(size // 2, 1)), colour, -1)
+    else:  # circle, dot
         cv2.circle(img, (x, y), size, colour, -1, cv2.LINE_AA)
 
 
@@ -111,6 +119,13 @@ def draw_features(canvas: Canvas, features: list[Feature]) -> list[str]:
     for f in features:
         colour, shape = category_style(f.category, extra.index(f.category) if f.category in extra else 0)
         ((x, y),) = canvas.px(np.array([[f.x, f.y]]))
+        if f.sensor == LIDAR:  # a small marker and a short tick along the normal, no ID
+            tick = (int(x + f.norm_x * arrow * 0.4), int(y - f.norm_y * arrow * 0.4))
+            cv2.line(img, (int(x), int(y)), tick, colour, 1, cv2.LINE_AA)
+            _marker(img, (int(x), int(y)), shape, colour, LANDMARK_MARKER)
+            if f.category not in drawn:
+                drawn.append(f.category)
+            continue
         tip = (int(x + f.norm_x * arrow), int(y - f.norm_y * arrow))
         cv2.arrowedLine(img, (int(x), int(y)), tip, colour, 2, cv2.LINE_AA, tipLength=0.3)
         _marker(img, (int(x), int(y)), shape, colour)
@@ -195,4 +210,4 @@ def render_preview(
     Path(path).write_bytes(data.tobytes())
 
 
-__all__ = ["CATEGORY_STYLE", "category_style", "render_preview"]
+__all__ = ["CATEGORY_STYLE", "LANDMARK_MARKER", "category_style", "draw_features", "render_preview"]

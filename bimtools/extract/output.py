@@ -46,6 +46,7 @@ def build_manifest(site: ExtractedSite, files: list[str]) -> SiteManifest:
         storeys=storeys,
         files=files,
         tool_version=__version__,
+        landmarks=site.landmarks,
     )
 
 

@@ -24,6 +24,7 @@ from bimtools.extract.features import (
     storey_features,
 )
 from bimtools.extract.floorplan import FloorPlan, ObstacleShape, build_floorplan
+from bimtools.extract.landmarks import region_probe, storey_landmarks
 from bimtools.extract.occupancy import rasterise
 from bimtools.extract.placement import opening_in_plan
 from bimtools.extract.section import polygons_of, projected_footprint, section_polygon
@@ -32,13 +33,14 @@ from bimtools.extract.settings import (
     DEFAULT_SECTION_HEIGHT,
     RESOLUTION_RANGE,
     SECTION_HEIGHT_RANGE,
+    LandmarkSettings,
 )
 from bimtools.ifc.categories import CategorySet, load_categories
 from bimtools.ifc.geometry import Mesh, ProgressCallback, iterate_meshes
 from bimtools.ifc.model import ModelInfo, describe_model, open_model
 from bimtools.ifc.storeys import Storey, container_storey, list_storeys, storey_at_elevation
 from bimtools.ifc.text import element_name
-from bimtools.site.records import Feature, OccupancyGrid
+from bimtools.site.records import Feature, OccupancyGrid, camera_features
 
 OBSTACLE_CLASSES = ("IfcWall", "IfcColumn", "IfcCurtainWall", "IfcDoor", "IfcWindow")
 CURTAIN_PART_CLASSES = ("IfcPlate", "IfcMember")
@@ -67,6 +69,7 @@ class ExtractedSite:
     resolution: float
     storeys: list[StoreyResult] = field(default_factory=list)
     all_storeys: list[str] = field(default_factory=list)
+    landmarks: LandmarkSettings | None = None  # the rules of the landmark rows (None: none extracted)
 
     warnings: list[str] = field(default_factory=list)
 
@@ -253,7 +256,13 @@ def extract_site(
     meshes = iterate_meshes(model, candidates.all(), progress=progress, threads=threads)
     where = ElementStoreys(storeys, meshes)
 
-    result = ExtractedSite(info, section_height, resolution, all_storeys=[s.name for s in storeys])
+    result = ExtractedSite(
+        info,
+        section_height,
+        resolution,
+        all_storeys=[s.name for s in storeys],
+        landmarks=categories.landmarks if categories.landmarks.enabled else None,
+    )
     for s in storeys:
         if storey not in (None, "all") and s.name != storey:
             continue
@@ -261,9 +270,9 @@ def extract_site(
             s, storeys, candidates, meshes, where, categories, section_height, resolution, info.unit_scale
         )
         result.warnings += storey_result.warnings
-        if storey_result.features or storey is not None:
+        if camera_features(storey_result.features) or storey is not None:
             result.storeys.append(storey_result)
-    if not result.features:
+    if not camera_features(result.features):
         asked = "any storey" if storey in (None, "all") else f"storey {storey!r}"
         raise InputError(f"{path}: no features found (no doors, lifts or stairs on {asked})")
     return result
@@ -357,6 +366,9 @@ def _extract_storey(
     order = {c.name: i for i, c in enumerate(categories.categories)}
     features.sort(key=lambda f: (order.get(f.category, 99), round(f.x, 3), round(f.y, 3), f.id))
     features, notes = merge_duplicates(features)
+    if categories.landmarks.enabled:
+        free = region_probe(ctx.regions.label_at, ctx.regions.areas)
+        features += storey_landmarks(plan.walls, categories.landmarks, s.name, s.elevation, free)
     return StoreyResult(s, features, plan, grid, warnings, notes)
 
 

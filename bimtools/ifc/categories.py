@@ -14,7 +14,9 @@ import ifcopenshell
 
 from bimkit.checks import range_problem, read_yaml
 from bimkit.errors import InputError
+from bimtools.extract.settings import LandmarkSettings, parse_landmarks
 from bimtools.ifc.text import element_text, predefined_type
+from bimtools.site.records import LANDMARK_CATEGORIES
 
 DEFAULT_CATEGORIES = Path(__file__).resolve().parent.parent / "default_categories.yaml"
 KINDS = ("door", "lift", "stairs")
@@ -69,6 +71,7 @@ class CategorySet:
     categories: tuple[Category, ...]
     circulation_spaces: re.Pattern[str] | None = None
     source: str = field(default="default")
+    landmarks: LandmarkSettings = field(default_factory=LandmarkSettings)  # the lidar landmarks
 
     def is_circulation(self, name: str) -> bool:
         return bool(self.circulation_spaces and name and self.circulation_spaces.search(name))
@@ -135,6 +138,11 @@ def parse_categories(doc: object, source: str) -> CategorySet:
         name = item.get("name")
         if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z][A-Za-z0-9_ -]*", name):
             raise InputError(f"{where}.name: expected a category name, got {name!r}")
+        if name in LANDMARK_CATEGORIES:
+            raise InputError(
+                f"{where}.name: {name!r} is a lidar landmark category (see the landmarks: block), "
+                "not a name for a camera category"
+            )
         kind = item.get("kind", "door")
         if kind not in KINDS:
             raise InputError(f"{where}.kind: expected one of {', '.join(KINDS)}, got {kind!r}")
@@ -164,6 +172,7 @@ def parse_categories(doc: object, source: str) -> CategorySet:
         categories=tuple(categories),
         circulation_spaces=_regex(doc.get("circulation_spaces"), f"{source}: circulation_spaces", 0),
         source=source,
+        landmarks=parse_landmarks(doc.get("landmarks"), f"{source}: landmarks"),
     )
 
 

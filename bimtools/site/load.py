@@ -9,7 +9,7 @@ from bimkit.errors import InputError
 from bimtools.site.features_csv import read_features
 from bimtools.site.manifest import SiteManifest, read_manifest
 from bimtools.site.occupancy_map import OccupancyGrid, read_map
-from bimtools.site.records import Feature, Obstacle, WallSegment
+from bimtools.site.records import Feature, Obstacle, WallSegment, camera_features, lidar_landmarks
 from bimtools.site.walls_geojson import read_walls
 
 
@@ -23,6 +23,16 @@ class StoreyModel:
     walls: list[WallSegment] = field(default_factory=list)
     obstacles: list[Obstacle] = field(default_factory=list)
     grid: OccupancyGrid | None = None
+
+    @property
+    def camera_features(self) -> list[Feature]:
+        """B_object as the camera sees it: doors, lifts, stairs (see ``records.sensor_of``)."""
+        return camera_features(self.features)
+
+    @property
+    def lidar_landmarks(self) -> list[Feature]:
+        """The wall corners, column corners and openings a lidar sees (empty unless extracted)."""
+        return lidar_landmarks(self.features)
 
 
 @dataclass

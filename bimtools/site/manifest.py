@@ -8,6 +8,7 @@ from pathlib import Path
 
 from bimkit.checks import read_json
 from bimkit.errors import InputError
+from bimtools.extract.settings import LandmarkSettings, parse_landmarks
 from bimtools.site.records import StoreyInfo
 
 SITE_FORMAT = "bim-init.site/1"
@@ -27,6 +28,9 @@ class SiteManifest:
     files: list[str] = field(default_factory=list)
     tool_version: str = ""
     format: str = SITE_FORMAT
+    # the rules the lidar landmarks of features.csv were extracted by (None: no landmarks), so
+    # that a scan is read by the same rules (initcli.core.scan_landmarks.ScanLandmarkParams.from_rules)
+    landmarks: LandmarkSettings | None = None
 
     def to_dict(self) -> dict:
         return {
@@ -41,6 +45,7 @@ class SiteManifest:
             "resolution": self.resolution,
             "storeys": [asdict(s) for s in self.storeys],
             "files": list(self.files),
+            **({"landmarks": landmark_rules(self.landmarks)} if self.landmarks is not None else {}),
         }
 
     @classmethod
@@ -59,6 +64,9 @@ class SiteManifest:
                 files=list(doc.get("files", [])),
                 tool_version=doc.get("tool", {}).get("version", ""),
                 format=doc.get("format", SITE_FORMAT),
+                landmarks=parse_landmarks(doc["landmarks"], f"{where}: landmarks")
+                if "landmarks" in doc
+                else None,
             )
         except (KeyError, TypeError, ValueError) as exc:
             raise InputError(f"{where}: malformed manifest ({exc!s})") from None
@@ -78,6 +86,12 @@ def _storey(entry: object, where: str) -> StoreyInfo:
         ):
             raise InputError(f"{where}.{key}: expected a file name in the site folder, got {value!r}")
     return info
+
+
+def landmark_rules(settings: LandmarkSettings) -> dict:
+    """The landmarks: block as site.json records it (the categories file's keys, lists for pairs)."""
+    doc = asdict(settings)
+    return {k: list(v) if isinstance(v, tuple) else v for k, v in doc.items()}
 
 
 def format_manifest(manifest: SiteManifest) -> str:

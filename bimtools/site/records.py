@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -13,6 +14,24 @@ EXTRA_COLUMNS = ("Storey", "Elevation", "IfcClass", "Name")
 FEATURE_COLUMNS = TABLE1_COLUMNS + EXTRA_COLUMNS
 
 BUILTIN_CATEGORIES = ("Door", "Lift", "Stairs")
+
+# Which sensor sees a feature: the one place that says it. Camera features are the categories of the
+# categories file (Door, Lift, Stairs or a user's own); lidar landmarks are the wall geometry that
+# bim-extract adds with the categories file's ``landmarks:`` block (bimtools.extract.landmarks):
+#   ConcaveCorner  an inner corner of a room (the two faces meet at 60-120 degrees seen from inside)
+#   ConvexCorner   an outer corner (a wall end, a pillar or shaft corner standing into the room)
+#   ColumnCorner   an outer corner of a free-standing column (a small closed outline)
+#   Opening        a gap of door width in a wall line, with wall on both sides (a doorway, or the
+#                  recess of a door leaf set back in its frame)
+CAMERA = "camera"
+LIDAR = "lidar"
+SENSORS = (CAMERA, LIDAR)
+LANDMARK_CATEGORIES = ("ConcaveCorner", "ConvexCorner", "ColumnCorner", "Opening")
+
+
+def sensor_of(category: str) -> str:
+    """``"lidar"`` for a landmark category, ``"camera"`` for every other (a category of the file)."""
+    return LIDAR if category in LANDMARK_CATEGORIES else CAMERA
 
 
 @dataclass(frozen=True)
@@ -40,6 +59,21 @@ class Feature:
     def heading(self) -> float:
         """Direction of the normal in radians."""
         return math.atan2(self.norm_y, self.norm_x)
+
+    @property
+    def sensor(self) -> str:
+        """Which sensor sees it: ``"camera"`` (doors, lifts, stairs) or ``"lidar"`` (a landmark)."""
+        return sensor_of(self.category)
+
+
+def camera_features(features: Iterable[Feature]) -> list[Feature]:
+    """The features a camera detector sees (every row that is not a lidar landmark)."""
+    return [f for f in features if f.sensor == CAMERA]
+
+
+def lidar_landmarks(features: Iterable[Feature]) -> list[Feature]:
+    """The wall corners, column corners and openings (rows of the LANDMARK_CATEGORIES)."""
+    return [f for f in features if f.sensor == LIDAR]
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,9 @@ Schema: ``schemas/detection_log.schema.json`` (one line = one instance). Records
 - ``detections``: one image's raw detector output, with the odom pose when it was taken; each
   object has ``class``, ``score``, ``bbox`` [u1, v1, u2, v2] and ``depth`` (mean over the
   (2n+1)x(2n+1) window at the box centre).
-- ``feature`` (optional): an already aggregated feature in the odom frame.
+- ``feature`` (optional): an already aggregated feature in the odom frame; ``source`` says which
+  sensor found it: ``camera`` (the default: a log without the field is a camera log) or ``lidar``
+  (a wall corner, column corner or opening, see :mod:`initcli.core.landmark_tracks`).
 - ``scan`` (optional), ``truth`` (optional, simulation only: true pose in the BIM frame).
 - ``state``, ``hypotheses`` (optional, written by ``bim-init run``): kept as plain data.
 
@@ -30,7 +32,9 @@ from typing import IO, Any, Union
 from bimkit.documents import check_finite_tree, parse_json, read_bytes
 from bimkit.errors import InputError
 from bimkit.limits import MAX_LOG_BYTES, MAX_LOG_LINE_BYTES, show_bytes
+from bimtools.site.records import CAMERA, LIDAR, SENSORS
 from initcli.core.geometry import Pose2D
+from initcli.core.landmark_tracks import LidarLandmark
 from initcli.core.projection import CameraIntrinsics, CameraMount
 
 LOG_VERSION = 1
@@ -80,6 +84,7 @@ class FeatureRecord:
     cls: str
     x: float
     y: float
+    source: str = CAMERA  # the sensor that found it: "camera" or "lidar" (bimtools.site.records.SENSORS)
 
 
 @dataclass(frozen=True)
@@ -294,7 +299,10 @@ def _parse_body(kind: str, o: dict) -> Record:
             tuple(_parse_object(obj, i) for i, obj in enumerate(objects)),
         )
     if kind == "feature":
-        return FeatureRecord(_t(o), _str(o, "class"), _coord(o, "x"), _coord(o, "y"))
+        source = o.get("source", CAMERA)
+        if source not in SENSORS:
+            raise _Bad(f"field 'source' must be one of {', '.join(SENSORS)}, got {json.dumps(source)}")
+        return FeatureRecord(_t(o), _str(o, "class"), _coord(o, "x"), _coord(o, "y"), source)
     if kind == "scan":
         ranges = o.get("ranges")
         if not isinstance(ranges, list):
@@ -494,7 +502,10 @@ def record_to_dict(rec: Record) -> dict[str, Any]:
             ],
         }
     if isinstance(rec, FeatureRecord):
-        return {"type": "feature", "t": rec.t, "class": rec.cls, "x": rec.x, "y": rec.y}
+        out = {"type": "feature", "t": rec.t, "class": rec.cls, "x": rec.x, "y": rec.y}
+        if rec.source != CAMERA:  # camera logs stay as they were
+            out["source"] = rec.source
+        return out
     if isinstance(rec, Scan):
         return {
             "type": "scan",
@@ -548,6 +559,12 @@ class LogWriter:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def landmark_records(landmarks: Iterable[LidarLandmark]) -> list[FeatureRecord]:
+    """Confirmed lidar landmarks as ``feature`` records with ``source: lidar``, at the time each was
+    confirmed (their covariance and normal stay with the landmarks: the record has no field for them)."""
+    return [FeatureRecord(float(m.t_confirmed), m.category, float(m.x), float(m.y), LIDAR) for m in landmarks]
 
 
 def write_log(path: Path | str, records: Iterable[Record]) -> None:

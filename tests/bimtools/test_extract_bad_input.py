@@ -27,6 +27,14 @@ def work(tmp_path: Path) -> Path:
     (tmp_path / "nan.yaml").write_text(
         "categories:\n  - name: Doors\n    doors: [{classes: [IfcDoor]}]\n    enclosure_max_area: .nan\n"
     )
+    door = "categories:\n  - name: Door\n    doors: [{classes: [IfcDoor]}]\n"
+    (tmp_path / "angle.yaml").write_text(door + "landmarks: {corner_angle: [0, 90]}\n")
+    (tmp_path / "lmkey.yaml").write_text(door + "landmarks: {enabled: true, min_legs: 0.3}\n")
+    (tmp_path / "lmon.yaml").write_text(door + "landmarks: {enabled: 'yes'}\n")
+    (tmp_path / "widths.yaml").write_text(door + "landmarks: {opening_width: [2.5, 0.7]}\n")
+    (tmp_path / "reserved.yaml").write_text(
+        "categories:\n  - name: Opening\n    doors: [{classes: [IfcDoor]}]\n"
+    )
     (tmp_path / "afile").write_text("x\n")
     (tmp_path / "other").mkdir()
     (tmp_path / "other" / "notes.txt").write_text("someone else's\n")
@@ -50,6 +58,27 @@ CASES = [
     ("latin-1 --categories", [MODEL, "--categories", "latin1.yaml", "-o", "out"], "not UTF-8"),
     ("--categories nan area", [MODEL, "--categories", "nan.yaml", "-o", "out"], "nan is not a finite number"),
     ("--categories a folder", [MODEL, "--categories", "other", "-o", "out"], "is a folder"),
+    (
+        "landmarks corner_angle 0",
+        [MODEL, "--categories", "angle.yaml", "-o", "out"],
+        "angle.yaml: landmarks.corner_angle[0]: 0 must be > 0",
+    ),
+    ("landmarks unknown key", [MODEL, "--categories", "lmkey.yaml", "-o", "out"], "unknown key(s) min_legs"),
+    (
+        "landmarks enabled 'yes'",
+        [MODEL, "--categories", "lmon.yaml", "-o", "out"],
+        "enabled: expected true or false",
+    ),
+    (
+        "landmarks widths reversed",
+        [MODEL, "--categories", "widths.yaml", "-o", "out"],
+        "low 2.5 is above high 0.7",
+    ),
+    (
+        "reserved category name",
+        [MODEL, "--categories", "reserved.yaml", "-o", "out"],
+        "is a lidar landmark category",
+    ),
     ("-o a file", [MODEL, "-o", "afile"], "-o/--outdir afile: is a file"),
     ("-o under a file", [MODEL, "-o", "afile/site"], "is a file"),
     ("-o foreign folder", [MODEL, "-o", "other"], "pass --force"),

@@ -50,3 +50,19 @@ def test_render_preview_without_outline_uses_the_features(tmp_path: Path) -> Non
     assert image.shape[0] >= 300 and image.shape[1] >= 500
     colour = category_style("Ramp", 0)[0]
     assert (np.all(image == colour, axis=2)).sum() > 20  # the extra category's circle is drawn
+
+
+def test_landmarks_are_drawn_small_without_ids_and_listed_in_the_legend() -> None:
+    from bimtools.preview import LANDMARK_MARKER, draw_features
+
+    corner = Feature("wall-CC1", "ConcaveCorner", 2.0, 2.0, 0.70710678, 0.70710678, 1.0, 0.0)
+    door = Feature("D1", "Door", 6.0, 2.0, 0.0, 1.0, 0.9, 2.1)
+    drawn = {}
+    for name, features in (("corner", [corner]), ("door", [door])):
+        canvas = Canvas((0.0, 0.0, 10.0, 5.0), max_side=400)
+        assert draw_features(canvas, features) == [features[0].category]
+        drawn[name] = int((canvas.image != 255).any(axis=2).sum())
+    colour = CATEGORY_STYLE["ConcaveCorner"][0]
+    assert 0 < drawn["corner"] < (2 * LANDMARK_MARKER + 1) ** 2 + 40  # a dot and a tick, no label
+    assert drawn["door"] > 4 * drawn["corner"]  # a door: square, arrow and its ID
+    assert colour != CATEGORY_STYLE["ConvexCorner"][0]

@@ -153,3 +153,42 @@ def test_digitalhub_passages_without_body_are_placed_with_a_warning(shared_ifc_d
         assert any(door.GlobalId in w for w in site.warnings), door.GlobalId
         f = rows[door.GlobalId]
         assert f.width == pytest.approx(1.2, abs=0.01)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_lidar_landmarks_lie_on_the_walls_and_face_free_floor(shared_ifc_dir, name):
+    """The landmark rules on the storeys of a real model (computed from the extraction's wall
+    surfaces, as bim-extract does with landmarks on): corners are vertices of the wall section,
+    an opening's two edges lie on wall lines, and 0.3 m along every normal is a free cell."""
+    from bimtools.extract.circulation import FreeRegions
+    from bimtools.extract.landmarks import LINE_TOLERANCE, region_probe, storey_landmarks
+    from bimtools.extract.settings import LandmarkSettings
+
+    settings = LandmarkSettings(enabled=True)
+    total = 0
+    for result in _site(shared_ifc_dir, name).storeys:
+        walls = result.plan.walls
+        regions = FreeRegions(result.grid)
+        rows = storey_landmarks(
+            walls, settings, result.storey.name, 0.0, region_probe(regions.label_at, regions.areas)
+        )
+        total += len(rows)
+        assert len({r.id for r in rows}) == len(rows)
+        ends = np.array([[w.x1, w.y1] for w in walls]).reshape(-1, 2)
+        lines = [((w.x1, w.y1), (w.x2, w.y2)) for w in walls]
+        for f in rows:
+            assert result.grid.value_at(f.x + 0.3 * f.norm_x, f.y + 0.3 * f.norm_y) == FREE, f
+            if f.category != "Opening":
+                assert float(np.min(np.hypot(*(ends - [f.x, f.y]).T))) < 1e-6, f
+                continue
+            assert settings.opening_width[0] <= f.width <= settings.opening_width[1]
+            for s in (-1.0, 1.0):
+                px, py = f.x + s * f.norm_y * f.width / 2, f.y - s * f.norm_x * f.width / 2
+                assert min(_to_line(px, py, a, b) for a, b in lines) < LINE_TOLERANCE, f
+    assert total > 0
+
+
+def _to_line(px: float, py: float, a: tuple[float, float], b: tuple[float, float]) -> float:
+    ex, ey = b[0] - a[0], b[1] - a[1]
+    s = max(0.0, min(1.0, ((px - a[0]) * ex + (py - a[1]) * ey) / max(ex * ex + ey * ey, 1e-18)))
+    return math.hypot(a[0] + s * ex - px, a[1] + s * ey - py)

@@ -19,3 +19,20 @@ def test_ranges_refuse_their_edges_as_documented() -> None:
     assert range_problem(0.004, **settings.RESOLUTION_RANGE) is not None
     assert range_problem(1.0, **settings.RESOLUTION_RANGE) is None
     assert range_problem(1.5, **settings.RESOLUTION_RANGE) is not None
+
+
+def test_landmark_defaults_are_inside_their_ranges_and_off() -> None:
+    d = settings.LandmarkSettings()
+    assert not d.enabled
+    for key, bounds in settings.LANDMARK_RANGES.items():
+        value = getattr(d, key)
+        for v in value if isinstance(value, tuple) else (value,):
+            assert range_problem(v, **bounds) is None, key
+
+
+def test_landmarks_block_parses() -> None:
+    assert settings.parse_landmarks(None, "x") == settings.LandmarkSettings()
+    assert settings.parse_landmarks({}, "x").enabled  # a block without `enabled` asks for them
+    assert not settings.parse_landmarks({"enabled": False}, "x").enabled
+    s = settings.parse_landmarks({"corner_angle": [70, 110], "min_leg": 0.5, "opening_width": [0.8, 2]}, "x")
+    assert (s.corner_angle, s.min_leg, s.opening_width) == ((70.0, 110.0), 0.5, (0.8, 2.0))

@@ -180,3 +180,28 @@ def test_records_out_of_time_order_are_sorted_with_a_warning(tmp_path: Path) -> 
     log = read_log(path)
     assert [r.t for r in log.records] == [0.0, 1.0]
     assert any("out of time order" in w for w in log.warnings)
+
+
+def test_feature_source_round_trips_and_old_logs_read_as_camera(tmp_path: Path) -> None:
+    records = [
+        Meta(DEFAULT_CAMERA, DEFAULT_MOUNT),
+        FeatureRecord(0.4, "door", 3.0, -1.0),
+        FeatureRecord(0.5, "ConcaveCorner", 1.25, 2.5, source="lidar"),
+    ]
+    path = tmp_path / "sources.jsonl"
+    write_log(path, records)
+    lines = path.read_text().splitlines()
+    assert '"source"' not in lines[1]  # a camera feature is written as before the field existed
+    assert json.loads(lines[2])["source"] == "lidar"
+    for line in lines:
+        jsonschema.validate(json.loads(line), SCHEMA)
+    log = read_log(path)
+    assert log.records == records[1:]
+    assert [f.source for f in log.features] == ["camera", "lidar"]
+    old = write(tmp_path, META, '{"type":"feature","t":0.4,"class":"door","x":1,"y":2}', name="old.jsonl")
+    assert read_log(old).features[0].source == "camera"
+    bad = write(tmp_path, META, '{"type":"feature","t":0.4,"class":"door","x":1,"y":2,"source":"radar"}')
+    with pytest.raises(InputError, match=r"log.jsonl:2: field 'source' must be one of camera, lidar"):
+        read_log(bad)
+    with pytest.raises(jsonschema.ValidationError):
+        jsonschema.validate(json.loads(bad.read_text().splitlines()[1]), SCHEMA)
