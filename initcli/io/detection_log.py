@@ -348,8 +348,47 @@ def _record_time(rec: Record) -> float | None:
 def read_log(path: Path | str, skip_bad: bool = False) -> DetectionLog:
     """Read a detection log; raise :class:`InputError` (``file:line: problem``) on bad input."""
     path = Path(path)
+    text = _read_text(path)
+    got = _Lines()
+    for number, raw in enumerate(text.splitlines(), start=1):
+        if not raw.strip():
+            continue
+        got.saw_any = True
+        try:
+            got.add(path, number, raw)
+        except _Bad as exc:
+            if not skip_bad or _safe_type(raw) == "meta":  # a bad meta record is never skipped
+                raise InputError(f"{path}:{number}: {exc}") from None
+            got.bad.append(f"{path}:{number}: {exc}")
+
+    if not got.saw_any:
+        raise InputError(f"{path}: empty log (no records)")
+    if got.meta is None:
+        raise InputError(
+            f'{path}: missing meta record (the first line must be {{"type":"meta","version":{LOG_VERSION}}})'
+        )
+    unknown, bad = got.unknown, got.bad
+    log = DetectionLog(
+        path=path,
+        meta=got.meta,
+        records=got.records,
+        lines=got.lines,
+        skipped_bad=len(bad),
+        skipped_unknown=unknown,
+    )
+    if bad:
+        log.warnings.append(f"skipped {len(bad)} malformed line(s) (--skip-bad); first: {bad[0]}")
+    if unknown:
+        kinds = ", ".join(f"{k!r} x{n}" for k, n in sorted(unknown.items()))
+        log.warnings.append(f"{path}: skipped record(s) of unknown type: {kinds}")
+    _sort_by_time(log)
+    return log
+
+
+def _read_text(path: Path) -> str:
+    """The log's text; InputError for a missing file, a folder, a binary or an unreadable file."""
     try:
-        text = path.read_text(encoding="utf-8-sig")
+        return path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise InputError(f"{path}: no such file") from None
     except IsADirectoryError:
@@ -359,74 +398,61 @@ def read_log(path: Path | str, skip_bad: bool = False) -> DetectionLog:
     except OSError as exc:
         raise InputError(f"{path}: cannot read: {exc.strerror or exc}") from None
 
+
+@dataclass
+class _Lines:
+    """The lines of a log read so far: the meta record, the other records with their line numbers,
+    the records of unknown types counted, and the malformed lines skipped (``--skip-bad``)."""
+
     meta: Meta | None = None
-    records: list[Record] = []
-    lines: list[int] = []
-    unknown: dict[str, int] = {}
-    bad: list[str] = []
-    saw_any = False
-    for number, raw in enumerate(text.splitlines(), start=1):
-        if not raw.strip():
-            continue
-        saw_any = True
+    records: list[Record] = field(default_factory=list)
+    lines: list[int] = field(default_factory=list)
+    unknown: dict[str, int] = field(default_factory=dict)
+    bad: list[str] = field(default_factory=list)
+    saw_any: bool = False
+
+    def add(self, path: Path, number: int, raw: str) -> None:
+        """One non-empty line; ``_Bad`` when it is malformed, InputError when the meta record is missing."""
         try:
-            try:
-                value = json.loads(raw)
-            except json.JSONDecodeError as exc:
-                raise _Bad(f"not valid JSON: {exc.msg} (column {exc.colno})") from None
-            rec = parse_record(value)
-            if rec is None:
-                kind = str(value.get("type"))
-                unknown[kind] = unknown.get(kind, 0) + 1
-                continue
-            if isinstance(rec, Meta):
-                if meta is not None:
-                    raise _Bad("a second meta record (only the first line may be meta)")
-                if records:
-                    raise _Bad("the meta record must be the first record")
-                meta = rec
-                continue
-            if meta is None:
-                raise InputError(
-                    f"{path}:{number}: missing meta record: the first record must be "
-                    f'{{"type":"meta","version":{LOG_VERSION},...}}, got type {value.get("type")!r}'
-                )
-        except _Bad as exc:
-            if not skip_bad or _safe_type(raw) == "meta":  # a bad meta record is never skipped
-                raise InputError(f"{path}:{number}: {exc}") from None
-            bad.append(f"{path}:{number}: {exc}")
-            continue
-        records.append(rec)
-        lines.append(number)
+            value = json.loads(raw)
+        except json.JSONDecodeError as exc:
+            raise _Bad(f"not valid JSON: {exc.msg} (column {exc.colno})") from None
+        rec = parse_record(value)
+        if rec is None:
+            kind = str(value.get("type"))
+            self.unknown[kind] = self.unknown.get(kind, 0) + 1
+            return
+        if isinstance(rec, Meta):
+            if self.meta is not None:
+                raise _Bad("a second meta record (only the first line may be meta)")
+            if self.records:
+                raise _Bad("the meta record must be the first record")
+            self.meta = rec
+            return
+        if self.meta is None:
+            raise InputError(
+                f"{path}:{number}: missing meta record: the first record must be "
+                f'{{"type":"meta","version":{LOG_VERSION},...}}, got type {value.get("type")!r}'
+            )
+        self.records.append(rec)
+        self.lines.append(number)
 
-    if not saw_any:
-        raise InputError(f"{path}: empty log (no records)")
-    if meta is None:
-        raise InputError(
-            f'{path}: missing meta record (the first line must be {{"type":"meta","version":{LOG_VERSION}}})'
-        )
 
-    log = DetectionLog(
-        path=path, meta=meta, records=records, lines=lines, skipped_bad=len(bad), skipped_unknown=unknown
-    )
-    if bad:
-        log.warnings.append(f"skipped {len(bad)} malformed line(s) (--skip-bad); first: {bad[0]}")
-    if unknown:
-        kinds = ", ".join(f"{k!r} x{n}" for k, n in sorted(unknown.items()))
-        log.warnings.append(f"{path}: skipped record(s) of unknown type: {kinds}")
+def _sort_by_time(log: DetectionLog) -> None:
+    """Records out of time order sorted by t (with a warning); records without t keep their place
+    relative to their neighbours as well as possible."""
+    records, lines = log.records, log.lines
     times = [_record_time(r) for r in records]
     out_of_order = sum(
         1 for a, b in zip(times, times[1:], strict=False) if a is not None and b is not None and b < a
     )
     if out_of_order:
-        log.warnings.append(f"{path}: {out_of_order} record(s) out of time order; sorted by t")
+        log.warnings.append(f"{log.path}: {out_of_order} record(s) out of time order; sorted by t")
         order = sorted(
             range(len(records)), key=lambda i: (times[i] if times[i] is not None else -math.inf, i)
         )
-        # records without t keep their place relative to their neighbours as well as possible
         log.records = [records[i] for i in order]
         log.lines = [lines[i] for i in order]
-    return log
 
 
 def _safe_type(raw: str) -> str | None:
