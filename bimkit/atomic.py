@@ -9,6 +9,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+__all__ = ["replace_directory", "staged_directory", "write_bytes_atomic", "write_text_atomic"]
+
 
 @contextmanager
 def staged_directory(target: Path) -> Iterator[Path]:

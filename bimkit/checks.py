@@ -21,6 +21,19 @@ import yaml
 
 from bimkit.errors import InputError
 
+__all__ = [
+    "check_finite_tree",
+    "check_number",
+    "check_output_dir",
+    "check_output_file",
+    "parse_yaml",
+    "range_problem",
+    "read_json",
+    "read_text",
+    "read_yaml",
+    "show_number",
+]
+
 
 def show_number(value: float) -> str:
     """A number as the user would write it: ``1000000000000``, ``1e-09``, ``nan``."""

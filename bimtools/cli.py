@@ -24,6 +24,8 @@ from bimtools.extract.settings import (
     SECTION_HEIGHT_RANGE,
 )
 
+__all__ = ["LazyProgress", "PROG", "SITE_MARKERS", "app", "extract", "main", "summary_table"]
+
 PROG = "bim-extract"
 SITE_MARKERS = ("site.json",)  # an output folder holding one was written by bim-extract
 

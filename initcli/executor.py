@@ -18,6 +18,17 @@ from typing import Any, Protocol
 
 from bimkit.errors import InputError
 
+__all__ = [
+    "EXECUTORS",
+    "Executor",
+    "LocalExecutor",
+    "RayExecutor",
+    "default_workers",
+    "init_worker",
+    "make_executor",
+    "map_unordered",
+]
+
 EXECUTORS = ("local", "ray")
 
 

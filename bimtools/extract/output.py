@@ -14,6 +14,8 @@ from bimtools.site.occupancy_map import write_map
 from bimtools.site.records import StoreyInfo
 from bimtools.site.walls_geojson import write_walls
 
+__all__ = ["build_manifest", "write_site"]
+
 
 def build_manifest(site: ExtractedSite, files: list[str]) -> SiteManifest:
     storeys = []

@@ -40,6 +40,23 @@ from bimtools.ifc.storeys import Storey, container_storey, list_storeys, storey_
 from bimtools.ifc.text import element_name
 from bimtools.site.records import Feature, OccupancyGrid
 
+__all__ = [
+    "BODY_BAND",
+    "CURTAIN_PART_CLASSES",
+    "Candidates",
+    "ElementStoreys",
+    "ExtractedSite",
+    "GLASS_BAND",
+    "GLASS_CLASSES",
+    "LIFT_MIN_SPAN",
+    "MERGE_DISTANCE",
+    "OBSTACLE_CLASSES",
+    "StoreyResult",
+    "collect_candidates",
+    "extract_site",
+    "merge_duplicates",
+]
+
 OBSTACLE_CLASSES = ("IfcWall", "IfcColumn", "IfcCurtainWall", "IfcDoor", "IfcWindow")
 CURTAIN_PART_CLASSES = ("IfcPlate", "IfcMember")
 # Glazing: an obstacle over its whole plan footprint (a section at the cut meets only frame pieces).

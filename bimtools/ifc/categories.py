@@ -16,6 +16,16 @@ from bimkit.checks import range_problem, read_yaml
 from bimkit.errors import InputError
 from bimtools.ifc.text import element_text, predefined_type
 
+__all__ = [
+    "Category",
+    "CategorySet",
+    "DEFAULT_CATEGORIES",
+    "ElementRule",
+    "KINDS",
+    "load_categories",
+    "parse_categories",
+]
+
 DEFAULT_CATEGORIES = Path(__file__).resolve().parent.parent / "default_categories.yaml"
 KINDS = ("door", "lift", "stairs")
 

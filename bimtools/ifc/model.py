@@ -11,6 +11,16 @@ import ifcopenshell.util.unit
 
 from bimkit.errors import InputError
 
+__all__ = [
+    "ModelInfo",
+    "SUPPORTED_SCHEMAS",
+    "authoring_application",
+    "describe_model",
+    "file_sha256",
+    "length_unit_name",
+    "open_model",
+]
+
 SUPPORTED_SCHEMAS = ("IFC2X3", "IFC4", "IFC4X3")
 
 

@@ -10,6 +10,8 @@ from bimkit.checks import read_json
 from bimkit.errors import InputError
 from bimtools.site.records import StoreyInfo
 
+__all__ = ["SITE_FORMAT", "SiteManifest", "format_manifest", "read_manifest"]
+
 SITE_FORMAT = "bim-init.site/1"
 
 

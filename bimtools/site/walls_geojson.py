@@ -16,6 +16,8 @@ from bimkit.checks import read_json
 from bimkit.errors import InputError
 from bimtools.site.records import Obstacle, WallSegment
 
+__all__ = ["read_walls", "walls_to_geojson", "write_walls"]
+
 
 def _r(v: float) -> float:
     return round(float(v), 4)

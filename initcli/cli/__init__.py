@@ -4,4 +4,6 @@ Each module is one command (``match``, ``run``, ``eval``, ``detector``); :mod:`i
 the typer app. Algorithms live in :mod:`initcli.core`, file formats in :mod:`initcli.io`.
 """
 
+__all__ = ["PROG"]
+
 PROG = "bim-init"  # the program name of every error line (``bim-init: error: ...``)

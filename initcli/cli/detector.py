@@ -24,6 +24,8 @@ from initcli.cli.progress import TrainingProgress, metrics_table
 if TYPE_CHECKING:
     pass
 
+__all__ = ["MODEL_HELP", "TORCH_MISSING", "detector_app", "evaluate", "export", "predict", "synth", "train"]
+
 detector_app = typer.Typer(
     name="detector",
     help="The object detector (paper §3.2.2): synthetic data from the BIM, training, ONNX export, inference.",

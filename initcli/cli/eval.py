@@ -36,6 +36,8 @@ from initcli.eval.tables import NONE, table2, table3
 from initcli.eval.trial import TrialJob
 from initcli.executor import Executor, default_workers, make_executor
 
+__all__ = ["EVAL_MARKERS", "EXIT_INTERRUPTED", "evaluate"]
+
 EXIT_INTERRUPTED = 130
 EVAL_MARKERS = ("results.jsonl", "table.md")  # an --out folder holding one was written by bim-init eval
 

@@ -22,6 +22,8 @@ from rich.table import Table
 if TYPE_CHECKING:
     from initcli.detector.metrics import Metrics
 
+__all__ = ["TrainingProgress", "count_bar", "message_progress", "metrics_table"]
+
 
 def count_bar(label: str) -> Progress:
     """A transient bar on stderr: ``label``, the bar, done / total and the time left."""

@@ -23,6 +23,8 @@ from initcli.config import load_config
 from initcli.core.geometry import Pose2D
 from initcli.session.simulated import run_simulated
 
+__all__ = ["EXIT_FAILED", "LiveView", "RUN_MARKERS", "SEED_MAX", "parse_start", "result_table", "run"]
+
 EXIT_FAILED = 1
 SEED_MAX = 2**32 - 1  # numpy seeds
 RUN_MARKERS = ("summary.json",)  # an --out folder holding one was written by bim-init run

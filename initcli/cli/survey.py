@@ -34,6 +34,8 @@ from initcli.survey.survey import (
 )
 from initcli.survey.uniqueness import UniquenessParams
 
+__all__ = ["EXIT_INTERRUPTED", "SURVEY_MARKERS", "SURVEY_VERSION", "survey", "survey_params"]
+
 EXIT_INTERRUPTED = 130
 SURVEY_VERSION = 1
 

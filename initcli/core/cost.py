@@ -14,6 +14,8 @@ import numpy as np
 
 from initcli.core.pattern import angle_difference, pair_distance, rotation_angle
 
+__all__ = ["matching_cost", "pair_cost", "triple_cost"]
+
 
 def pair_cost(b_u: np.ndarray, b_v: np.ndarray, s_i: np.ndarray, s_j: np.ndarray) -> np.ndarray:
     """First term of Eq. 14: |d^B_{m(s1)m(s2)} - d^S_{s1 s2}|."""

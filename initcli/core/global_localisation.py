@@ -51,6 +51,16 @@ from initcli.core.particle_filter import (
     weighted_pose_stats,
 )
 
+__all__ = [
+    "GlobalEstimate",
+    "GlobalLocalisation",
+    "GlobalLocalisationParams",
+    "PoseHistogram",
+    "YAW_BINS_FULL_TURN",
+    "free_cell_centres",
+    "kld_sample_limit",
+]
+
 YAW_BINS_FULL_TURN = 36  # 360 degrees / 10 degrees
 
 

@@ -48,6 +48,18 @@ import numpy as np
 from initcli.core.geometry import Pose2D
 from initcli.core.matching import OUTLIER
 
+__all__ = [
+    "VERDICT_NONE",
+    "VERDICT_UNIQUE",
+    "confidences",
+    "distinct_places",
+    "drop_dominated",
+    "one_place",
+    "pose_groups",
+    "rank_order",
+    "verdict_text",
+]
+
 VERDICT_UNIQUE = "unique match"
 VERDICT_NONE = "no consistent match"
 

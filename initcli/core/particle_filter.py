@@ -23,6 +23,20 @@ from bimtools.site.records import OCCUPIED, OccupancyGrid
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.grid_cache import GridCache
 
+__all__ = [
+    "FilterNoise",
+    "LaserModel",
+    "LikelihoodField",
+    "ParticleFilter",
+    "PoseEstimate",
+    "beam_log_likelihood",
+    "likelihood_field",
+    "low_variance_indices",
+    "sample_motion",
+    "scan_fit",
+    "weighted_pose_stats",
+]
+
 
 @dataclass(frozen=True)
 class FilterNoise:

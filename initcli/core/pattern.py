@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["angle_difference", "pair_distance", "rotation_angle"]
+
 
 def pair_distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Eq. 5: d_uv = sqrt((x_v - x_u)^2 + (y_v - y_u)^2)."""

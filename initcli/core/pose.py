@@ -22,6 +22,19 @@ from scipy.optimize import least_squares
 
 from initcli.core.geometry import Pose2D, wrap_angle
 
+__all__ = [
+    "POSE_METHODS",
+    "SIDE_TOLERANCE",
+    "estimate_pose",
+    "heading_from_feature",
+    "paper_pose",
+    "rigid_align",
+    "rigid_align_batch",
+    "rigid_pose",
+    "trilaterate",
+    "trilateration_residuals",
+]
+
 POSE_METHODS = ("paper", "rigid")
 SIDE_TOLERANCE = 0.05  # m: below this offset from the feature line the side is not trusted
 

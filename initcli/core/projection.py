@@ -22,6 +22,25 @@ import numpy as np
 
 from initcli.core.geometry import Pose2D
 
+__all__ = [
+    "CameraIntrinsics",
+    "CameraMount",
+    "R_BODY_OPTICAL",
+    "base_to_odom",
+    "bbox_centre",
+    "box_for_point",
+    "detections_to_odom",
+    "mount_from_optical",
+    "odom_to_optical",
+    "odom_to_pixel",
+    "optical_rotation",
+    "optical_to_base",
+    "optical_to_pixel",
+    "pixel_to_optical",
+    "rpy_from_matrix",
+    "rpy_matrix",
+]
+
 # Optical (x right, y down, z forward) -> camera body (x forward, y left, z up).
 R_BODY_OPTICAL = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
 

@@ -22,6 +22,24 @@ import numpy as np
 
 from initcli.core.jit import compiled
 
+__all__ = [
+    "ANGLE_MARGIN",
+    "EPS",
+    "EVEN_TOLERANCE",
+    "NEAR_SEGMENT",
+    "RANGE_MARGIN",
+    "SHORTEST_SEGMENT2",
+    "SIGHT_END",
+    "SIGHT_PARALLEL",
+    "TWO_PI",
+    "cast_rays",
+    "nearest_segment_distance",
+    "ray_segment_distances",
+    "ray_segment_params",
+    "segment_directions",
+    "sight_blocked",
+]
+
 EPS = 1e-9  # |d × e| below this: parallel, no hit (the lidar's rule)
 TWO_PI = 2.0 * math.pi
 

@@ -20,6 +20,8 @@ from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount, odom_to_pixel
 from initcli.core.raycast import sight_blocked
 
+__all__ = ["CameraModel", "FeatureArrays", "PAIR_CHUNK", "visible"]
+
 PAIR_CHUNK = 20_000  # (pose, feature) pairs tested against the walls at once
 
 

@@ -21,6 +21,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+__all__ = ["CLASS_NAMES", "DEFAULT_MODEL", "MODELS_DIR", "resolve_model_path"]
+
 CLASS_NAMES: tuple[str, ...] = ("door", "lift", "stairs")
 MODELS_DIR = Path(__file__).resolve().parent / "models"
 DEFAULT_MODEL = MODELS_DIR / "default.onnx"

@@ -19,6 +19,8 @@ from initcli.detector.datasets import load_dataset
 from initcli.detector.metrics import MetricAccumulator, Metrics
 from initcli.detector.runtime import Detector
 
+__all__ = ["EvalResult", "evaluate_model"]
+
 
 @dataclass
 class EvalResult:

@@ -14,6 +14,8 @@ import numpy as np
 
 from initcli.detector.layouts import iou_matrix
 
+__all__ = ["ClassMetrics", "MetricAccumulator", "Metrics", "average_precision"]
+
 
 @dataclass
 class ClassMetrics:

@@ -30,6 +30,32 @@ from bimkit.errors import InputError
 from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount
 
+__all__ = [
+    "DetectedObject",
+    "DetectionLog",
+    "Detections",
+    "FeatureRecord",
+    "HypothesesRecord",
+    "LOG_VERSION",
+    "LogWriter",
+    "MAX_ANGLE",
+    "MAX_COORDINATE",
+    "MAX_TIME",
+    "Meta",
+    "Odom",
+    "RECORD_TYPES",
+    "Record",
+    "Scan",
+    "State",
+    "Truth",
+    "format_record",
+    "iter_lines",
+    "parse_record",
+    "read_log",
+    "record_to_dict",
+    "write_log",
+]
+
 LOG_VERSION = 1
 RECORD_TYPES = ("meta", "odom", "detections", "feature", "scan", "truth", "state", "hypotheses")
 

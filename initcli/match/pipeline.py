@@ -48,6 +48,25 @@ from initcli.core.rectify import WallArray, rectify_pose
 from initcli.io.detection_log import DetectionLog, read_log
 from initcli.match.sightings import sightings_from_log
 
+__all__ = [
+    "DEFAULT_POSE_METHOD",
+    "ESCALATED_PARTIALS",
+    "EXIT_AMBIGUOUS",
+    "EXIT_BAD_INPUT",
+    "EXIT_NO_MATCH",
+    "EXIT_UNIQUE",
+    "Hypothesis",
+    "MatchOptions",
+    "MatchReport",
+    "OPTION_RANGES",
+    "check_classes",
+    "current_odom",
+    "match_log",
+    "run_match",
+    "site_class_map",
+    "transform_poses_batch",
+]
+
 EXIT_UNIQUE = 0
 EXIT_BAD_INPUT = 2
 EXIT_AMBIGUOUS = 3

@@ -32,6 +32,22 @@ from initcli.ros.msgdefs import bbox_centre, detection_fields, register_missing,
 from initcli.ros.records import Bag2LogOptions, Bag2LogStats, BagTopics, Topic
 from initcli.ros.tf import TransformTree, frame_name, msg_transform, quaternion_yaw
 
+__all__ = [
+    "BagSource",
+    "CLOCK_JUMP_S",
+    "DEPTH_BUFFER",
+    "DEPTH_SYNC_S",
+    "ODOM_MARGIN_S",
+    "Progress",
+    "bag_paths",
+    "bag_to_records",
+    "decode_depth",
+    "decode_image",
+    "intrinsics",
+    "parse_class_names",
+    "stamp_seconds",
+]
+
 DEPTH_SYNC_S = 0.05  # s: a depth image this close in time to a colour image is its aligned one
 ODOM_MARGIN_S = 0.2  # s: images this far outside the odometry's time span still get its end pose
 CLOCK_JUMP_S = 0.5  # s: a topic whose stamps go back by more than this has a broken clock

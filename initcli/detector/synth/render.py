@@ -22,6 +22,8 @@ from initcli.detector.synth.look import FeatureLooks, Look, default_look
 from initcli.detector.synth.paint import clutter_colours, decoration_colours, feature_colours, texture
 from initcli.detector.synth.scene import Camera, Panels, Scene
 
+__all__ = ["NEAR", "PANEL_TOLERANCE", "View", "VisibleFeature", "cast_rays", "render_view"]
+
 NEAR = 0.05  # m: nothing is rendered closer than this
 PANEL_TOLERANCE = 0.08  # m: a wall hit this close to a panel's plane is on the panel
 

@@ -25,6 +25,27 @@ from initcli.core.classes import ClassMap
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.detector import CLASS_NAMES
 
+__all__ = [
+    "CLUTTER_BOX",
+    "CLUTTER_PERSON",
+    "Camera",
+    "Clutter",
+    "DECOR_CABINET",
+    "DECOR_CALL_PANEL",
+    "DECOR_EXIT_SIGN",
+    "DECOR_INDICATOR",
+    "DECOR_POSTER",
+    "DECOR_SWITCH",
+    "DECOR_WINDOW",
+    "Panels",
+    "Scene",
+    "SceneFeature",
+    "camera_pose_in_world",
+    "panels_from_rows",
+    "standard_decorations",
+    "wall_line",
+]
+
 # Decoration kinds (unlabelled things on walls).
 DECOR_POSTER = 0
 DECOR_CALL_PANEL = 1

@@ -39,6 +39,24 @@ from initcli.detector.training.model import (
     upgrade_state_dict,
 )
 
+__all__ = [
+    "ALPHA",
+    "Callback",
+    "EpochRecord",
+    "ModelEMA",
+    "TrainOptions",
+    "TrainSet",
+    "balanced_weights",
+    "build_targets",
+    "collate",
+    "evaluate",
+    "freeze",
+    "frozen_modules",
+    "pick_device",
+    "set_train_mode",
+    "train",
+]
+
 ALPHA = 0.54  # Gaussian size relative to the box (TTFNet)
 
 
