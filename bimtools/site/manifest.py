@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 from bimkit.checks import read_json
 from bimkit.errors import InputError
@@ -30,7 +31,7 @@ class SiteManifest:
     tool_version: str = ""
     format: str = SITE_FORMAT
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         return {
             "format": self.format,
             "tool": {"name": "bim-extract", "version": self.tool_version},
@@ -46,7 +47,7 @@ class SiteManifest:
         }
 
     @classmethod
-    def from_dict(cls, doc: dict, where: str = "site.json") -> SiteManifest:
+    def from_dict(cls, doc: dict[str, Any], where: str = "site.json") -> SiteManifest:
         try:
             return cls(
                 source_file=doc["source"]["file"],

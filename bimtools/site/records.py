@@ -122,7 +122,7 @@ class OccupancyGrid:
 
     @property
     def shape(self) -> tuple[int, int]:
-        return self.cells.shape  # type: ignore[return-value]
+        return self.cells.shape
 
     def content_key(self) -> tuple[object, ...]:
         """What the map holds, as a hashable key (cells by a hash of their bytes): two grids with

@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
 from bimkit.checks import read_json
 from bimkit.errors import InputError
@@ -23,8 +24,8 @@ def _r(v: float) -> float:
     return round(float(v), 4)
 
 
-def walls_to_geojson(walls: Iterable[WallSegment], obstacles: Iterable[Obstacle]) -> dict:
-    features: list[dict] = []
+def walls_to_geojson(walls: Iterable[WallSegment], obstacles: Iterable[Obstacle]) -> dict[str, Any]:
+    features: list[dict[str, Any]] = []
     for w in walls:
         features.append(
             {

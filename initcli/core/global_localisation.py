@@ -142,7 +142,8 @@ class PoseHistogram:
         return ix, iy, ia
 
     def encode(self, ix: np.ndarray, iy: np.ndarray, ia: np.ndarray) -> np.ndarray:
-        return (ix * self.ny + iy) * self.yaw_bins + ia
+        code: np.ndarray = (ix * self.ny + iy) * self.yaw_bins + ia
+        return code
 
     def keys(self, particles: np.ndarray) -> np.ndarray:
         return self.encode(*self.cells(particles))

@@ -176,4 +176,5 @@ def confidences(cost: np.ndarray, n_out: np.ndarray, tau: float = 0.5, eps: floa
         return cost
     logw = -cost / tau + np.asarray(n_out, dtype=float) * math.log(eps)
     w = np.exp(logw - logw.max())
-    return w / w.sum()
+    normalised: np.ndarray = w / w.sum()
+    return normalised

@@ -41,7 +41,8 @@ SIDE_TOLERANCE = 0.05  # m: below this offset from the feature line the side is 
 
 def trilateration_residuals(xy: np.ndarray, anchors: np.ndarray, dists: np.ndarray) -> np.ndarray:
     """Eq. 10 residuals: d_i^2 - ((x - x_i)^2 + (y - y_i)^2), one per feature."""
-    return dists**2 - ((xy[0] - anchors[:, 0]) ** 2 + (xy[1] - anchors[:, 1]) ** 2)  # Eq. 10
+    residuals: np.ndarray = dists**2 - ((xy[0] - anchors[:, 0]) ** 2 + (xy[1] - anchors[:, 1]) ** 2)  # Eq. 10
+    return residuals
 
 
 def _circle_points(c1: np.ndarray, r1: float, c2: np.ndarray, r2: float) -> list[np.ndarray]:

@@ -86,7 +86,7 @@ def visible(poses: np.ndarray, features: FeatureArrays, walls: np.ndarray, model
     cam = model.camera
     mu, mv = model.margin * cam.width, model.margin * cam.height
     with np.errstate(invalid="ignore"):
-        ok = (
+        ok: np.ndarray = (
             (depth >= model.min_range)
             & (depth <= model.max_range)
             & (u >= mu)

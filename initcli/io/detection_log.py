@@ -191,7 +191,7 @@ class _Bad(ValueError):
 # --- field readers ---------------------------------------------------------------------------------
 
 
-def _num(obj: dict, key: str, where: str = "") -> float:
+def _num(obj: dict[str, Any], key: str, where: str = "") -> float:
     if key not in obj:
         raise _Bad(f"missing field {where}{key!r}")
     v = obj[key]
@@ -209,7 +209,9 @@ MAX_ANGLE = 1e4  # rad: headings (unwrapped odometry yaw may grow, but not witho
 MAX_TIME = 1e10  # s
 
 
-def _coord(obj: dict, key: str, where: str = "", bound: float = MAX_COORDINATE, unit: str = "m") -> float:
+def _coord(
+    obj: dict[str, Any], key: str, where: str = "", bound: float = MAX_COORDINATE, unit: str = "m"
+) -> float:
     """A finite number within +-bound (metres of odometry, radians of heading, seconds)."""
     v = _num(obj, key, where)
     if abs(v) > bound:
@@ -217,15 +219,15 @@ def _coord(obj: dict, key: str, where: str = "", bound: float = MAX_COORDINATE, 
     return v
 
 
-def _t(obj: dict) -> float:
+def _t(obj: dict[str, Any]) -> float:
     return _coord(obj, "t", bound=MAX_TIME, unit="s")
 
 
-def _yaw(obj: dict, where: str = "") -> float:
+def _yaw(obj: dict[str, Any], where: str = "") -> float:
     return _coord(obj, "yaw", where, bound=MAX_ANGLE, unit="rad")
 
 
-def _str(obj: dict, key: str, where: str = "") -> str:
+def _str(obj: dict[str, Any], key: str, where: str = "") -> str:
     if key not in obj:
         raise _Bad(f"missing field {where}{key!r}")
     v = obj[key]
@@ -234,7 +236,7 @@ def _str(obj: dict, key: str, where: str = "") -> str:
     return v
 
 
-def _obj(obj: dict, key: str) -> dict:
+def _obj(obj: dict[str, Any], key: str) -> dict[str, Any]:
     if key not in obj:
         raise _Bad(f"missing field {key!r}")
     v = obj[key]
@@ -243,7 +245,7 @@ def _obj(obj: dict, key: str) -> dict:
     return v
 
 
-def _parse_meta(o: dict) -> Meta:
+def _parse_meta(o: dict[str, Any]) -> Meta:
     if "version" not in o:
         raise _Bad("meta record has no 'version'")
     version = o["version"]
@@ -303,7 +305,7 @@ def _parse_object(o: Any, i: int) -> DetectedObject:
     return DetectedObject(cls=_str(o, "class", where), score=_num(o, "score", where), bbox=box, depth=depth)  # type: ignore[arg-type]
 
 
-def _parse_body(kind: str, o: dict) -> Record:
+def _parse_body(kind: str, o: dict[str, Any]) -> Record:
     if kind == "odom":
         return Odom(_t(o), _coord(o, "x"), _coord(o, "y"), _yaw(o))
     if kind == "detections":
