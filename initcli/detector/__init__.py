@@ -8,7 +8,8 @@ Three parts, each importable without the next:
   COCO readers), :mod:`.metrics` and :mod:`.evaluate` (precision, recall, AP@0.5 per class);
 - :mod:`initcli.detector.synth`, rendering: :mod:`~initcli.detector.synth.scene` (a storey as the
   renderer sees it), :mod:`~initcli.detector.synth.look` (textures, colours, lighting),
-  :mod:`~initcli.detector.synth.render` (the numpy raycaster) and
+  :mod:`~initcli.detector.synth.render` (the numpy raycaster; its colours in
+  :mod:`~initcli.detector.synth.paint`) and
   :mod:`~initcli.detector.synth.dataset` (synthetic YOLO datasets with domain randomisation);
 - :mod:`initcli.detector.training`, PyTorch (the ``[train]`` extra): the network
   (:mod:`~initcli.detector.training.model`), augmentation, checkpoints, training and the ONNX export.
