@@ -224,8 +224,6 @@ def _track_pairs(decisions: list[dict[str, Any]]) -> dict[tuple[bool, bool], lis
 
 
 def main() -> None:
-    from initcli.core.verification import VerificationParams
-
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--starts", type=int, default=100, help="construction-profile starts per sample")
     ap.add_argument("--sweep-starts", type=int, default=20, help="starts per sample at each doubled key")
@@ -243,6 +241,15 @@ def main() -> None:
     if args.dump:
         with args.dump.open("wb") as f:
             pickle.dump(decisions, f)
+    _print_claims(decisions, len(jobs))
+    _print_tracks(decisions)
+    _print_pairs(decisions)
+    sys.stdout.flush()
+
+
+def _print_claims(decisions: list[dict], n_jobs: int) -> None:
+    """How the claim decisions split (claimed, held back by rivals, failed), the rivals' margins and
+    the scan-fit gaps of claims held back."""
     claims = [d for d in decisions if d["kind"] == "claim"]
     split: collections.Counter[tuple[str, str]] = collections.Counter()
     gaps: dict[str, list[float]] = {"right": [], "wrong": []}
@@ -260,7 +267,7 @@ def main() -> None:
         if not d["claimed"] and d["claim"]["passed"] and d["fit_gap"] is not None:
             gaps[place].append(d["fit_gap"])
     several = len(decisions) - len(claims)
-    print(f"{len(jobs)} sessions, {len(claims)} claim decisions, {several} sets of several hypotheses")
+    print(f"{n_jobs} sessions, {len(claims)} claim decisions, {several} sets of several hypotheses")
     print("| claim at the | decision | count |\n|---|---|---|")
     for (place, what), n in sorted(split.items()):
         print(f"| {place} place | {what} | {n} |")
@@ -276,7 +283,10 @@ def main() -> None:
         top = f"{max(values):+.3f}" if values else "-"
         share = f"{sum(v > 0.05 for v in values) / len(values):.2f}" if values else "-"
         print(f"| {place} place | {len(values)} | {top} | {share} |")
-    params = VerificationParams()
+
+
+def _print_tracks(decisions: list[dict]) -> None:
+    """The worst lidar window along the path of every hypothesis passing the recent checks."""
     tracks: list[tuple[bool, np.ndarray]] = []
     for d in decisions:
         for h in [d["claim"], *d["rivals"]] if d["kind"] == "claim" else d["hypotheses"]:
@@ -289,6 +299,13 @@ def main() -> None:
         if worst:
             p1, p5, p50 = np.percentile(worst, [1, 5, 50])
             print(f"| {'right' if right else 'wrong'} | {len(worst)} | {p1:.3f} | {p5:.3f} | {p50:.3f} |")
+
+
+def _print_pairs(decisions: list[dict]) -> None:
+    """Pairs of hypotheses compared by the lidar along the path, and how often A outranks B."""
+    from initcli.core.verification import VerificationParams
+
+    params = VerificationParams()
     print("\npairs of hypotheses compared by the lidar along the path (A passing the recent checks, B a")
     print("claim's rival passing them too, or any other of several hypotheses): A's best lead over B in a")
     print("window, B's best lead over A; and how often track_outranks(A, B) holds as the session asks it")
@@ -334,7 +351,6 @@ def main() -> None:
         )
     unsafe = sum(v.wins for v in pairs.get((False, True), []))
     print(f"\na wrong place outranking the right one by the lidar along the path: {unsafe} (must be 0)")
-    sys.stdout.flush()
 
 
 if __name__ == "__main__":

@@ -113,6 +113,9 @@ def claim(folder: Path, patterns: Iterable[str]) -> None:
     _write_record(folder, owned)
 
 
+__all__ = ["replace_directory", "staged_directory", "write_bytes_atomic", "write_text_atomic"]
+
+
 @contextmanager
 def _signals_held() -> Iterator[None]:
     """SIGINT and SIGTERM wait while a replacement moves files: they are noted and delivered to

@@ -6,6 +6,8 @@ line or key) and what is wrong; the CLIs print it as one line on stderr and exit
 
 from __future__ import annotations
 
+__all__ = ["EXIT_BAD_INPUT", "InputError"]
+
 EXIT_BAD_INPUT = 2
 
 

@@ -24,6 +24,8 @@ from bimtools.extract.settings import (
     SECTION_HEIGHT_RANGE,
 )
 
+__all__ = ["LazyProgress", "PROG", "app", "extract", "main", "summary_table"]
+
 PROG = "bim-extract"
 
 app = typer.Typer(add_completion=False, pretty_exceptions_enable=False, rich_markup_mode=None)

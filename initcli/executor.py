@@ -25,6 +25,17 @@ from typing import Any, Protocol
 from bimkit.cli import EXIT_INTERRUPTED, EXIT_TERMINATED, error_line, native_stderr_silenced
 from bimkit.errors import EXIT_BAD_INPUT, InputError
 
+__all__ = [
+    "EXECUTORS",
+    "Executor",
+    "LocalExecutor",
+    "RayExecutor",
+    "default_workers",
+    "init_worker",
+    "make_executor",
+    "map_unordered",
+]
+
 EXECUTORS = ("local", "ray")
 PROBE_TIMEOUT_S = 5.0  # s: a TCP connection to the Ray address
 CONNECT_TIMEOUT_S = 20.0  # s: ray.init on an address that accepts connections (both within 30 s)

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+__all__ = ["SCHEMA_DIR", "schema_path"]
+
 SCHEMA_DIR = Path(__file__).resolve().parent
 
 

@@ -29,6 +29,23 @@ from shapely.geometry.base import BaseGeometry
 
 from bimtools.site.records import FREE, OccupancyGrid
 
+__all__ = [
+    "CORRIDOR_MAX_WIDTH",
+    "CORRIDOR_MIN_DOORS",
+    "CORRIDOR_MIN_ELONGATION",
+    "FreeRegions",
+    "PROBE_DISTANCES",
+    "PlaceShape",
+    "SideProbe",
+    "SpaceIndex",
+    "choose_side",
+    "is_circulation_shape",
+    "is_plan_circulation",
+    "place_shape",
+    "probe_side",
+    "rectangle_equivalent",
+]
+
 PROBE_DISTANCES = (0.35, 0.6, 0.9, 1.3)  # metres beyond the element's face
 CORRIDOR_MAX_WIDTH = 3.5  # metres: a corridor is at most this wide ...
 CORRIDOR_MIN_ELONGATION = 3.0  # ... and at least this many times longer than wide

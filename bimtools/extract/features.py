@@ -24,6 +24,19 @@ from bimtools.site.records import Feature
 if TYPE_CHECKING:
     import ifcopenshell
 
+__all__ = [
+    "BodyCandidate",
+    "DoorCandidate",
+    "ENCLOSURE_DOOR_RADIUS",
+    "ENTRANCE_RADIUS",
+    "FOOT_CLEARANCE",
+    "FOOT_STEPS",
+    "StoreyContext",
+    "decide_sides",
+    "is_shaft_space",
+    "storey_features",
+]
+
 ENTRANCE_RADIUS = 2.5  # metres: a door this close to a lift/stair body is its entrance
 ENCLOSURE_DOOR_RADIUS = 5.0  # metres: a door into a body's enclosure this close to the body enters it
 FOOT_CLEARANCE = 0.35  # metres in front of a stair's foot that must be free floor ...

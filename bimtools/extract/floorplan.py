@@ -19,6 +19,8 @@ from shapely.geometry.polygon import orient
 from bimtools.extract.section import polygons_of
 from bimtools.site.records import Obstacle, WallSegment
 
+__all__ = ["FloorPlan", "ObstacleShape", "build_floorplan", "building_outline", "fill_holes", "wall_surfaces"]
+
 _CLOSING = 0.35  # metres: gaps in the envelope up to twice this are closed for the outline
 _COLLINEAR = math.radians(1.0)
 _SLIVER = 2e-4  # metres

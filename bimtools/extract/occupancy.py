@@ -18,6 +18,8 @@ from bimtools.extract.floorplan import FloorPlan
 from bimtools.extract.section import polygons_of
 from bimtools.site.records import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
 
+__all__ = ["GridFrame", "MAX_GRID_PIXELS", "fill", "outline", "rasterise"]
+
 MAX_GRID_PIXELS = 10_000 * 10_000  # one storey's occupancy map (100 MB of uint8)
 
 _SHIFT = 4  # sub-pixel bits for cv2 drawing

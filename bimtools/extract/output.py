@@ -17,6 +17,8 @@ from bimtools.site.walls_geojson import write_walls
 SITE_MARKERS = ("site.json",)  # a folder holding one was written by bim-extract
 SITE_WRITES = ("site.json", "features.csv", "walls.geojson", "map_*", "preview_*")  # what it writes there
 
+__all__ = ["build_manifest", "write_site"]
+
 
 def build_manifest(site: ExtractedSite, files: list[str]) -> SiteManifest:
     storeys = []

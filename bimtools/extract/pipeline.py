@@ -42,6 +42,23 @@ from bimtools.ifc.storeys import Storey, container_storey, list_storeys, storey_
 from bimtools.ifc.text import element_name
 from bimtools.site.records import Feature, OccupancyGrid, camera_features
 
+__all__ = [
+    "BODY_BAND",
+    "CURTAIN_PART_CLASSES",
+    "Candidates",
+    "ElementStoreys",
+    "ExtractedSite",
+    "GLASS_BAND",
+    "GLASS_CLASSES",
+    "LIFT_MIN_SPAN",
+    "MERGE_DISTANCE",
+    "OBSTACLE_CLASSES",
+    "StoreyResult",
+    "collect_candidates",
+    "extract_site",
+    "merge_duplicates",
+]
+
 OBSTACLE_CLASSES = ("IfcWall", "IfcColumn", "IfcCurtainWall", "IfcDoor", "IfcWindow")
 CURTAIN_PART_CLASSES = ("IfcPlate", "IfcMember")
 # Glazing: an obstacle over its whole plan footprint (a section at the cut meets only frame pieces).
@@ -292,7 +309,30 @@ def _extract_storey(
     cut = s.elevation + section_height
     warnings: list[str] = []
     obstacles = _obstacles_at(s, cut, candidates, meshes)
+    space_names, space_areas, space_entities = _spaces_at(s, cut, candidates, meshes, where)
+    plan = build_floorplan(s.name, cut, obstacles, space_areas)
+    grid, _ = rasterise(plan, resolution)
+    ctx = StoreyContext(
+        s.name, s.elevation, FreeRegions(grid), SpaceIndex(space_names, space_areas), categories
+    )
+    doors = _doors_on(s, candidates, meshes, where, scale, warnings)
+    bodies = _bodies_on_storey(s, storeys, candidates, meshes, where, categories)
+    bodies += _shaft_spaces(space_entities, space_names, space_areas, categories)
+    features = storey_features(ctx, doors, bodies)
+    warnings += ctx.warnings
+    order = {c.name: i for i, c in enumerate(categories.categories)}
+    features.sort(key=lambda f: (order.get(f.category, 99), round(f.x, 3), round(f.y, 3), f.id))
+    features, notes = merge_duplicates(features)
+    if categories.landmarks.enabled:
+        free = region_probe(ctx.regions.label_at, ctx.regions.areas)
+        features += storey_landmarks(plan.walls, categories.landmarks, s.name, s.elevation, free)
+    return StoreyResult(s, features, plan, grid, warnings, notes)
 
+
+def _spaces_at(
+    s: Storey, cut: float, candidates: Candidates, meshes: dict[str, Mesh], where: ElementStoreys
+) -> tuple[list[str], list[BaseGeometry], list]:
+    """The storey's spaces cut at ``cut``: their names, section areas and entities."""
     space_names: list[str] = []
     space_areas: list[BaseGeometry] = []
     space_entities = []
@@ -306,13 +346,19 @@ def _extract_storey(
         space_names.append(element_name(space))
         space_areas.append(area)
         space_entities.append(space)
+    return space_names, space_areas, space_entities
 
-    plan = build_floorplan(s.name, cut, obstacles, space_areas)
-    grid, _ = rasterise(plan, resolution)
-    ctx = StoreyContext(
-        s.name, s.elevation, FreeRegions(grid), SpaceIndex(space_names, space_areas), categories
-    )
 
+def _doors_on(
+    s: Storey,
+    candidates: Candidates,
+    meshes: dict[str, Mesh],
+    where: ElementStoreys,
+    scale: float,
+    warnings: list[str],
+) -> list[DoorCandidate]:
+    """The storey's doors with their openings in plan; a door without a body is placed from the
+    opening it fills or its placement (a warning says which), one without any geometry skipped."""
     doors: list[DoorCandidate] = []
     for element in candidates.doors:
         if where.of(element) is not s:
@@ -339,9 +385,16 @@ def _extract_storey(
             verts, x_axis, y_axis, width * scale if width else None, height * scale if height else None
         )
         doors.append(DoorCandidate(element.GlobalId, element.is_a(), element_name(element), opening, element))
+    return doors
 
-    bodies = _bodies_on_storey(s, storeys, candidates, meshes, where, categories)
-    for entity, name, area in zip(space_entities, space_names, space_areas, strict=True):
+
+def _shaft_spaces(
+    entities: list, names: list[str], areas: list[BaseGeometry], categories: CategorySet
+) -> list[BodyCandidate]:
+    """Spaces that are lift or stair shafts by name and size (not circulation): bodies of their
+    category (a lift's starts on this storey)."""
+    bodies: list[BodyCandidate] = []
+    for entity, name, area in zip(entities, names, areas, strict=True):
         for cat in categories.categories:
             if (
                 cat.kind in ("lift", "stairs")
@@ -361,15 +414,7 @@ def _extract_storey(
                     )
                 )
                 break
-    features = storey_features(ctx, doors, bodies)
-    warnings += ctx.warnings
-    order = {c.name: i for i, c in enumerate(categories.categories)}
-    features.sort(key=lambda f: (order.get(f.category, 99), round(f.x, 3), round(f.y, 3), f.id))
-    features, notes = merge_duplicates(features)
-    if categories.landmarks.enabled:
-        free = region_probe(ctx.regions.label_at, ctx.regions.areas)
-        features += storey_landmarks(plan.walls, categories.landmarks, s.name, s.elevation, free)
-    return StoreyResult(s, features, plan, grid, warnings, notes)
+    return bodies
 
 
 def merge_duplicates(features: list[Feature]) -> tuple[list[Feature], list[str]]:

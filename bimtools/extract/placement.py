@@ -12,6 +12,18 @@ import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
+__all__ = [
+    "CLIMB_RISE",
+    "DEEPER_THAN_WIDE",
+    "Front",
+    "MAX_FACE_OFFSET",
+    "Opening",
+    "heading_deg",
+    "opening_in_plan",
+    "rectangle_fronts",
+    "stair_foot",
+]
+
 MAX_FACE_OFFSET = 0.25  # metres from the element's centre plane to the face used as X, Y
 DEEPER_THAN_WIDE = 1.5  # a door this many times deeper than wide along its placement X is turned
 CLIMB_RISE = 1.0  # metres of rise over which a stair's climb at its foot is measured

@@ -7,6 +7,8 @@ import shapely
 from shapely.geometry import MultiPolygon, Polygon
 from shapely.geometry.base import BaseGeometry
 
+__all__ = ["GLASS_MAX_DEPTH", "polygons_of", "projected_footprint", "section_polygon", "section_segments"]
+
 _SNAP = 1e-5  # metres; intersection points are rounded to this grid so loops close
 
 

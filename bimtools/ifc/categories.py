@@ -18,6 +18,16 @@ from bimtools.extract.settings import LandmarkSettings, parse_landmarks
 from bimtools.ifc.text import element_text, predefined_type
 from bimtools.site.records import LANDMARK_CATEGORIES
 
+__all__ = [
+    "Category",
+    "CategorySet",
+    "DEFAULT_CATEGORIES",
+    "ElementRule",
+    "KINDS",
+    "load_categories",
+    "parse_categories",
+]
+
 DEFAULT_CATEGORIES = Path(__file__).resolve().parent.parent / "default_categories.yaml"
 KINDS = ("door", "lift", "stairs")
 

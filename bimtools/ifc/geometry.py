@@ -14,6 +14,8 @@ import ifcopenshell
 import ifcopenshell.geom
 import numpy as np
 
+__all__ = ["Mesh", "ProgressCallback", "geometry_settings", "iterate_meshes"]
+
 ProgressCallback = Callable[[int, int], None]
 
 

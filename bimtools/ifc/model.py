@@ -15,6 +15,16 @@ from bimkit.documents import open_input
 from bimkit.errors import InputError
 from bimkit.limits import MAX_IFC_BYTES
 
+__all__ = [
+    "ModelInfo",
+    "SUPPORTED_SCHEMAS",
+    "authoring_application",
+    "describe_model",
+    "file_sha256",
+    "length_unit_name",
+    "open_model",
+]
+
 SUPPORTED_SCHEMAS = ("IFC2X3", "IFC4", "IFC4X3")
 
 

@@ -9,6 +9,8 @@ import ifcopenshell
 import ifcopenshell.util.element
 import ifcopenshell.util.placement
 
+__all__ = ["Storey", "container_storey", "list_storeys", "storey_at_elevation", "storey_slug"]
+
 
 @dataclass
 class Storey:

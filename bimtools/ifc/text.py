@@ -5,6 +5,8 @@ from __future__ import annotations
 import ifcopenshell
 import ifcopenshell.util.element
 
+__all__ = ["element_name", "element_text", "predefined_type"]
+
 
 def element_text(element: ifcopenshell.entity_instance) -> str:
     """Everything a category regex is matched against, joined with ' | '."""

@@ -10,6 +10,8 @@ from pathlib import Path
 
 from bimtools.samples import MODELS, write
 
+__all__ = ["main"]
+
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(

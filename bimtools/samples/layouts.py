@@ -23,6 +23,40 @@ from typing import Literal
 
 from bimtools.site.records import Feature
 
+__all__ = [
+    "CIRCULATION_KINDS",
+    "Cell",
+    "CellKind",
+    "DOOR_CLEARANCE",
+    "DOOR_SIZES",
+    "DoorRole",
+    "DoorSpec",
+    "FloorPlan",
+    "LiftSpec",
+    "PLANS",
+    "ROLE_CATEGORY",
+    "SIDE_NORMAL",
+    "STOREY_ELEVATION",
+    "STOREY_HEIGHT",
+    "STOREY_NAME",
+    "Side",
+    "StairSpec",
+    "Vec",
+    "WALL_THICKNESS",
+    "WallPiece",
+    "block_a",
+    "block_b",
+    "check_plan",
+    "free_points",
+    "host_wall",
+    "ntu_hallway",
+    "plan",
+    "truth_document",
+    "truth_features",
+    "wall_pieces",
+    "wall_points",
+]
+
 WALL_THICKNESS = 0.2
 STOREY_HEIGHT = 3.0
 STOREY_NAME = "Level 1"

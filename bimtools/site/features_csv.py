@@ -71,7 +71,7 @@ def read_features(path: Path) -> list[Feature]:
         raise InputError(f"{path}:{reader.line_num}: not a CSV row ({exc})") from None
 
 
-def _rows(path: Path, reader: csv.DictReader) -> list[Feature]:
+def _rows(path: Path, reader: csv.DictReader[str]) -> list[Feature]:
     header = [h.strip() for h in (reader.fieldnames or [])]
     missing = [c for c in TABLE1_COLUMNS if c not in header]
     if missing:

@@ -12,6 +12,8 @@ from bimtools.site.occupancy_map import OccupancyGrid, read_map
 from bimtools.site.records import Feature, Obstacle, WallSegment, camera_features, lidar_landmarks
 from bimtools.site.walls_geojson import read_walls
 
+__all__ = ["Site", "StoreyModel", "load_site"]
+
 
 @dataclass
 class StoreyModel:

@@ -5,11 +5,14 @@ from __future__ import annotations
 import json
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 from bimkit.checks import read_json
 from bimkit.errors import InputError
 from bimtools.extract.settings import LandmarkSettings, parse_landmarks
 from bimtools.site.records import StoreyInfo
+
+__all__ = ["SITE_FORMAT", "SiteManifest", "format_manifest", "read_manifest"]
 
 SITE_FORMAT = "bim-init.site/1"
 
@@ -32,7 +35,7 @@ class SiteManifest:
     # that a scan is read by the same rules (initcli.core.scan_landmarks.ScanLandmarkParams.from_rules)
     landmarks: LandmarkSettings | None = None
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         return {
             "format": self.format,
             "tool": {"name": "bim-extract", "version": self.tool_version},
@@ -49,7 +52,7 @@ class SiteManifest:
         }
 
     @classmethod
-    def from_dict(cls, doc: dict, where: str = "site.json") -> SiteManifest:
+    def from_dict(cls, doc: dict[str, Any], where: str = "site.json") -> SiteManifest:
         try:
             return cls(
                 source_file=doc["source"]["file"],
@@ -88,7 +91,7 @@ def _storey(entry: object, where: str) -> StoreyInfo:
     return info
 
 
-def landmark_rules(settings: LandmarkSettings) -> dict:
+def landmark_rules(settings: LandmarkSettings) -> dict[str, Any]:
     """The landmarks: block as site.json records it (the categories file's keys, lists for pairs)."""
     doc = asdict(settings)
     return {k: list(v) if isinstance(v, tuple) else v for k, v in doc.items()}

@@ -8,6 +8,21 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+__all__ = [
+    "BUILTIN_CATEGORIES",
+    "EXTRA_COLUMNS",
+    "FEATURE_COLUMNS",
+    "FREE",
+    "Feature",
+    "OCCUPIED",
+    "Obstacle",
+    "OccupancyGrid",
+    "StoreyInfo",
+    "TABLE1_COLUMNS",
+    "UNKNOWN",
+    "WallSegment",
+]
+
 # The first eight columns of features.csv are exactly the paper's Table 1.
 TABLE1_COLUMNS = ("ID", "Category", "X", "Y", "Norm_X", "Norm_Y", "Width", "Height")
 EXTRA_COLUMNS = ("Storey", "Elevation", "IfcClass", "Name")
@@ -141,7 +156,7 @@ class OccupancyGrid:
 
     @property
     def shape(self) -> tuple[int, int]:
-        return self.cells.shape  # type: ignore[return-value]
+        return self.cells.shape
 
     def content_key(self) -> tuple[object, ...]:
         """What the map holds, as a hashable key (cells by a hash of their bytes): two grids with

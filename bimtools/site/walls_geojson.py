@@ -11,18 +11,21 @@ from __future__ import annotations
 import json
 from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
 from bimkit.checks import read_json
 from bimkit.errors import InputError
 from bimtools.site.records import Obstacle, WallSegment
+
+__all__ = ["read_walls", "walls_to_geojson", "write_walls"]
 
 
 def _r(v: float) -> float:
     return round(float(v), 4)
 
 
-def walls_to_geojson(walls: Iterable[WallSegment], obstacles: Iterable[Obstacle]) -> dict:
-    features: list[dict] = []
+def walls_to_geojson(walls: Iterable[WallSegment], obstacles: Iterable[Obstacle]) -> dict[str, Any]:
+    features: list[dict[str, Any]] = []
     for w in walls:
         features.append(
             {

@@ -26,6 +26,8 @@ from initcli.core.motion import motion_delta
 from initcli.drivers.base import SensorFrame
 from initcli.sim.build import SimSetup
 
+__all__ = ["AmclAttempt", "AmclTracePoint", "MIN_TRAVEL", "converged", "run_amcl"]
+
 MIN_TRAVEL = 1.0  # m driven before a convergence claim counts (as in fine tuning)
 
 

@@ -29,6 +29,8 @@ from initcli.core.geometry import wrap_angle
 from initcli.core.wall_following import MovingObstacleWait, ScanView, open_beside, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
 
+__all__ = ["BaselineAttempt", "WallFollowingExplorer", "drive_attempts", "limit_passed"]
+
 
 class WallFollowingExplorer:
     """Velocity commands for random exploration, one control period at a time."""

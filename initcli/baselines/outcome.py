@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 from initcli.core.geometry import Pose2D
 
+__all__ = ["LocalisationOutcome"]
+
 
 @dataclass
 class LocalisationOutcome:

@@ -18,6 +18,8 @@ from initcli.cli.progress import message_progress
 from initcli.ros.convert import convert_bag
 from initcli.ros.records import Bag2LogOptions
 
+__all__ = ["bag2log"]
+
 
 def bag2log(
     bag: Annotated[Path, typer.Argument(metavar="BAG", help="ROS 1 .bag, ROS 2 bag folder (.db3) or .mcap.")],

@@ -15,17 +15,18 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
-from rich.table import Table
 
 from bimkit.cli import error_line, number_option
 from bimkit.errors import EXIT_BAD_INPUT, InputError
 from bimkit.outputs import OutputFile, OutputFolder, check_outputs
 from initcli.cli import PROG
+from initcli.cli.progress import TrainingProgress, metrics_table
 from initcli.detector import DETECTOR_CONFIDENCE
 
 if TYPE_CHECKING:
-    from initcli.detector.metrics import Metrics
     from initcli.detector.runtime import Detector
+
+__all__ = ["MODEL_HELP", "TORCH_MISSING", "detector_app", "evaluate", "export", "predict", "synth", "train"]
 
 detector_app = typer.Typer(
     name="detector",
@@ -68,85 +69,78 @@ def _require_torch(command: str) -> None:
         raise InputError(f"bim-init detector {command} {TORCH_MISSING}") from None
 
 
-def _metrics_table(metrics: Metrics, title: str) -> Table:
-    table = Table(title=title or None, title_justify="left")
-    for col in ("class", "instances", "precision", "recall", "AP@0.5"):
-        table.add_column(col, justify="left" if col == "class" else "right")
-
-    def f(v: float | None) -> str:
-        return "-" if v is None else f"{v:.3f}"
-
-    for c in metrics.classes:
-        table.add_row(c.name, str(c.instances), f(c.precision), f(c.recall), f(c.ap50))
-    table.add_row(
-        "all", str(sum(c.instances for c in metrics.classes)), "", "", f(metrics.map50), style="bold"
-    )
-    return table
-
-
 # --- synth -----------------------------------------------------------------------------------------
+
+# The options of synth and train that take more than a line (typer reads these Annotated types).
+_SynthSites = Annotated[
+    list[Path],
+    typer.Option("--site", metavar="SITE", help="bim-extract OUTDIR (repeat for several sites)."),
+]
+_SynthImages = Annotated[
+    int,
+    typer.Option(
+        "--images",
+        callback=number_option(PROG, minimum=1, maximum=1_000_000),
+        metavar="N",
+        help="Images to render.",
+    ),
+]
+_SynthSeed = Annotated[
+    int,
+    typer.Option(
+        "--seed",
+        callback=number_option(PROG, minimum=0, maximum=2**32 - 1),
+        metavar="S",
+        help="Random seed (image i depends on S, i).",
+    ),
+]
+_ValFraction = Annotated[
+    float,
+    typer.Option(
+        "--val-fraction",
+        callback=number_option(PROG, minimum=0, below=1),
+        metavar="F",
+        help="Share of images in the val split.",
+    ),
+]
+_Preview = Annotated[
+    Path | None,
+    typer.Option("--preview", metavar="FILE.png", help="Write a contact sheet of labelled images."),
+]
+_SynthWorkers = Annotated[
+    int,
+    typer.Option(
+        "--workers",
+        callback=number_option(PROG, minimum=0, maximum=64),
+        metavar="N",
+        help="Processes; 0 = one per core (max 2).",
+    ),
+]
+_ShuffleClasses = Annotated[
+    float,
+    typer.Option(
+        "--shuffle-classes",
+        callback=number_option(PROG, minimum=0, maximum=1),
+        metavar="P",
+        help="Draw each feature as a random class with this chance (training data; 0 for test sets).",
+    ),
+]
 
 
 @detector_app.command()
 def synth(
-    site: Annotated[
-        list[Path],
-        typer.Option("--site", metavar="SITE", help="bim-extract OUTDIR (repeat for several sites)."),
-    ],
+    site: _SynthSites,
     out: Annotated[Path, typer.Option("--out", metavar="DATASET", help="Dataset folder to write.")],
-    images: Annotated[
-        int,
-        typer.Option(
-            "--images",
-            callback=number_option(PROG, minimum=1, maximum=1_000_000),
-            metavar="N",
-            help="Images to render.",
-        ),
-    ] = 500,
+    images: _SynthImages = 500,
     size: Annotated[str, typer.Option("--size", metavar="WxH", help="Image size in pixels.")] = "320x240",
-    seed: Annotated[
-        int,
-        typer.Option(
-            "--seed",
-            callback=number_option(PROG, minimum=0, maximum=2**32 - 1),
-            metavar="S",
-            help="Random seed (image i depends on S, i).",
-        ),
-    ] = 0,
-    val_fraction: Annotated[
-        float,
-        typer.Option(
-            "--val-fraction",
-            callback=number_option(PROG, minimum=0, below=1),
-            metavar="F",
-            help="Share of images in the val split.",
-        ),
-    ] = 0.1,
-    preview: Annotated[
-        Path | None,
-        typer.Option("--preview", metavar="FILE.png", help="Write a contact sheet of labelled images."),
-    ] = None,
-    workers: Annotated[
-        int,
-        typer.Option(
-            "--workers",
-            callback=number_option(PROG, minimum=0, maximum=64),
-            metavar="N",
-            help="Processes; 0 = one per core (max 2).",
-        ),
-    ] = 0,
+    seed: _SynthSeed = 0,
+    val_fraction: _ValFraction = 0.1,
+    preview: _Preview = None,
+    workers: _SynthWorkers = 0,
     depth: Annotated[
         bool, typer.Option("--depth/--no-depth", help="Also write 16-bit depth PNGs (mm).")
     ] = True,
-    shuffle_classes: Annotated[
-        float,
-        typer.Option(
-            "--shuffle-classes",
-            callback=number_option(PROG, minimum=0, maximum=1),
-            metavar="P",
-            help="Draw each feature as a random class with this chance (training data; 0 for test sets).",
-        ),
-    ] = 0.0,
+    shuffle_classes: _ShuffleClasses = 0.0,
 ) -> None:
     """Render a YOLO dataset (RGB, depth, labels) from site models with domain randomisation."""
     from bimkit.atomic import staged_directory
@@ -208,89 +202,100 @@ def synth(
 
 # --- train -----------------------------------------------------------------------------------------
 
+_TrainData = Annotated[
+    Path, typer.Option("--data", metavar="data.yaml|COCO.json", help="YOLO data.yaml or COCO json.")
+]
+_Epochs = Annotated[
+    int, typer.Option("--epochs", callback=number_option(PROG, minimum=1, maximum=10_000), metavar="N")
+]
+_TrainImgsz = Annotated[
+    int,
+    typer.Option(
+        "--imgsz",
+        callback=number_option(PROG, minimum=32, maximum=2048),
+        metavar="PX",
+        help="Square input size, a multiple of 32.",
+    ),
+]
+_TrainOut = Annotated[
+    Path, typer.Option("--out", metavar="model.pt", help="Checkpoint written after every epoch.")
+]
+_Batch = Annotated[
+    int, typer.Option("--batch", callback=number_option(PROG, minimum=1, maximum=1024), metavar="N")
+]
+_LearningRate = Annotated[
+    float,
+    typer.Option(
+        "--lr",
+        callback=number_option(PROG, above=0, maximum=1),
+        metavar="LR",
+        help="AdamW learning rate.",
+    ),
+]
+_Device = Annotated[str, typer.Option("--device", metavar="auto|cpu|cuda", help="auto: a GPU when present.")]
+_TrainWorkers = Annotated[
+    int,
+    typer.Option(
+        "--workers",
+        callback=number_option(PROG, minimum=-1, maximum=64),
+        metavar="N",
+        help="Data loader processes; -1: auto.",
+    ),
+]
+_TimeLimit = Annotated[
+    float,
+    typer.Option("--time-limit", metavar="MIN", help="Stop after this many minutes (schedule follows time)."),
+]
+_ValMax = Annotated[
+    int,
+    typer.Option(
+        "--val-max",
+        callback=number_option(PROG, minimum=0, maximum=10_000_000),
+        metavar="N",
+        help="Validate on at most N images.",
+    ),
+]
+_TrainSeed = Annotated[
+    int, typer.Option("--seed", callback=number_option(PROG, minimum=0, maximum=2**32 - 1), metavar="S")
+]
+_Init = Annotated[
+    str | None,
+    typer.Option(
+        "--init",
+        metavar="default|model.pt",
+        help="Fine-tune: start from the shipped model ('default') or this checkpoint.",
+    ),
+]
+_FreezeBackbone = Annotated[
+    bool, typer.Option("--freeze-backbone", help="Train only the neck and heads (small datasets).")
+]
+_Backbone = Annotated[
+    str,
+    typer.Option(
+        "--backbone",
+        metavar="efficientnet_lite0|residual",
+        help="A new model's backbone: ImageNet-pretrained lite0, or the small residual one (scratch).",
+    ),
+]
+
 
 @detector_app.command()
 def train(
-    data: Annotated[
-        Path, typer.Option("--data", metavar="data.yaml|COCO.json", help="YOLO data.yaml or COCO json.")
-    ],
-    epochs: Annotated[
-        int, typer.Option("--epochs", callback=number_option(PROG, minimum=1, maximum=10_000), metavar="N")
-    ] = 30,
-    imgsz: Annotated[
-        int,
-        typer.Option(
-            "--imgsz",
-            callback=number_option(PROG, minimum=32, maximum=2048),
-            metavar="PX",
-            help="Square input size, a multiple of 32.",
-        ),
-    ] = 320,
-    out: Annotated[
-        Path, typer.Option("--out", metavar="model.pt", help="Checkpoint written after every epoch.")
-    ] = Path("model.pt"),
+    data: _TrainData,
+    epochs: _Epochs = 30,
+    imgsz: _TrainImgsz = 320,
+    out: _TrainOut = Path("model.pt"),
     resume: Annotated[bool, typer.Option("--resume", help="Continue the checkpoint at --out.")] = False,
-    batch: Annotated[
-        int, typer.Option("--batch", callback=number_option(PROG, minimum=1, maximum=1024), metavar="N")
-    ] = 16,
-    lr: Annotated[
-        float,
-        typer.Option(
-            "--lr",
-            callback=number_option(PROG, above=0, maximum=1),
-            metavar="LR",
-            help="AdamW learning rate.",
-        ),
-    ] = 2e-3,
-    device: Annotated[
-        str, typer.Option("--device", metavar="auto|cpu|cuda", help="auto: a GPU when present.")
-    ] = "auto",
-    workers: Annotated[
-        int,
-        typer.Option(
-            "--workers",
-            callback=number_option(PROG, minimum=-1, maximum=64),
-            metavar="N",
-            help="Data loader processes; -1: auto.",
-        ),
-    ] = -1,
-    time_limit: Annotated[
-        float,
-        typer.Option(
-            "--time-limit", metavar="MIN", help="Stop after this many minutes (schedule follows time)."
-        ),
-    ] = 0.0,
-    val_max: Annotated[
-        int,
-        typer.Option(
-            "--val-max",
-            callback=number_option(PROG, minimum=0, maximum=10_000_000),
-            metavar="N",
-            help="Validate on at most N images.",
-        ),
-    ] = 500,
-    seed: Annotated[
-        int, typer.Option("--seed", callback=number_option(PROG, minimum=0, maximum=2**32 - 1), metavar="S")
-    ] = 0,
-    init: Annotated[
-        str | None,
-        typer.Option(
-            "--init",
-            metavar="default|model.pt",
-            help="Fine-tune: start from the shipped model ('default') or this checkpoint.",
-        ),
-    ] = None,
-    freeze_backbone: Annotated[
-        bool, typer.Option("--freeze-backbone", help="Train only the neck and heads (small datasets).")
-    ] = False,
-    backbone: Annotated[
-        str,
-        typer.Option(
-            "--backbone",
-            metavar="efficientnet_lite0|residual",
-            help="A new model's backbone: ImageNet-pretrained lite0, or the small residual one (scratch).",
-        ),
-    ] = "efficientnet_lite0",
+    batch: _Batch = 16,
+    lr: _LearningRate = 2e-3,
+    device: _Device = "auto",
+    workers: _TrainWorkers = -1,
+    time_limit: _TimeLimit = 0.0,
+    val_max: _ValMax = 500,
+    seed: _TrainSeed = 0,
+    init: _Init = None,
+    freeze_backbone: _FreezeBackbone = False,
+    backbone: _Backbone = "efficientnet_lite0",
 ) -> None:
     """Train the detector; validates precision, recall and AP@0.5 per class each epoch."""
     try:
@@ -300,8 +305,6 @@ def train(
         _require_torch("train")
     except InputError as exc:
         raise _fail(str(exc)) from None
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-
     from initcli.detector.training.train import TrainOptions
     from initcli.detector.training.train import train as run_training
 
@@ -323,54 +326,10 @@ def train(
         freeze_backbone=freeze_backbone,
         backbone=backbone,
     )
-    progress = Progress(
-        TextColumn("[progress.description]{task.description}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TextColumn("{task.fields[losses]}"),
-        TimeElapsedColumn(),
-        console=Console(stderr=True),
-    )
-    state: dict = {}
-
-    def on_event(kind: str, info: dict) -> None:
-        if kind == "start":
-            ds = info["dataset"]
-            console.print(
-                f"data: {len(ds.train)} train / {len(ds.val)} val images, classes {ds.names}; "
-                f"device {info['device']}; {info['params']:,} parameters"
-            )
-            state["steps"] = info["steps_per_epoch"]
-        elif kind == "step":
-            epoch = info["epoch"]
-            if state.get("epoch") != epoch:
-                if "task" in state:
-                    progress.remove_task(state["task"])
-                state["epoch"] = epoch
-                state["task"] = progress.add_task(
-                    f"epoch {epoch + 1}/{epochs}", total=state["steps"], losses=""
-                )
-            progress.update(
-                state["task"],
-                advance=1,
-                losses=f"loss {info['loss']:.3f} hm {info['hm']:.3f} box {info['box']:.3f}",
-            )
-        elif kind == "epoch":
-            r = info["record"]
-            if info["metrics"] is not None:
-                progress.console.print(
-                    _metrics_table(
-                        info["metrics"], f"epoch {r.epoch}: loss {r.loss:.3f}, {r.seconds:.0f} s, val"
-                    )
-                )
-            else:
-                progress.console.print(
-                    f"epoch {r.epoch}: loss {r.loss:.3f}, {r.seconds:.0f} s (no val split)"
-                )
-
+    display = TrainingProgress(console, epochs)
     try:
-        with progress:
-            run_training(opts, on_event)
+        with display.progress:
+            run_training(opts, display.on_event)
     except InputError as exc:
         raise _fail(str(exc)) from None
     console.print(
@@ -584,7 +543,7 @@ def evaluate(
         return
     console = _console()
     console.print(f"{model} on {data} ({split}, {result.metrics.images} images)")
-    console.print(_metrics_table(result.metrics, ""))
+    console.print(metrics_table(result.metrics, ""))
     console.print(f"mAP@0.5 {result.metrics.map50:.3f}" if result.metrics.map50 is not None else "mAP@0.5 -")
     for w in result.warnings:
         typer.echo(f"bim-init: warning: {w}", err=True)

@@ -35,13 +35,16 @@ from initcli.eval.campaign import (
     run_jobs,
     trial_count,
 )
-from initcli.eval.config import load_eval_config, parse_methods
+from initcli.eval.config import EvalConfig, load_eval_config, parse_methods
 from initcli.eval.records import TrialRecord
 from initcli.eval.report import RunStats, write_report
 from initcli.eval.results_file import ResultsWriter, read_results
 from initcli.eval.sweep import parse_sweep
 from initcli.eval.tables import NONE, table2, table3
-from initcli.executor import default_workers, make_executor
+from initcli.eval.trial import TrialJob
+from initcli.executor import Executor, default_workers, make_executor
+
+__all__ = ["EVAL_MARKERS", "EXIT_INTERRUPTED", "evaluate"]
 
 EVAL_MARKERS = ("results.jsonl", "table.md")  # an --out folder holding one was written by bim-init eval
 EVAL_WRITES = ("results.jsonl", "table.csv", "table.md", "fig9.png", "fig12_*.png", "sweep_*.png", ".sites")
@@ -64,83 +67,94 @@ def _rich_table(title: str, header: list[str], rows: list[list[str]]) -> Table:
     return table
 
 
+# The options of eval that take more than a line (typer reads these Annotated types).
+_Config = Annotated[
+    Path | None,
+    typer.Option(
+        "--config",
+        metavar="eval.yaml",
+        help="Eval config [default: sample_models/eval.yaml of the source tree].",
+    ),
+]
+_Starts = Annotated[
+    int | None,
+    typer.Option(
+        "--starts",
+        metavar="N",
+        help="Starts per site, 1-100000 (overrides the config).",
+        callback=number_option(PROG, minimum=1, maximum=100000),
+    ),
+]
+_Methods = Annotated[
+    str | None,
+    typer.Option("--methods", metavar="M,...", help="Some of bim, bim+pf, amcl, markers [default: config]."),
+]
+_Workers = Annotated[
+    int | None,
+    typer.Option(
+        "--workers",
+        metavar="W",
+        help="Parallel processes, 1-1024 [default: all cores].",
+        callback=number_option(PROG, minimum=1, maximum=1024),
+    ),
+]
+_Resume = Annotated[
+    bool, typer.Option("--resume", help="Keep DIR/results.jsonl and run only the trials it lacks.")
+]
+_Force = Annotated[
+    bool,
+    typer.Option(
+        "--force",
+        help="Write into an --out folder that holds other files than an eval's (they are kept).",
+    ),
+]
+_Yes = Annotated[bool, typer.Option("--yes", help=f"Run a campaign of more than {MAX_TRIALS} trials.")]
+_Sweep = Annotated[
+    str | None,
+    typer.Option(
+        "--sweep",
+        metavar="KEY=V1,V2,...",
+        help="Vary one parameter (miss_rate, false_positives, depth_noise, odometry_drift, clutter, "
+        "alpha, beta, or a dotted site-config path), the rest fixed.",
+    ),
+]
+_Sites = Annotated[
+    str | None, typer.Option("--sites", metavar="NAME,...", help="Only these sites of the config.")
+]
+_Reality = Annotated[
+    str | None,
+    typer.Option(
+        "--reality",
+        metavar="ideal|construction",
+        help="Run every site in this named reality (sim.reality; keys a site config sets win).",
+    ),
+]
+_Executor = Annotated[
+    str,
+    typer.Option("--executor", metavar="local|ray", help="Where the trials run: local processes or Ray."),
+]
+_Address = Annotated[
+    str | None,
+    typer.Option(
+        "--address", metavar="ADDR", help="Ray cluster (auto, ray://host:10001) [default: a local one]."
+    ),
+]
+
+
 def evaluate(
-    config: Annotated[
-        Path | None,
-        typer.Option(
-            "--config",
-            metavar="eval.yaml",
-            help="Eval config [default: sample_models/eval.yaml of the source tree].",
-        ),
-    ] = None,
-    starts: Annotated[
-        int | None,
-        typer.Option(
-            "--starts",
-            metavar="N",
-            help="Starts per site, 1-100000 (overrides the config).",
-            callback=number_option(PROG, minimum=1, maximum=100000),
-        ),
-    ] = None,
-    methods: Annotated[
-        str | None,
-        typer.Option(
-            "--methods", metavar="M,...", help="Some of bim, bim+pf, amcl, markers [default: config]."
-        ),
-    ] = None,
-    workers: Annotated[
-        int | None,
-        typer.Option(
-            "--workers",
-            metavar="W",
-            help="Parallel processes, 1-1024 [default: all cores].",
-            callback=number_option(PROG, minimum=1, maximum=1024),
-        ),
-    ] = None,
+    config: _Config = None,
+    starts: _Starts = None,
+    methods: _Methods = None,
+    workers: _Workers = None,
     out: Annotated[Path, typer.Option("--out", metavar="DIR", help="Output folder.")] = Path("eval_results"),
-    resume: Annotated[
-        bool, typer.Option("--resume", help="Keep DIR/results.jsonl and run only the trials it lacks.")
-    ] = False,
-    force: Annotated[
-        bool,
-        typer.Option(
-            "--force",
-            help="Write into an --out folder that holds other files than an eval's (they are kept).",
-        ),
-    ] = False,
-    sweep: Annotated[
-        str | None,
-        typer.Option(
-            "--sweep",
-            metavar="KEY=V1,V2,...",
-            help="Vary one parameter (miss_rate, false_positives, depth_noise, odometry_drift, clutter, "
-            "alpha, beta, or a dotted site-config path), the rest fixed.",
-        ),
-    ] = None,
-    sites: Annotated[
-        str | None, typer.Option("--sites", metavar="NAME,...", help="Only these sites of the config.")
-    ] = None,
-    reality: Annotated[
-        str | None,
-        typer.Option(
-            "--reality",
-            metavar="ideal|construction",
-            help="Run every site in this named reality (sim.reality; keys a site config sets win).",
-        ),
-    ] = None,
-    executor: Annotated[
-        str,
-        typer.Option("--executor", metavar="local|ray", help="Where the trials run: local processes or Ray."),
-    ] = "local",
-    address: Annotated[
-        str | None,
-        typer.Option(
-            "--address", metavar="ADDR", help="Ray cluster (auto, ray://host:10001) [default: a local one]."
-        ),
-    ] = None,
-    yes: Annotated[
-        bool, typer.Option("--yes", help=f"Run a campaign of more than {MAX_TRIALS} trials.")
-    ] = False,
+    resume: _Resume = False,
+    force: _Force = False,
+    sweep: _Sweep = None,
+    sites: _Sites = None,
+    reality: _Reality = None,
+    executor: _Executor = "local",
+    address: _Address = None,
+    yes: _Yes = False,
 ) -> None:
     """Reproduce the paper's Tables 2 and 3: success, distance and error of every method over many starts."""
     console = Console(stderr=False)
@@ -152,12 +166,7 @@ def evaluate(
         the_sweep = parse_sweep(sweep) if sweep else None
         if reality is not None and reality not in REALITY_PROFILES:
             raise InputError(f"--reality: expected one of {', '.join(REALITY_PROFILES)}, got {reality!r}")
-        only = sites.replace(",", " ").split() if sites else None
-        if only:
-            unknown = [s for s in only if s not in {x.name for x in eval_config.sites}]
-            if unknown:
-                names = ", ".join(x.name for x in eval_config.sites)
-                raise InputError(f"--sites: no site {unknown[0]!r} in the config (sites: {names})")
+        only = _only_sites(sites, eval_config)
         check_outputs(
             campaign_inputs(eval_config, only), [OutputFolder(out, "--out", EVAL_MARKERS, EVAL_WRITES)], force
         )
@@ -185,38 +194,12 @@ def evaluate(
         err.print(f"resuming: {len(previous)} trials in {results_path} kept, {total} to run")
     records = list(previous)
     started = time.perf_counter()
-    ran = 0
     environments = {s.name: s.paper for s in eval_config.sites}
     command = (
         "bim-init " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:] else "bim-init eval"
     )
     try:
-        with (
-            ResultsWriter(results_path, append=resume) as writer,
-            Progress(
-                TextColumn("[bold]eval[/bold]"),
-                BarColumn(),
-                MofNCompleteColumn(),
-                TextColumn("trials"),
-                TimeElapsedColumn(),
-                TextColumn("ETA"),
-                TimeRemainingColumn(),
-                TextColumn("{task.fields[last]}"),
-                console=err,
-            ) as progress,
-        ):
-            task = progress.add_task("trials", total=total, last="")
-
-            def finished(batch: list[TrialRecord]) -> None:
-                nonlocal ran
-                for record in batch:
-                    writer.write(record)
-                    records.append(record)
-                ran += len(batch)
-                last = batch[-1]
-                progress.update(task, advance=len(batch), last=f"{last.site} #{last.start}")
-
-            run_jobs(jobs, n_workers, finished, runner)
+        ran = _run_trials(jobs, total, n_workers, runner, results_path, resume, records, err)
     except KeyboardInterrupt:
         runner.close(cancel=True)
         if out.is_dir():
@@ -242,3 +225,56 @@ def evaluate(
             f"{stats.per_minute:.1f} trials/min"
         )
     console.print(f"wrote {out}/results.jsonl, table.csv, table.md and plots")
+
+
+def _only_sites(sites: str | None, eval_config: EvalConfig) -> list[str] | None:
+    """The sites ``--sites`` names (None: every site of the config); InputError for one not in it."""
+    only = sites.replace(",", " ").split() if sites else None
+    if only:
+        unknown = [s for s in only if s not in {x.name for x in eval_config.sites}]
+        if unknown:
+            names = ", ".join(x.name for x in eval_config.sites)
+            raise InputError(f"--sites: no site {unknown[0]!r} in the config (sites: {names})")
+    return only
+
+
+def _run_trials(
+    jobs: list[TrialJob],
+    total: int,
+    n_workers: int,
+    runner: Executor,
+    results_path: Path,
+    resume: bool,
+    records: list[TrialRecord],
+    err: Console,
+) -> int:
+    """Run the trials with a progress bar on ``err``, each record written to ``results_path`` (appended
+    with ``resume``) as it comes and appended to ``records``; the number of trials run."""
+    ran = 0
+    with (
+        ResultsWriter(results_path, append=resume) as writer,
+        Progress(
+            TextColumn("[bold]eval[/bold]"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TextColumn("trials"),
+            TimeElapsedColumn(),
+            TextColumn("ETA"),
+            TimeRemainingColumn(),
+            TextColumn("{task.fields[last]}"),
+            console=err,
+        ) as progress,
+    ):
+        task = progress.add_task("trials", total=total, last="")
+
+        def finished(batch: list[TrialRecord]) -> None:
+            nonlocal ran
+            for record in batch:
+                writer.write(record)
+                records.append(record)
+            ran += len(batch)
+            last = batch[-1]
+            progress.update(task, advance=len(batch), last=f"{last.site} #{last.start}")
+
+        run_jobs(jobs, n_workers, finished, runner)
+    return ran

@@ -20,6 +20,8 @@ from initcli.cli.publish_pose import publish_pose
 from initcli.cli.run import run as run_session_command
 from initcli.cli.survey import survey
 
+__all__ = ["app", "main"]
+
 app = typer.Typer(
     name="bim-init",
     help="Marker-free robot initialisation from BIM: match detected doors, lifts and stairs to the model.",

@@ -12,6 +12,8 @@ from pathlib import Path
 
 import matplotlib
 
+__all__ = ["MARKERS", "plot_hypotheses"]
+
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402

@@ -19,6 +19,8 @@ from bimkit.cli import fail, number_option
 from bimkit.errors import InputError
 from initcli.cli import PROG
 
+__all__ = ["publish_pose"]
+
 
 def publish_pose(
     summary: Annotated[Path, typer.Argument(metavar="SUMMARY.json", help="summary.json of bim-init run.")],

@@ -25,6 +25,8 @@ from initcli.core.geometry import Pose2D
 from initcli.session.simulated import RUN_MARKERS, RUN_WRITES, run_simulated
 from initcli.site import input_paths
 
+__all__ = ["EXIT_FAILED", "LiveView", "RUN_MARKERS", "SEED_MAX", "parse_start", "result_table", "run"]
+
 EXIT_FAILED = 1
 SEED_MAX = 2**32 - 1  # numpy seeds
 

@@ -20,7 +20,7 @@ from bimtools.site.load import load_site
 from initcli.cli import PROG
 from initcli.config import SessionConfig, camera_of, followed_side, load_config
 from initcli.core.visibility import CameraModel
-from initcli.executor import make_executor
+from initcli.executor import Executor, make_executor
 from initcli.match.pipeline import site_class_map
 from initcli.survey.survey import (
     Landmark,
@@ -33,6 +33,8 @@ from initcli.survey.survey import (
     survey_storey,
 )
 from initcli.survey.uniqueness import UniquenessParams
+
+__all__ = ["EXIT_INTERRUPTED", "SURVEY_MARKERS", "SURVEY_VERSION", "survey", "survey_params"]
 
 SURVEY_VERSION = 1
 SURVEY_MARKERS = ("survey.json",)  # an --out folder holding one was written by bim-init survey
@@ -64,70 +66,76 @@ def survey_params(config: SessionConfig, spacing: float, headings: int) -> Surve
     )
 
 
+# The options of survey that take more than a line (typer reads these Annotated types).
+_Config = Annotated[
+    Path | None,
+    typer.Option(
+        "--config", metavar="site.yaml", help="Camera, matching and exploration settings of a run config."
+    ),
+]
+_Spacing = Annotated[
+    float,
+    typer.Option(
+        "--spacing",
+        metavar="M",
+        help="Metres between start positions, [0.1, 100].",
+        callback=number_option(PROG, minimum=0.1, maximum=100),
+    ),
+]
+_Headings = Annotated[
+    int,
+    typer.Option(
+        "--headings",
+        metavar="N",
+        help="Start headings per position, 1-360.",
+        callback=number_option(PROG, minimum=1, maximum=360),
+    ),
+]
+_Landmarks = Annotated[
+    int,
+    typer.Option(
+        "--landmarks",
+        metavar="N",
+        help="Extra landmarks to suggest (0-2).",
+        callback=number_option(PROG, minimum=0, maximum=2),
+    ),
+]
+_Executor = Annotated[
+    str,
+    typer.Option("--executor", metavar="local|ray", help="Where the matching runs: local processes or Ray."),
+]
+_Workers = Annotated[
+    int | None,
+    typer.Option(
+        "--workers",
+        metavar="W",
+        help="Local processes, 1-1024 [default: all cores].",
+        callback=number_option(PROG, minimum=1, maximum=1024),
+    ),
+]
+_Address = Annotated[
+    str | None, typer.Option("--address", metavar="ADDR", help="Ray cluster (auto, ray://host:10001).")
+]
+_Force = Annotated[
+    bool,
+    typer.Option("--force", help="Write into an --out folder holding other files than a survey's (kept)."),
+]
+_Yes = Annotated[bool, typer.Option("--yes", help=f"Run a survey of more than {MAX_STARTS} starts.")]
+
+
 def survey(
     site: Annotated[Path, typer.Argument(metavar="SITE", help="A bim-extract output folder.")],
     storey: Annotated[str, typer.Option("--storey", metavar="NAME|all", help="Storey to survey.")] = "all",
     out: Annotated[Path, typer.Option("--out", metavar="DIR", help="Output folder.")] = Path("survey"),
-    config: Annotated[
-        Path | None,
-        typer.Option(
-            "--config", metavar="site.yaml", help="Camera, matching and exploration settings of a run config."
-        ),
-    ] = None,
-    spacing: Annotated[
-        float,
-        typer.Option(
-            "--spacing",
-            metavar="M",
-            help="Metres between start positions, [0.1, 100].",
-            callback=number_option(PROG, minimum=0.1, maximum=100),
-        ),
-    ] = 1.0,
-    headings: Annotated[
-        int,
-        typer.Option(
-            "--headings",
-            metavar="N",
-            help="Start headings per position, 1-360.",
-            callback=number_option(PROG, minimum=1, maximum=360),
-        ),
-    ] = 4,
-    landmarks: Annotated[
-        int,
-        typer.Option(
-            "--landmarks",
-            metavar="N",
-            help="Extra landmarks to suggest (0-2).",
-            callback=number_option(PROG, minimum=0, maximum=2),
-        ),
-    ] = 2,
-    executor: Annotated[
-        str,
-        typer.Option(
-            "--executor", metavar="local|ray", help="Where the matching runs: local processes or Ray."
-        ),
-    ] = "local",
-    workers: Annotated[
-        int | None,
-        typer.Option(
-            "--workers",
-            metavar="W",
-            help="Local processes, 1-1024 [default: all cores].",
-            callback=number_option(PROG, minimum=1, maximum=1024),
-        ),
-    ] = None,
-    address: Annotated[
-        str | None, typer.Option("--address", metavar="ADDR", help="Ray cluster (auto, ray://host:10001).")
-    ] = None,
-    force: Annotated[
-        bool,
-        typer.Option(
-            "--force", help="Write into an --out folder holding other files than a survey's (kept)."
-        ),
-    ] = False,
-    yes: Annotated[
-        bool, typer.Option("--yes", help=f"Run a survey of more than {MAX_STARTS} starts.")
-    ] = False,
+    config: _Config = None,
+    spacing: _Spacing = 1.0,
+    headings: _Headings = 4,
+    landmarks: _Landmarks = 2,
+    executor: _Executor = "local",
+    workers: _Workers = None,
+    address: _Address = None,
+    force: _Force = False,
+    yes: _Yes = False,
 ) -> None:
     """Map the distance to a unique match over a floor from its features and walls alone (no noise):
     sampled starts look round, follow the wall and match until one hypothesis is left."""
@@ -163,21 +171,7 @@ def survey(
         "limit_m": params.limit_m,
         "storeys": storeys,
     }
-    table = Table(title="Survey: distance to a unique match", title_justify="left")
-    for column in (
-        "storey",
-        "starts",
-        "area m2",
-        "<=5 m",
-        "<=10 m",
-        "<=20 m",
-        "median m",
-        "never-unique m2",
-        "landmarks",
-    ):
-        table.add_column(column, justify="left" if column == "storey" else "right")
-    from initcli.survey.plots import survey_png
-
+    table = _survey_table()
     try:
         with Progress(
             TextColumn("[bold]survey[/bold] {task.fields[storey]}"),
@@ -187,46 +181,9 @@ def survey(
             console=err,
         ) as progress:
             for name, plan in plans.items():
-                task = progress.add_task("starts", total=len(plan.starts), storey=name)
-                result, views = survey_storey(plan, params, runner, partial(progress.advance, task))
-                entry = summarise(result)
-                chosen: list[Landmark] = []
-                improved: StoreySurvey | None = None
-                if landmarks:
-                    n_cand = landmarks * params.landmark_candidates
-                    task_l = progress.add_task("landmarks", total=n_cand, storey=f"{name} landmarks")
-                    chosen, improved = suggest_landmarks(
-                        result, views, landmarks, runner, partial(progress.advance, task_l)
-                    )
-                    progress.update(task_l, completed=n_cand)
-                    entry["landmarks"] = [
-                        {
-                            "x": round(lm.x, 3),
-                            "y": round(lm.y, 3),
-                            "norm_x": round(lm.norm_x, 4),
-                            "norm_y": round(lm.norm_y, 4),
-                            "category": lm.cls,
-                            "mean_distance_m": round(lm.mean_distance_m, 2),
-                        }
-                        for lm in chosen
-                    ]
-                    entry["with_landmarks"] = summarise(improved)
-                stem = "".join(c if c.isalnum() or c in "-_" else "_" for c in name)
-                out.mkdir(parents=True, exist_ok=True)
-                survey_png(out / f"survey_{stem}.png", result, improved, chosen)
-                entry["map"] = f"survey_{stem}.png"
+                entry, chosen = _survey_one(name, plan, params, runner, landmarks, progress, out)
                 storeys.append(entry)
-                shares = entry["unique_within"]
-                median = entry["median_distance_m"]
-                table.add_row(
-                    name,
-                    str(entry["samples"]),
-                    f"{entry['area_m2']:.0f}",
-                    *(f"{100 * shares[k]:.0f} %" for k in ("5m", "10m", "20m")),  # type: ignore[index]
-                    "never" if median is None else f"{median:.1f}",
-                    f"{entry['never_unique_area_m2']:.0f}",
-                    ", ".join(f"({lm.x:.1f}, {lm.y:.1f})" for lm in chosen) or "-",
-                )
+                table.add_row(*_table_row(name, entry, chosen))
     except KeyboardInterrupt:
         runner.close(cancel=True)
         if out.is_dir():
@@ -240,3 +197,79 @@ def survey(
     claim(out, SURVEY_WRITES)
     console.print(table)
     console.print(f"wrote {out}/survey.json and the maps")
+
+
+def _survey_table() -> Table:
+    """The terminal table, one row per storey."""
+    table = Table(title="Survey: distance to a unique match", title_justify="left")
+    for column in (
+        "storey",
+        "starts",
+        "area m2",
+        "<=5 m",
+        "<=10 m",
+        "<=20 m",
+        "median m",
+        "never-unique m2",
+        "landmarks",
+    ):
+        table.add_column(column, justify="left" if column == "storey" else "right")
+    return table
+
+
+def _survey_one(
+    name: str,
+    plan: StoreyPlan,
+    params: SurveyParams,
+    runner: Executor,
+    landmarks: int,
+    progress: Progress,
+    out: Path,
+) -> tuple[dict[str, object], list[Landmark]]:
+    """Survey one storey (and suggest ``landmarks`` extra landmarks), draw its map into ``out``; its
+    entry of survey.json and the landmarks chosen."""
+    from initcli.survey.plots import survey_png
+
+    task = progress.add_task("starts", total=len(plan.starts), storey=name)
+    result, views = survey_storey(plan, params, runner, partial(progress.advance, task))
+    entry = summarise(result)
+    chosen: list[Landmark] = []
+    improved: StoreySurvey | None = None
+    if landmarks:
+        n_cand = landmarks * params.landmark_candidates
+        task_l = progress.add_task("landmarks", total=n_cand, storey=f"{name} landmarks")
+        advance = partial(progress.advance, task_l)
+        chosen, improved = suggest_landmarks(result, views, landmarks, runner, advance)
+        progress.update(task_l, completed=n_cand)
+        entry["landmarks"] = [
+            {
+                "x": round(lm.x, 3),
+                "y": round(lm.y, 3),
+                "norm_x": round(lm.norm_x, 4),
+                "norm_y": round(lm.norm_y, 4),
+                "category": lm.cls,
+                "mean_distance_m": round(lm.mean_distance_m, 2),
+            }
+            for lm in chosen
+        ]
+        entry["with_landmarks"] = summarise(improved)
+    stem = "".join(c if c.isalnum() or c in "-_" else "_" for c in name)
+    out.mkdir(parents=True, exist_ok=True)
+    survey_png(out / f"survey_{stem}.png", result, improved, chosen)
+    entry["map"] = f"survey_{stem}.png"
+    return entry, chosen
+
+
+def _table_row(name: str, entry: dict[str, object], chosen: list[Landmark]) -> list[str]:
+    """A storey's row of the terminal table."""
+    shares = entry["unique_within"]
+    median = entry["median_distance_m"]
+    return [
+        name,
+        str(entry["samples"]),
+        f"{entry['area_m2']:.0f}",
+        *(f"{100 * shares[k]:.0f} %" for k in ("5m", "10m", "20m")),  # type: ignore[index]
+        "never" if median is None else f"{median:.1f}",
+        f"{entry['never_unique_area_m2']:.0f}",
+        ", ".join(f"({lm.x:.1f}, {lm.y:.1f})" for lm in chosen) or "-",
+    ]

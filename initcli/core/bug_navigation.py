@@ -17,6 +17,17 @@ import numpy as np
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.wall_following import ScanView, WallFollowParams, across_the_floor, wall_follow
 
+__all__ = [
+    "BugNavigator",
+    "BugParams",
+    "CROSSING_EXTRA_S",
+    "CROSSING_SLACK",
+    "FloorCrossing",
+    "RouteNavigator",
+    "around_side",
+    "cross_floor",
+]
+
 CROSSING_SLACK = 1.5  # a crossing may take this many times its drive at cruise speed ...
 CROSSING_EXTRA_S = 5.0  # s ... plus this (turning toward it); then wall following resumes there
 

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 
+__all__ = ["BUILTIN_CLASSES", "BUILTIN_SYNONYMS", "ClassMap"]
+
 BUILTIN_SYNONYMS: dict[str, str] = {
     "door": "door",
     "doors": "door",

@@ -12,6 +12,8 @@ import numpy as np
 
 from initcli.core.geometry import Pose2D
 
+__all__ = ["CHECK_EVERY_S", "ConfinementWatch", "FULL_WINDOW", "confined"]
+
 CHECK_EVERY_S = 1.0  # s between two checks of a ConfinementWatch
 FULL_WINDOW = 0.9  # fraction of the window the trace must span before it is judged
 

@@ -14,21 +14,25 @@ import numpy as np
 
 from initcli.core.pattern import angle_difference, pair_distance, rotation_angle
 
+__all__ = ["matching_cost", "pair_cost", "triple_cost"]
+
 
 def pair_cost(b_u: np.ndarray, b_v: np.ndarray, s_i: np.ndarray, s_j: np.ndarray) -> np.ndarray:
     """First term of Eq. 14: |d^B_{m(s1)m(s2)} - d^S_{s1 s2}|."""
-    return np.abs(pair_distance(b_u, b_v) - pair_distance(s_i, s_j))
+    cost: np.ndarray = np.abs(pair_distance(b_u, b_v) - pair_distance(s_i, s_j))
+    return cost
 
 
 def triple_cost(
     b_u: np.ndarray, b_v: np.ndarray, b_w: np.ndarray, s_i: np.ndarray, s_j: np.ndarray, s_k: np.ndarray
 ) -> np.ndarray:
     """One summand of Eq. 14 for the triple (s_{i-2}, s_{i-1}, s_i) matched to (b_u, b_v, b_w)."""
-    return (
+    cost: np.ndarray = (
         np.abs(pair_distance(b_u, b_v) - pair_distance(s_i, s_j))  # |d^B_{uv} - d^S_{i-2,i-1}|
         + np.abs(pair_distance(b_u, b_w) - pair_distance(s_i, s_k))  # |d^B_{uw} - d^S_{i-2,i}|
         + angle_difference(rotation_angle(b_u, b_v, b_w), rotation_angle(s_i, s_j, s_k))  # |theta - theta|
     )
+    return cost
 
 
 def matching_cost(b_xy: np.ndarray, s_xy: np.ndarray) -> float:

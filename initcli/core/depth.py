@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 
+__all__ = ["window_depth"]
+
 
 def window_depth(
     depth: np.ndarray, u: float, v: float, n: int = 2, min_depth: float = 0.0, max_depth: float = math.inf

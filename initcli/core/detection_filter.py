@@ -31,6 +31,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+__all__ = [
+    "ConfirmedFeature",
+    "DetectionFilter",
+    "FilterParams",
+    "FilterResult",
+    "GivenFeature",
+    "Sighting",
+    "filter_detections",
+    "is_truncated",
+    "within_drift_window",
+]
+
 
 @dataclass(frozen=True)
 class FilterParams:

@@ -22,6 +22,8 @@ from initcli.core.geometry import Pose2D
 from initcli.core.grid_planner import PlanningGrid
 from initcli.core.jit import compiled
 
+__all__ = ["FREE_BELOW", "Frontier", "FrontierParams", "L_CLAMP", "L_FREE", "L_OCC", "LocalMap", "OCC_ABOVE"]
+
 L_FREE = -0.4  # log-odds added to a cell a beam passed through
 L_OCC = 0.85  # log-odds added at a beam's end point
 L_CLAMP = 4.0  # log-odds saturate at +-this

@@ -13,6 +13,8 @@ from typing import overload
 
 import numpy as np
 
+__all__ = ["Pose2D", "poses_to_array", "rot2", "transform_poses", "wrap_angle"]
+
 
 @overload
 def wrap_angle(angle: float) -> float: ...

@@ -51,6 +51,16 @@ from initcli.core.particle_filter import (
     weighted_pose_stats,
 )
 
+__all__ = [
+    "GlobalEstimate",
+    "GlobalLocalisation",
+    "GlobalLocalisationParams",
+    "PoseHistogram",
+    "YAW_BINS_FULL_TURN",
+    "free_cell_centres",
+    "kld_sample_limit",
+]
+
 YAW_BINS_FULL_TURN = 36  # 360 degrees / 10 degrees
 
 
@@ -132,7 +142,8 @@ class PoseHistogram:
         return ix, iy, ia
 
     def encode(self, ix: np.ndarray, iy: np.ndarray, ia: np.ndarray) -> np.ndarray:
-        return (ix * self.ny + iy) * self.yaw_bins + ia
+        code: np.ndarray = (ix * self.ny + iy) * self.yaw_bins + ia
+        return code
 
     def keys(self, particles: np.ndarray) -> np.ndarray:
         return self.encode(*self.cells(particles))

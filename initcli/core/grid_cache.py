@@ -14,6 +14,8 @@ from typing import Generic, TypeVar
 
 from bimtools.site.records import OccupancyGrid
 
+__all__ = ["GRID_CACHE_SIZE", "GridCache"]
+
 T = TypeVar("T")
 
 GRID_CACHE_SIZE = 4  # maps (with their settings) whose values a cache keeps

@@ -18,6 +18,8 @@ from scipy.sparse.csgraph import dijkstra
 
 from bimtools.site.records import FREE, OccupancyGrid
 
+__all__ = ["DOOR_SEAL_MARGIN", "PlanningGrid", "with_doors_closed"]
+
 DOOR_SEAL_MARGIN = 0.15  # m beyond each side of a door's width that the seal drawn across it reaches
 
 

@@ -48,6 +48,18 @@ import numpy as np
 from initcli.core.geometry import Pose2D
 from initcli.core.matching import OUTLIER
 
+__all__ = [
+    "VERDICT_NONE",
+    "VERDICT_UNIQUE",
+    "confidences",
+    "distinct_places",
+    "drop_dominated",
+    "one_place",
+    "pose_groups",
+    "rank_order",
+    "verdict_text",
+]
+
 VERDICT_UNIQUE = "unique match"
 VERDICT_NONE = "no consistent match"
 
@@ -164,4 +176,5 @@ def confidences(cost: np.ndarray, n_out: np.ndarray, tau: float = 0.5, eps: floa
         return cost
     logw = -cost / tau + np.asarray(n_out, dtype=float) * math.log(eps)
     w = np.exp(logw - logw.max())
-    return w / w.sum()
+    normalised: np.ndarray = w / w.sum()
+    return normalised

@@ -24,6 +24,8 @@ import numpy as np
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.projection import R_BODY_OPTICAL, CameraIntrinsics, CameraMount, odom_to_pixel
 
+__all__ = ["Tag", "robot_pose_from_marker", "tag_object_points", "tag_rotation"]
+
 
 class Tag(Protocol):
     """What the pose needs of a tag: its BIM pose (centre and wall normal) and its corner geometry."""

@@ -44,6 +44,8 @@ from scipy.spatial import cKDTree
 
 from initcli.core.pattern import angle_difference, pair_distance, rotation_angle
 
+__all__ = ["BimIndex", "MatchOverflow", "MatchParams", "MatchState", "Matcher", "OUTLIER", "match_sequence"]
+
 OUTLIER = -1
 
 

@@ -11,6 +11,8 @@ import math
 
 from initcli.core.geometry import Pose2D, wrap_angle
 
+__all__ = ["apply_delta", "motion_delta"]
+
 
 def motion_delta(a: Pose2D, b: Pose2D) -> tuple[float, float, float]:
     """The (rot1 rad, trans m, rot2 rad) decomposition of the motion from ``a`` to ``b``."""

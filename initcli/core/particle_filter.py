@@ -23,6 +23,20 @@ from bimtools.site.records import OCCUPIED, OccupancyGrid
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.grid_cache import GridCache
 
+__all__ = [
+    "FilterNoise",
+    "LaserModel",
+    "LikelihoodField",
+    "ParticleFilter",
+    "PoseEstimate",
+    "beam_log_likelihood",
+    "likelihood_field",
+    "low_variance_indices",
+    "sample_motion",
+    "scan_fit",
+    "weighted_pose_stats",
+]
+
 
 @dataclass(frozen=True)
 class FilterNoise:
@@ -67,20 +81,23 @@ class LikelihoodField:
 
     def lookup(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """The distance field at world points (max_distance off the map)."""
-        return self._padded[self.padded_row(y), self.padded_col(x)]
+        distance: np.ndarray = self._padded[self.padded_row(y), self.padded_col(x)]
+        return distance
 
     def padded_col(self, x: np.ndarray) -> np.ndarray:
         """The column of the padded field holding each world ``x`` (the border off the map)."""
         col = np.floor((x - self.grid.origin[0]) / self.grid.resolution).astype(np.int64)
         col += 1
         np.maximum(col, 0, out=col)  # np.clip on integers costs more than the two bounds
-        return np.minimum(col, self.cols + 1, out=col)
+        clipped: np.ndarray = np.minimum(col, self.cols + 1, out=col)
+        return clipped
 
     def padded_row(self, y: np.ndarray) -> np.ndarray:
         """The row of the padded field holding each world ``y`` (the border off the map)."""
         row = self.rows - np.floor((y - self.grid.origin[1]) / self.grid.resolution).astype(np.int64)
         np.maximum(row, 0, out=row)
-        return np.minimum(row, self.rows + 1, out=row)
+        clipped: np.ndarray = np.minimum(row, self.rows + 1, out=row)
+        return clipped
 
     def near_walls(self, tolerance: float) -> np.ndarray:
         """The padded field's cells within ``tolerance`` (m) of a wall, as a flat boolean array
@@ -147,7 +164,8 @@ def beam_log_likelihood(
         keep = fits >= model.beam_skip_threshold
         if keep.mean() >= 1.0 - model.beam_skip_error_threshold:
             logp = logp[:, keep]
-    return logp.sum(axis=1) / model.temperature
+    loglik: np.ndarray = logp.sum(axis=1) / model.temperature
+    return loglik
 
 
 @dataclass

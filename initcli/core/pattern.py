@@ -7,12 +7,15 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["angle_difference", "pair_distance", "rotation_angle"]
+
 
 def pair_distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Eq. 5: d_uv = sqrt((x_v - x_u)^2 + (y_v - y_u)^2)."""
     a = np.asarray(a, dtype=float)
     b = np.asarray(b, dtype=float)
-    return np.hypot(b[..., 0] - a[..., 0], b[..., 1] - a[..., 1])  # Eq. 5
+    distance: np.ndarray = np.hypot(b[..., 0] - a[..., 0], b[..., 1] - a[..., 1])  # Eq. 5
+    return distance
 
 
 def rotation_angle(u: np.ndarray, v: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -26,7 +29,8 @@ def rotation_angle(u: np.ndarray, v: np.ndarray, w: np.ndarray) -> np.ndarray:
     w = np.asarray(w, dtype=float)
     ax, ay = v[..., 0] - u[..., 0], v[..., 1] - u[..., 1]  # Eq. 6 (times d_uv)
     bx, by = w[..., 0] - u[..., 0], w[..., 1] - u[..., 1]  # Eq. 6 (times d_uw)
-    return np.arctan2(ax * by - ay * bx, ax * bx + ay * by)  # Eq. 8
+    theta: np.ndarray = np.arctan2(ax * by - ay * bx, ax * bx + ay * by)  # Eq. 8
+    return theta
 
 
 def angle_difference(a: np.ndarray | float, b: np.ndarray | float) -> np.ndarray:
@@ -38,4 +42,5 @@ def angle_difference(a: np.ndarray | float, b: np.ndarray | float) -> np.ndarray
     difference is the only deviation from the published criteria, and the oracle uses it too.
     """
     d = np.abs(np.asarray(a, dtype=float) - np.asarray(b, dtype=float)) % (2.0 * np.pi)
-    return np.minimum(d, 2.0 * np.pi - d)
+    wrapped: np.ndarray = np.minimum(d, 2.0 * np.pi - d)
+    return wrapped

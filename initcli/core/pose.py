@@ -22,13 +22,27 @@ from scipy.optimize import least_squares
 
 from initcli.core.geometry import Pose2D, wrap_angle
 
+__all__ = [
+    "POSE_METHODS",
+    "SIDE_TOLERANCE",
+    "estimate_pose",
+    "heading_from_feature",
+    "paper_pose",
+    "rigid_align",
+    "rigid_align_batch",
+    "rigid_pose",
+    "trilaterate",
+    "trilateration_residuals",
+]
+
 POSE_METHODS = ("paper", "rigid")
 SIDE_TOLERANCE = 0.05  # m: below this offset from the feature line the side is not trusted
 
 
 def trilateration_residuals(xy: np.ndarray, anchors: np.ndarray, dists: np.ndarray) -> np.ndarray:
     """Eq. 10 residuals: d_i^2 - ((x - x_i)^2 + (y - y_i)^2), one per feature."""
-    return dists**2 - ((xy[0] - anchors[:, 0]) ** 2 + (xy[1] - anchors[:, 1]) ** 2)  # Eq. 10
+    residuals: np.ndarray = dists**2 - ((xy[0] - anchors[:, 0]) ** 2 + (xy[1] - anchors[:, 1]) ** 2)  # Eq. 10
+    return residuals
 
 
 def _circle_points(c1: np.ndarray, r1: float, c2: np.ndarray, r2: float) -> list[np.ndarray]:

@@ -22,6 +22,25 @@ import numpy as np
 
 from initcli.core.geometry import Pose2D
 
+__all__ = [
+    "CameraIntrinsics",
+    "CameraMount",
+    "R_BODY_OPTICAL",
+    "base_to_odom",
+    "bbox_centre",
+    "box_for_point",
+    "detections_to_odom",
+    "mount_from_optical",
+    "odom_to_optical",
+    "odom_to_pixel",
+    "optical_rotation",
+    "optical_to_base",
+    "optical_to_pixel",
+    "pixel_to_optical",
+    "rpy_from_matrix",
+    "rpy_matrix",
+]
+
 # Optical (x right, y down, z forward) -> camera body (x forward, y left, z up).
 R_BODY_OPTICAL = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
 
@@ -91,7 +110,8 @@ def optical_to_base(points: np.ndarray, mount: CameraMount) -> np.ndarray:
     """Eq. 2, first transforms: optical -> camera body -> robot base, (N, 3)."""
     p = np.asarray(points, dtype=float).reshape(-1, 3)
     r = mount.rotation() @ R_BODY_OPTICAL  # T^{base}_{optical} = T^{base}_{body} T^{body}_{optical}
-    return p @ r.T + mount.translation
+    base: np.ndarray = p @ r.T + mount.translation
+    return base
 
 
 def base_to_odom(points: np.ndarray, robot: Pose2D) -> np.ndarray:
@@ -119,7 +139,8 @@ def odom_to_optical(points: np.ndarray, mount: CameraMount, robot: Pose2D) -> np
     base_xy = robot.apply_inverse(p[:, :2])
     base = np.column_stack([base_xy, p[:, 2]])
     r = mount.rotation() @ R_BODY_OPTICAL
-    return (base - mount.translation) @ r  # r^T applied to row vectors
+    optical: np.ndarray = (base - mount.translation) @ r  # r^T applied to row vectors
+    return optical
 
 
 def optical_to_pixel(
@@ -184,4 +205,5 @@ def mount_from_optical(rotation: np.ndarray, translation: np.ndarray) -> CameraM
 
 def optical_rotation(mount: CameraMount) -> np.ndarray:
     """``R^{base}_{optical}`` of a mount (Eq. 2: body rotation times the optical-to-body axes)."""
-    return mount.rotation() @ R_BODY_OPTICAL
+    rotation: np.ndarray = mount.rotation() @ R_BODY_OPTICAL
+    return rotation

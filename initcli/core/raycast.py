@@ -22,6 +22,24 @@ import numpy as np
 
 from initcli.core.jit import compiled
 
+__all__ = [
+    "ANGLE_MARGIN",
+    "EPS",
+    "EVEN_TOLERANCE",
+    "NEAR_SEGMENT",
+    "RANGE_MARGIN",
+    "SHORTEST_SEGMENT2",
+    "SIGHT_END",
+    "SIGHT_PARALLEL",
+    "TWO_PI",
+    "cast_rays",
+    "nearest_segment_distance",
+    "ray_segment_distances",
+    "ray_segment_params",
+    "segment_directions",
+    "sight_blocked",
+]
+
 EPS = 1e-9  # |d × e| below this: parallel, no hit (the lidar's rule)
 TWO_PI = 2.0 * math.pi
 
@@ -61,7 +79,8 @@ def ray_segment_params(
 
 def segment_directions(segments: np.ndarray) -> np.ndarray:
     """(S, 4) segments -> (S, 2) direction vectors ``e = b - a`` (what the ray tests use)."""
-    return segments[:, 2:4] - segments[:, 0:2]
+    directions: np.ndarray = segments[:, 2:4] - segments[:, 0:2]
+    return directions
 
 
 def ray_segment_distances(
@@ -79,7 +98,8 @@ def ray_segment_distances(
     denom, t, u = ray_segment_params(w[..., 0], w[..., 1], dx, dy, e[..., 0], e[..., 1])
     hit = (np.abs(denom) > EPS) & (t > 0) & (u >= 0) & (u <= 1)
     t = np.where(hit, t, np.inf)
-    return np.minimum(ranges, t.min(axis=1))
+    nearest: np.ndarray = np.minimum(ranges, t.min(axis=1))
+    return nearest
 
 
 def sight_blocked(eye: np.ndarray, targets: np.ndarray, segments: np.ndarray) -> np.ndarray:
@@ -97,7 +117,8 @@ def sight_blocked(eye: np.ndarray, targets: np.ndarray, segments: np.ndarray) ->
     w = segments[None, :, 0:2] - eyes[:, None, :]
     denom, t, u = ray_segment_params(w[..., 0], w[..., 1], d[..., 0], d[..., 1], e[..., 0], e[..., 1])
     hit = (np.abs(denom) > SIGHT_PARALLEL) & (t > SIGHT_END) & (t < 1.0 - SIGHT_END) & (u >= 0.0) & (u <= 1.0)
-    return hit.any(axis=1)
+    blocked: np.ndarray = hit.any(axis=1)
+    return blocked
 
 
 def _full_turn(angles: np.ndarray) -> tuple[float, float] | None:

@@ -32,6 +32,8 @@ import numpy as np
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.pose import heading_from_feature
 
+__all__ = ["Rectification", "WallArray", "nearest_wall", "rectify_pose", "rectify_position"]
+
 
 @dataclass(frozen=True)
 class WallArray:

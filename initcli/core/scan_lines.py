@@ -182,7 +182,8 @@ def _sse(cum: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
     a = m[..., 3] - n * mx * mx
     b = m[..., 4] - n * mx * my
     c = m[..., 5] - n * my * my
-    return np.maximum((a + c) / 2 - np.sqrt(((a - c) / 2) ** 2 + b * b), 0.0)
+    spread: np.ndarray = np.maximum((a + c) / 2 - np.sqrt(((a - c) / 2) ** 2 + b * b), 0.0)
+    return spread
 
 
 def _refine(points: np.ndarray, pieces: list[tuple[int, int]]) -> list[tuple[int, int]]:

@@ -20,6 +20,8 @@ from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount, odom_to_pixel
 from initcli.core.raycast import sight_blocked
 
+__all__ = ["CameraModel", "FeatureArrays", "PAIR_CHUNK", "visible"]
+
 PAIR_CHUNK = 20_000  # (pose, feature) pairs tested against the walls at once
 
 
@@ -84,7 +86,7 @@ def visible(poses: np.ndarray, features: FeatureArrays, walls: np.ndarray, model
     cam = model.camera
     mu, mv = model.margin * cam.width, model.margin * cam.height
     with np.errstate(invalid="ignore"):
-        ok = (
+        ok: np.ndarray = (
             (depth >= model.min_range)
             & (depth <= model.max_range)
             & (u >= mu)

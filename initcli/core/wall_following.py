@@ -17,6 +17,24 @@ import numpy as np
 
 from initcli.core.geometry import wrap_angle
 
+__all__ = [
+    "BEAM_CACHE_SIZE",
+    "CROSS_BEARINGS",
+    "CROSS_HALF_WIDTH",
+    "CROSS_REACH",
+    "CROSS_SHORT",
+    "CROSS_WALL_M",
+    "MovingObstacleWait",
+    "OPEN_SIDE_M",
+    "ScanView",
+    "WALL_GAP_M",
+    "WallFollowParams",
+    "across_the_floor",
+    "open_beside",
+    "wall_follow",
+    "wall_width",
+]
+
 
 @dataclass(frozen=True)
 class WallFollowParams:

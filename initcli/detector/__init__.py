@@ -8,7 +8,8 @@ Three parts, each importable without the next:
   COCO readers), :mod:`.metrics` and :mod:`.evaluate` (precision, recall, AP@0.5 per class);
 - :mod:`initcli.detector.synth`, rendering: :mod:`~initcli.detector.synth.scene` (a storey as the
   renderer sees it), :mod:`~initcli.detector.synth.look` (textures, colours, lighting),
-  :mod:`~initcli.detector.synth.render` (the numpy raycaster) and
+  :mod:`~initcli.detector.synth.render` (the numpy raycaster; its colours in
+  :mod:`~initcli.detector.synth.paint`) and
   :mod:`~initcli.detector.synth.dataset` (synthetic YOLO datasets with domain randomisation);
 - :mod:`initcli.detector.training`, PyTorch (the ``[train]`` extra): the network
   (:mod:`~initcli.detector.training.model`), augmentation, checkpoints, training and the ONNX export.
@@ -20,6 +21,8 @@ the data and what the shipped model can do.
 from __future__ import annotations
 
 from pathlib import Path
+
+__all__ = ["CLASS_NAMES", "DEFAULT_MODEL", "MODELS_DIR", "resolve_model_path"]
 
 CLASS_NAMES: tuple[str, ...] = ("door", "lift", "stairs")
 # The detector's own score threshold: boxes the network scores lower are dropped where it runs (the

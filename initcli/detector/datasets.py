@@ -47,6 +47,22 @@ from bimkit.checks import parse_json, read_bytes, read_text, read_yaml
 from bimkit.errors import InputError
 from bimkit.limits import MAX_TEXT_BYTES
 
+__all__ = [
+    "DOORDETECT_CLASSES",
+    "Dataset",
+    "DatasetItem",
+    "IMAGE_SUFFIXES",
+    "PARTS",
+    "holdout_fraction",
+    "label_path",
+    "load_coco",
+    "load_dataset",
+    "load_doordetect",
+    "load_remapped",
+    "load_yolo",
+    "read_yolo_labels",
+]
+
 IMAGE_SUFFIXES = {".jpg", ".jpeg", ".png", ".bmp", ".webp", ".tif", ".tiff"}
 
 

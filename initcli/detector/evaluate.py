@@ -20,6 +20,8 @@ from initcli.detector.metrics import MetricAccumulator, Metrics
 from initcli.detector.runtime import Detector
 from initcli.io.images import read_image
 
+__all__ = ["EvalResult", "evaluate_model"]
+
 
 @dataclass
 class EvalResult:

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["LAYOUTS", "LayoutError", "MAX_WH", "box_iou", "decode", "infer_layout", "iou_matrix", "nms"]
+
 LAYOUTS = ("yolov8", "yolov8t", "yolov5", "nms")
 MAX_WH = 7680.0  # class offset for class-aware NMS in one pass
 

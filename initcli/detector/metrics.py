@@ -15,6 +15,8 @@ import numpy as np
 from initcli.detector import DETECTOR_CONFIDENCE
 from initcli.detector.layouts import iou_matrix
 
+__all__ = ["ClassMetrics", "MetricAccumulator", "Metrics", "average_precision"]
+
 
 @dataclass
 class ClassMetrics:

@@ -11,6 +11,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+__all__ = ["Letterbox", "PAD_VALUE", "letterbox", "to_tensor_layout"]
+
 PAD_VALUE = 114
 
 

@@ -25,6 +25,8 @@ from initcli.detector import DEFAULT_MODEL, DETECTOR_CONFIDENCE, resolve_model_p
 from initcli.detector.layouts import LayoutError, decode, infer_layout, nms
 from initcli.detector.preprocess import PAD_VALUE, Letterbox, letterbox
 
+__all__ = ["DEFAULT_IMGSZ", "Detection", "Detector", "Preprocess", "session_options"]
+
 DEFAULT_IMGSZ = 640  # Ultralytics' default when the input size is dynamic and not in the metadata
 
 

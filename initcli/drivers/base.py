@@ -11,6 +11,8 @@ from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.io.detection_log import DetectedObject
 
+__all__ = ["LaserScan", "RobotDriver", "SensorFrame"]
+
 
 @dataclass(frozen=True)
 class LaserScan:

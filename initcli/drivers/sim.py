@@ -20,6 +20,8 @@ from initcli.io.detection_log import DetectedObject
 from initcli.sim.robot import DiffDriveRobot
 from initcli.sim.world import SimWorld
 
+__all__ = ["CONTROL_RATE", "Detector", "LidarSpec", "SimDriver"]
+
 CONTROL_RATE = 10.0  # Hz
 
 

@@ -17,6 +17,8 @@ from initcli.executor import Executor, LocalExecutor, map_unordered
 from initcli.sim.build import check_start
 from initcli.site import choose_storey, input_paths, prepare_site, prepare_world
 
+__all__ = ["PreparedSite", "check_start_poses", "plan_jobs", "prepare_sites", "run_jobs"]
+
 
 @dataclass(frozen=True)
 class PreparedSite:

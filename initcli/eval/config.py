@@ -18,6 +18,18 @@ from initcli.core.global_localisation import GlobalLocalisationParams
 from initcli.eval.records import METHODS, FailureRule
 from initcli.sim.markers import MarkerParams
 
+__all__ = [
+    "DEFAULT_CONFIG",
+    "EvalConfig",
+    "EvalSite",
+    "SAMPLES",
+    "SCHEMA_PATH",
+    "load_eval_config",
+    "parse_eval_config",
+    "parse_methods",
+    "site_name",
+]
+
 SCHEMA_PATH = schema_path("eval_config.schema.json")
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_models"  # in a source checkout only
 DEFAULT_CONFIG = SAMPLES / "eval.yaml"

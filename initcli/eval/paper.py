@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+__all__ = ["METHOD_TITLES", "PAPER", "PaperRow", "paper_row"]
+
 
 @dataclass(frozen=True)
 class PaperRow:

@@ -8,6 +8,8 @@ from pathlib import Path
 from bimkit.atomic import write_bytes_atomic
 from initcli.eval.records import METHODS, MethodSummary, TrialRecord
 
+__all__ = ["METHOD_COLOURS", "SITE_STYLES", "fig12", "fig9", "sweep_plot"]
+
 
 def _pyplot():
     import matplotlib

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+__all__ = ["FailureRule", "METHODS", "MethodSummary", "TrialKey", "TrialRecord"]
+
 METHODS = ("bim", "bim+pf", "amcl", "markers")
 
 

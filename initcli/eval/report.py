@@ -12,6 +12,8 @@ from initcli.eval.results_file import write_csv
 from initcli.eval.scoring import summarise
 from initcli.eval.tables import CSV_COLUMNS, csv_rows, markdown, sweep_table, table2, table3
 
+__all__ = ["RunStats", "table_markdown", "write_report"]
+
 
 @dataclass(frozen=True)
 class RunStats:

@@ -15,6 +15,16 @@ from bimkit.checks import parse_json, read_text
 from bimkit.errors import InputError
 from initcli.eval.records import TrialRecord
 
+__all__ = [
+    "REQUIRED",
+    "ResultsWriter",
+    "parse_record",
+    "read_results",
+    "record_line",
+    "truncate_partial_line",
+    "write_csv",
+]
+
 REQUIRED = ("site", "start", "method", "success", "reason")
 _FIELDS = {f.name for f in dataclasses.fields(TrialRecord)}
 

@@ -11,6 +11,8 @@ from initcli.baselines.outcome import LocalisationOutcome
 from initcli.core.geometry import wrap_angle
 from initcli.eval.records import FailureRule, MethodSummary, TrialRecord
 
+__all__ = ["judge", "pose_errors", "score", "summarise"]
+
 
 def pose_errors(outcome: LocalisationOutcome) -> tuple[float | None, float | None]:
     """(translation m, rotation deg) of the claimed pose against the truth at the same instant."""

@@ -13,6 +13,8 @@ from bimkit.errors import InputError
 from initcli.config import SCHEMA_PATH as SITE_SCHEMA
 from initcli.config import SessionConfig
 
+__all__ = ["SWEEP_KEYS", "Sweep", "apply_sweep", "format_value", "parse_sweep", "sweep_label"]
+
 # Short names for the parameters the issue asks to sweep; any dotted config path works too.
 SWEEP_KEYS: dict[str, str] = {
     "miss_rate": "sim.miss_rate",  # chance a visible feature is not detected in an image (0-1)

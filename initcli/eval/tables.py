@@ -7,6 +7,8 @@ import dataclasses
 from initcli.eval.paper import METHOD_TITLES, paper_row
 from initcli.eval.records import MethodSummary
 
+__all__ = ["CSV_COLUMNS", "NONE", "csv_rows", "fmt", "markdown", "sweep_table", "table2", "table3"]
+
 NONE = "—"
 
 CSV_COLUMNS = [f.name for f in dataclasses.fields(MethodSummary)] + [

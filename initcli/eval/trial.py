@@ -31,6 +31,8 @@ from initcli.session.simulated import sim_session
 from initcli.sim.build import SimSetup, build_sim
 from initcli.site import choose_storey
 
+__all__ = ["TrialJob", "run_trial", "session_outcomes", "trial_seed"]
+
 
 @dataclass(frozen=True)
 class TrialJob:

@@ -37,6 +37,32 @@ from initcli.core.geometry import Pose2D
 from initcli.core.landmark_tracks import LidarLandmark
 from initcli.core.projection import CameraIntrinsics, CameraMount
 
+__all__ = [
+    "DetectedObject",
+    "DetectionLog",
+    "Detections",
+    "FeatureRecord",
+    "HypothesesRecord",
+    "LOG_VERSION",
+    "LogWriter",
+    "MAX_ANGLE",
+    "MAX_COORDINATE",
+    "MAX_TIME",
+    "Meta",
+    "Odom",
+    "RECORD_TYPES",
+    "Record",
+    "Scan",
+    "State",
+    "Truth",
+    "format_record",
+    "iter_lines",
+    "parse_record",
+    "read_log",
+    "record_to_dict",
+    "write_log",
+]
+
 LOG_VERSION = 1
 RECORD_TYPES = ("meta", "odom", "detections", "feature", "scan", "truth", "state", "hypotheses")
 
@@ -173,7 +199,7 @@ class _Bad(ValueError):
 # --- field readers ---------------------------------------------------------------------------------
 
 
-def _num(obj: dict, key: str, where: str = "") -> float:
+def _num(obj: dict[str, Any], key: str, where: str = "") -> float:
     if key not in obj:
         raise _Bad(f"missing field {where}{key!r}")
     v = obj[key]
@@ -191,7 +217,9 @@ MAX_ANGLE = 1e4  # rad: headings (unwrapped odometry yaw may grow, but not witho
 MAX_TIME = 1e10  # s
 
 
-def _coord(obj: dict, key: str, where: str = "", bound: float = MAX_COORDINATE, unit: str = "m") -> float:
+def _coord(
+    obj: dict[str, Any], key: str, where: str = "", bound: float = MAX_COORDINATE, unit: str = "m"
+) -> float:
     """A finite number within +-bound (metres of odometry, radians of heading, seconds)."""
     v = _num(obj, key, where)
     if abs(v) > bound:
@@ -199,15 +227,15 @@ def _coord(obj: dict, key: str, where: str = "", bound: float = MAX_COORDINATE, 
     return v
 
 
-def _t(obj: dict) -> float:
+def _t(obj: dict[str, Any]) -> float:
     return _coord(obj, "t", bound=MAX_TIME, unit="s")
 
 
-def _yaw(obj: dict, where: str = "") -> float:
+def _yaw(obj: dict[str, Any], where: str = "") -> float:
     return _coord(obj, "yaw", where, bound=MAX_ANGLE, unit="rad")
 
 
-def _str(obj: dict, key: str, where: str = "") -> str:
+def _str(obj: dict[str, Any], key: str, where: str = "") -> str:
     if key not in obj:
         raise _Bad(f"missing field {where}{key!r}")
     v = obj[key]
@@ -216,7 +244,7 @@ def _str(obj: dict, key: str, where: str = "") -> str:
     return v
 
 
-def _obj(obj: dict, key: str) -> dict:
+def _obj(obj: dict[str, Any], key: str) -> dict[str, Any]:
     if key not in obj:
         raise _Bad(f"missing field {key!r}")
     v = obj[key]
@@ -225,7 +253,7 @@ def _obj(obj: dict, key: str) -> dict:
     return v
 
 
-def _parse_meta(o: dict) -> Meta:
+def _parse_meta(o: dict[str, Any]) -> Meta:
     if "version" not in o:
         raise _Bad("meta record has no 'version'")
     version = o["version"]
@@ -285,7 +313,7 @@ def _parse_object(o: Any, i: int) -> DetectedObject:
     return DetectedObject(cls=_str(o, "class", where), score=_num(o, "score", where), bbox=box, depth=depth)  # type: ignore[arg-type]
 
 
-def _parse_body(kind: str, o: dict) -> Record:
+def _parse_body(kind: str, o: dict[str, Any]) -> Record:
     if kind == "odom":
         return Odom(_t(o), _coord(o, "x"), _coord(o, "y"), _yaw(o))
     if kind == "detections":
@@ -359,81 +387,107 @@ def _record_time(rec: Record) -> float | None:
 def read_log(path: Path | str, skip_bad: bool = False) -> DetectionLog:
     """Read a detection log; raise :class:`InputError` (``file:line: problem``) on bad input."""
     path = Path(path)
-    if not os.path.lexists(path):
-        raise InputError(f"{path}: no such file")
-    data = read_bytes(path, "a detection log (.jsonl)", MAX_LOG_BYTES)
-    try:
-        text = data.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        raise InputError(f"{path}: not a text file (UTF-8 JSON Lines expected)") from None
-    del data
-
-    meta: Meta | None = None
-    records: list[Record] = []
-    lines: list[int] = []
-    unknown: dict[str, int] = {}
-    bad: list[str] = []
-    saw_any = False
+    text = _read_text(path)
+    got = _Lines()
     for number, raw in enumerate(text.splitlines(), start=1):
         if not raw.strip():
             continue
-        saw_any = True
+        got.saw_any = True
         try:
-            value = _decode_line(raw, path, number)
-            rec = parse_record(value)
-            _finite(value)
-            if rec is None:
-                kind = str(value.get("type"))
-                unknown[kind] = unknown.get(kind, 0) + 1
-                continue
-            if isinstance(rec, Meta):
-                if meta is not None:
-                    raise _Bad("a second meta record (only the first line may be meta)")
-                if records:
-                    raise _Bad("the meta record must be the first record")
-                meta = rec
-                continue
-            if meta is None:
-                raise InputError(
-                    f"{path}:{number}: missing meta record: the first record must be "
-                    f'{{"type":"meta","version":{LOG_VERSION},...}}, got type {value.get("type")!r}'
-                )
+            got.add(path, number, raw)
         except _Bad as exc:
             if not skip_bad or _safe_type(raw) == "meta":  # a bad meta record is never skipped
                 raise InputError(f"{path}:{number}: {exc}") from None
-            bad.append(f"{path}:{number}: {exc}")
-            continue
-        records.append(rec)
-        lines.append(number)
+            got.bad.append(f"{path}:{number}: {exc}")
 
-    if not saw_any:
+    if not got.saw_any:
         raise InputError(f"{path}: empty log (no records)")
-    if meta is None:
+    if got.meta is None:
         raise InputError(
             f'{path}: missing meta record (the first line must be {{"type":"meta","version":{LOG_VERSION}}})'
         )
-
+    unknown, bad = got.unknown, got.bad
     log = DetectionLog(
-        path=path, meta=meta, records=records, lines=lines, skipped_bad=len(bad), skipped_unknown=unknown
+        path=path,
+        meta=got.meta,
+        records=got.records,
+        lines=got.lines,
+        skipped_bad=len(bad),
+        skipped_unknown=unknown,
     )
     if bad:
         log.warnings.append(f"skipped {len(bad)} malformed line(s) (--skip-bad); first: {bad[0]}")
     if unknown:
         kinds = ", ".join(f"{k!r} x{n}" for k, n in sorted(unknown.items()))
         log.warnings.append(f"{path}: skipped record(s) of unknown type: {kinds}")
+    _sort_by_time(log)
+    return log
+
+
+def _read_text(path: Path) -> str:
+    """The log's text, within :data:`MAX_LOG_BYTES`; InputError for a missing file, a folder, a
+    device, a binary or an unreadable file."""
+    if not os.path.lexists(path):
+        raise InputError(f"{path}: no such file")
+    data = read_bytes(path, "a detection log (.jsonl)", MAX_LOG_BYTES)
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a text file (UTF-8 JSON Lines expected)") from None
+
+
+@dataclass
+class _Lines:
+    """The lines of a log read so far: the meta record, the other records with their line numbers,
+    the records of unknown types counted, and the malformed lines skipped (``--skip-bad``)."""
+
+    meta: Meta | None = None
+    records: list[Record] = field(default_factory=list)
+    lines: list[int] = field(default_factory=list)
+    unknown: dict[str, int] = field(default_factory=dict)
+    bad: list[str] = field(default_factory=list)
+    saw_any: bool = False
+
+    def add(self, path: Path, number: int, raw: str) -> None:
+        """One non-empty line; ``_Bad`` when it is malformed, InputError when the meta record is missing."""
+        value = _decode_line(raw, path, number)
+        rec = parse_record(value)
+        _finite(value)
+        if rec is None:
+            kind = str(value.get("type"))
+            self.unknown[kind] = self.unknown.get(kind, 0) + 1
+            return
+        if isinstance(rec, Meta):
+            if self.meta is not None:
+                raise _Bad("a second meta record (only the first line may be meta)")
+            if self.records:
+                raise _Bad("the meta record must be the first record")
+            self.meta = rec
+            return
+        if self.meta is None:
+            raise InputError(
+                f"{path}:{number}: missing meta record: the first record must be "
+                f'{{"type":"meta","version":{LOG_VERSION},...}}, got type {value.get("type")!r}'
+            )
+        self.records.append(rec)
+        self.lines.append(number)
+
+
+def _sort_by_time(log: DetectionLog) -> None:
+    """Records out of time order sorted by t (with a warning); records without t keep their place
+    relative to their neighbours as well as possible."""
+    records, lines = log.records, log.lines
     times = [_record_time(r) for r in records]
     out_of_order = sum(
         1 for a, b in zip(times, times[1:], strict=False) if a is not None and b is not None and b < a
     )
     if out_of_order:
-        log.warnings.append(f"{path}: {out_of_order} record(s) out of time order; sorted by t")
+        log.warnings.append(f"{log.path}: {out_of_order} record(s) out of time order; sorted by t")
         order = sorted(
             range(len(records)), key=lambda i: (times[i] if times[i] is not None else -math.inf, i)
         )
-        # records without t keep their place relative to their neighbours as well as possible
         log.records = [records[i] for i in order]
         log.lines = [lines[i] for i in order]
-    return log
 
 
 def _decode_line(raw: str, path: Path, number: int) -> Any:

@@ -11,6 +11,8 @@ from typing import Any
 from initcli.core.geometry import Pose2D
 from initcli.match.pipeline import MatchReport
 
+__all__ = ["RESULT_FORMAT", "report_to_dict"]
+
 RESULT_FORMAT = "bim-init.match/1"
 
 

@@ -48,6 +48,23 @@ from initcli.io.detection_log import DetectionLog, read_log
 from initcli.match.options import MatchOptions
 from initcli.match.sightings import sightings_from_log
 
+__all__ = [
+    "ESCALATED_PARTIALS",
+    "EXIT_AMBIGUOUS",
+    "EXIT_BAD_INPUT",
+    "EXIT_NO_MATCH",
+    "EXIT_UNIQUE",
+    "Hypothesis",
+    "MatchOptions",
+    "MatchReport",
+    "check_classes",
+    "current_odom",
+    "match_log",
+    "run_match",
+    "site_class_map",
+    "transform_poses_batch",
+]
+
 EXIT_UNIQUE = 0
 EXIT_BAD_INPUT = 2
 EXIT_AMBIGUOUS = 3
@@ -202,6 +219,7 @@ class _Candidates:
     n_out: list[np.ndarray] = field(default_factory=list)
     cost: list[np.ndarray] = field(default_factory=list)
     transform: list[np.ndarray] = field(default_factory=list)  # (H, 3) odom->BIM x, y, yaw
+    indexes: dict[str, BimIndex] = field(default_factory=dict)  # per storey
 
 
 def _storey_candidates(
@@ -268,36 +286,10 @@ def match_log(
     check_classes(log, cmap, site)
     warnings = list(log.warnings)
     notes: list[str] = []
-
-    # Steps 1-2: Eq. 1-2 and the detection filter.
-    if sightings is None:
-        sightings = sightings_from_log(log, cmap, opts.edge_margin)
-    given = [GivenFeature(f.t, cmap.canonical(f.cls), f.x, f.y) for f in log.features]
-    filtered = filter_detections(sightings, opts.filter_params(), given)
-    features = filtered.features
-    odom_pose, odom_path, more = current_odom(log)
-    warnings.extend(more)
-    if opts.drift_window is not None and log.odom and len(features) > opts.min_inliers:
-        odom_t = np.array([o.t for o in log.odom])
-        recent = within_drift_window(features, odom_t, odom_path[:, :2], opts.drift_window, opts.min_inliers)
-        if len(recent) < len(features):
-            notes.append(
-                f"matched the {len(recent)} features confirmed in the last {opts.drift_window:g} m of "
-                f"travel; {len(features) - len(recent)} older one(s) left out (odometry drift)"
-            )
-            features = recent
+    features, odom_pose, odom_path = _confirmed_features(log, opts, cmap, sightings, warnings, notes)
     if not log.detections and not log.features:
         notes.append("the log has no detections records")
-
-    if opts.storey is None or opts.storey == "auto":
-        storey_names = list(site.storeys)
-    else:
-        site.storey(opts.storey)  # raises InputError listing the valid storeys
-        storey_names = [opts.storey]
-
-    params = opts.match_params()
-    s_xy = np.array([[f.x, f.y] for f in features]).reshape(-1, 2)
-    s_cls = [f.cls for f in features]
+    storey_names = _storeys_searched(site, opts)
     report = MatchReport(
         log=log.path,
         site=Path(site.root),
@@ -325,21 +317,13 @@ def match_log(
 
     # Step 3-4: Algorithm 1 on every storey, then rule 1 (sub-matches) per storey; with no match,
     # one more outlier at a time up to the outlier_share budget.
+    s_xy = np.array([[f.x, f.y] for f in features]).reshape(-1, 2)
+    s_cls = [f.cls for f in features]
+    params = opts.match_params()
     budget = opts.outlier_budget(len(features))
     while True:
-        cand = _Candidates()
-        indexes: dict[str, BimIndex] = {}
         try:
-            for name in storey_names:
-                index, assign, n_out, cost, transform = _storey_candidates(
-                    site.storeys[name], cmap, s_xy, s_cls, params
-                )
-                indexes[name] = index
-                cand.storey.extend([name] * len(assign))
-                cand.assign.append(assign)
-                cand.n_out.append(n_out)
-                cand.cost.append(cost)
-                cand.transform.append(transform)
+            cand = _candidates(site, cmap, storey_names, s_xy, s_cls, params)
         except MatchOverflow as exc:
             warnings.append(f"matching stopped: {exc}; the detected pattern is far too ambiguous")
             report.verdict = verdict_text(max(2, params.max_partials))
@@ -356,14 +340,79 @@ def match_log(
             f"(outlier_share {opts.outlier_share:g} of {len(features)} features)"
         )
     report.outliers_allowed = params.max_outliers
-    if not cand.storey:
-        return report
+    if cand.storey:
+        _rank(report, site, cand, s_xy)
+    return report
 
+
+def _confirmed_features(
+    log: DetectionLog,
+    opts: MatchOptions,
+    cmap: ClassMap,
+    sightings: Sequence[Sighting] | None,
+    warnings: list[str],
+    notes: list[str],
+) -> tuple[list[ConfirmedFeature], Pose2D, np.ndarray]:
+    """Steps 1-2: Eq. 1-2 and the detection filter (within the drift window when one is set); the
+    robot's odom pose now and its odom path."""
+    if sightings is None:
+        sightings = sightings_from_log(log, cmap, opts.edge_margin)
+    given = [GivenFeature(f.t, cmap.canonical(f.cls), f.x, f.y) for f in log.features]
+    filtered = filter_detections(sightings, opts.filter_params(), given)
+    features = filtered.features
+    odom_pose, odom_path, more = current_odom(log)
+    warnings.extend(more)
+    if opts.drift_window is not None and log.odom and len(features) > opts.min_inliers:
+        odom_t = np.array([o.t for o in log.odom])
+        recent = within_drift_window(features, odom_t, odom_path[:, :2], opts.drift_window, opts.min_inliers)
+        if len(recent) < len(features):
+            notes.append(
+                f"matched the {len(recent)} features confirmed in the last {opts.drift_window:g} m of "
+                f"travel; {len(features) - len(recent)} older one(s) left out (odometry drift)"
+            )
+            features = recent
+    return features, odom_pose, odom_path
+
+
+def _storeys_searched(site: Site, opts: MatchOptions) -> list[str]:
+    """Every storey (``storey`` None or auto) or the one named (InputError listing the valid ones)."""
+    if opts.storey is None or opts.storey == "auto":
+        return list(site.storeys)
+    site.storey(opts.storey)  # raises InputError listing the valid storeys
+    return [opts.storey]
+
+
+def _candidates(
+    site: Site,
+    cmap: ClassMap,
+    storey_names: list[str],
+    s_xy: np.ndarray,
+    s_cls: Sequence[str],
+    params: MatchParams,
+) -> _Candidates:
+    """Algorithm 1 and rule 1 on every storey searched (MatchOverflow past the partial-match cap)."""
+    cand = _Candidates()
+    for name in storey_names:
+        model = site.storeys[name]
+        index, assign, n_out, cost, transform = _storey_candidates(model, cmap, s_xy, s_cls, params)
+        cand.indexes[name] = index
+        cand.storey.extend([name] * len(assign))
+        cand.assign.append(assign)
+        cand.n_out.append(n_out)
+        cand.cost.append(cost)
+        cand.transform.append(transform)
+    return cand
+
+
+def _rank(report: MatchReport, site: Site, cand: _Candidates, s_xy: np.ndarray) -> None:
+    """Steps 4-7 on the candidates of every storey: rank (rule 2), group by pose (rule 3), the
+    confidences (rule 5), the pose of each shown hypothesis, and the verdict, into ``report``."""
+    opts, odom_pose = report.options, report.odom_pose
     assign = np.concatenate(cand.assign)
     n_out = np.concatenate(cand.n_out)
     cost = np.concatenate(cand.cost)
     transform = np.concatenate(cand.transform)
-    storey_ids = np.array([storey_names.index(s) for s in cand.storey])
+    storey_ids = np.array([report.storeys.index(s) for s in cand.storey])
     current = transform_poses_batch(transform, odom_pose)  # robot pose in BIM per match (rigid)
     order = rank_order(n_out, cost)  # rule 2
     labels, reps = pose_groups(
@@ -376,20 +425,8 @@ def match_log(
     for rank, h in enumerate(reps[: opts.top], start=1):
         storey = cand.storey[h]
         model = site.storeys[storey]
-        index = indexes[storey]
         row = assign[h]
-        inl = np.flatnonzero(row != OUTLIER)
-        bim_xy = index.xy[row[inl]]
-        # Eq. 10-13 or rigid
-        pose = estimate_pose(opts.pose_method, bim_xy, s_xy[inl], odom_pose, opts.pose_window or None)
-        rect_pose, moved = None, False
-        if model.walls:
-            walls = WallArray.from_segments([(w.x1, w.y1, w.x2, w.y2, *w.normal) for w in model.walls])
-            feature_robot = odom_pose.apply_inverse(s_xy[inl[-1]])
-            rect_pose, rect = rectify_pose(  # Eq. 17, never turning the pose past beta
-                pose, walls, opts.d_thre, bim_xy[-1], feature_robot, math.radians(opts.beta)
-            )
-            moved = rect.moved
+        pose, rect_pose, moved = _hypothesis_pose(model, cand.indexes[storey], row, s_xy, odom_pose, opts)
         hyps.append(
             Hypothesis(
                 rank=rank,
@@ -412,4 +449,26 @@ def match_log(
     report.exit_code = EXIT_UNIQUE if len(reps) == 1 else EXIT_AMBIGUOUS
     rep_storeys = {cand.storey[h] for h in reps}
     report.storey = next(iter(rep_storeys)) if len(rep_storeys) == 1 else None
-    return report
+
+
+def _hypothesis_pose(
+    model: StoreyModel,
+    index: BimIndex,
+    row: np.ndarray,
+    s_xy: np.ndarray,
+    odom_pose: Pose2D,
+    opts: MatchOptions,
+) -> tuple[Pose2D, Pose2D | None, bool]:
+    """Steps 5-6 for one match: the robot's pose now (Eq. 10-13 or rigid), rectified with the
+    storey's walls (Eq. 17) when it has walls, and whether rectification moved it."""
+    inl = np.flatnonzero(row != OUTLIER)
+    bim_xy = index.xy[row[inl]]
+    pose = estimate_pose(opts.pose_method, bim_xy, s_xy[inl], odom_pose, opts.pose_window or None)
+    if not model.walls:
+        return pose, None, False
+    walls = WallArray.from_segments([(w.x1, w.y1, w.x2, w.y2, *w.normal) for w in model.walls])
+    feature_robot = odom_pose.apply_inverse(s_xy[inl[-1]])
+    rect_pose, rect = rectify_pose(  # Eq. 17, never turning the pose past beta
+        pose, walls, opts.d_thre, bim_xy[-1], feature_robot, math.radians(opts.beta)
+    )
+    return pose, rect_pose, rect.moved

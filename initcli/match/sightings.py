@@ -16,6 +16,8 @@ from initcli.core.detection_filter import Sighting, is_truncated
 from initcli.core.projection import CameraIntrinsics, CameraMount, detections_to_odom
 from initcli.io.detection_log import DetectionLog, Detections
 
+__all__ = ["image_sightings", "sightings_from_log"]
+
 
 def image_sightings(
     rec: Detections,

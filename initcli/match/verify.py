@@ -27,15 +27,36 @@ from initcli.core.verification import (
     PathTrack,
     ScanSample,
     Verification,
-    VerificationParams,
     judge,
     track_favoured,
     tracked_scan_fit,
     verify_hypothesis,
 )
+from initcli.core.verification_settings import VerificationParams
 from initcli.io.detection_log import DetectionLog, Detections, Odom, Scan, read_log
 from initcli.match.pipeline import MatchReport, site_class_map
 from initcli.match.sightings import sightings_from_log
+
+__all__ = [
+    "MAX_SCANS",
+    "PATH_CHECK_M",
+    "PATH_RETRY",
+    "PATH_WINDOW_M",
+    "PathEvidence",
+    "RECENT_SCANS_M",
+    "SCAN_BEAM_STEP",
+    "StoreyEvidence",
+    "TRACK_BEAM_STEP",
+    "TRACK_KEPT_M",
+    "TRACK_STEP_M",
+    "check_hypotheses",
+    "path_free_along",
+    "path_track",
+    "track_transform",
+    "verify_and_favour",
+    "verify_report",
+    "verify_transform",
+]
 
 SCAN_BEAM_STEP = 3  # every third beam is enough for a fit share
 RECENT_SCANS_M = 8.0  # m of the latest travel whose scans are fitted (older ones carry odometry drift)

@@ -1,12 +1,12 @@
 """A recorded ROS bag (ROS 1 ``.bag``, ROS 2 ``.db3`` folder or ``.mcap``) -> detection-log records.
 
 No ROS installation: rosbags reads the bag. The topics are chosen by message type when the bag
-holds exactly one of a kind (colour and depth images told apart by their encoding), otherwise by
-the options. Each colour image (run through the ONNX detector) or ``Detection2DArray`` becomes a
-``detections`` record: the box centre's depth is the window mean of Eq. 1 in the aligned depth
-image nearest in time, the pose is the odometry interpolated at the image stamp, re-based so the
-log's odom frame starts at the first pose (§3.3.1). ``CameraInfo`` gives the intrinsics and
-``/tf_static`` the camera mount (base frame -> optical frame).
+holds exactly one of a kind, otherwise by the options (:mod:`initcli.ros.bag_topics`). Each colour
+image (run through the ONNX detector) or ``Detection2DArray`` becomes a ``detections`` record: the
+box centre's depth is the window mean of Eq. 1 in the aligned depth image nearest in time, the pose
+is the odometry interpolated at the image stamp, re-based so the log's odom frame starts at the
+first pose (§3.3.1). ``CameraInfo`` gives the intrinsics and ``/tf_static`` the camera mount (base
+frame -> optical frame).
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import math
 import time
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -26,8 +26,9 @@ from bimkit.errors import InputError
 from bimkit.limits import MAX_BAG_BYTES
 from initcli.core.depth import window_depth
 from initcli.core.geometry import Pose2D, wrap_angle
-from initcli.core.projection import CameraMount, mount_from_optical
+from initcli.core.projection import CameraIntrinsics, CameraMount, mount_from_optical
 from initcli.io.detection_log import DetectedObject, Detections, Meta, Odom, Record, Scan
+from initcli.ros.bag_topics import choose_topics
 from initcli.ros.messages import (
     checked_transform,
     decode_depth,
@@ -37,21 +38,24 @@ from initcli.ros.messages import (
     stamp_seconds,
 )
 from initcli.ros.msgdefs import bbox_centre, detection_fields, register_missing, ros2_typestore
-from initcli.ros.records import (
-    CAMERA_INFO,
-    COMPRESSED_IMAGE,
-    DEPTH_ENCODINGS,
-    DETECTION_2D_ARRAY,
-    IMAGE,
-    LASER_SCAN,
-    ODOMETRY,
-    TF_MESSAGE,
-    Bag2LogOptions,
-    Bag2LogStats,
-    BagTopics,
-    Topic,
-)
+from initcli.ros.records import Bag2LogOptions, Bag2LogStats, BagTopics, Topic
 from initcli.ros.tf import TransformTree, frame_name, quaternion_yaw
+
+__all__ = [
+    "BagSource",
+    "CLOCK_JUMP_S",
+    "DEPTH_BUFFER",
+    "DEPTH_SYNC_S",
+    "ODOM_MARGIN_S",
+    "Progress",
+    "bag_paths",
+    "bag_to_records",
+    "decode_depth",
+    "decode_image",
+    "intrinsics",
+    "parse_class_names",
+    "stamp_seconds",
+]
 
 DEPTH_SYNC_S = 0.05  # s: a depth image this close in time to a colour image is its aligned one
 ODOM_MARGIN_S = 0.2  # s: images this far outside the odometry's time span still get its end pose
@@ -138,120 +142,7 @@ def _first_line(exc: BaseException) -> str:
     return text[0] if text else type(exc).__name__
 
 
-# --- choosing topics -------------------------------------------------------------------------------
-
-
-def _listing(topics: Iterable[Topic]) -> str:
-    return "; ".join(t.describe() for t in topics) or "none"
-
-
-def _pick(
-    source: BagSource, given: str | None, types: tuple[str, ...], what: str, flag: str, required: bool
-) -> Topic | None:
-    if given is not None:
-        topic = source.topics.get(given)
-        if topic is None:
-            raise InputError(
-                f"{source.path}: no topic {given} ({flag}); the bag has: {_listing(source.topics.values())}"
-            )
-        if topic.msgtype not in types:
-            raise InputError(f"{given} is {topic.msgtype}, {flag} needs {' or '.join(types)}")
-        return topic
-    found = [t for t in source.topics.values() if t.msgtype in types]
-    if len(found) == 1:
-        return found[0]
-    if not found:
-        if required:
-            raise InputError(
-                f"{source.path}: no {what} topic ({' or '.join(types)}); the bag has: "
-                f"{_listing(source.topics.values())}"
-            )
-        return None
-    raise InputError(f"{source.path}: several {what} topics, choose one with {flag}: {_listing(found)}")
-
-
-def _encoding(source: BagSource, topic: Topic) -> str:
-    msg = source.first(topic.name)
-    return str(getattr(msg, "encoding", "")) if msg is not None else ""
-
-
-def choose_topics(source: BagSource, options: Bag2LogOptions) -> BagTopics:
-    """The topics to read; InputError naming the candidates when the choice is not clear."""
-    if options.image_topic and options.detections_topic:
-        raise InputError("give --image-topic or --detections-topic, not both")
-    images = [t for t in source.topics.values() if t.msgtype == IMAGE]
-    encodings = {t.name: _encoding(source, t) for t in images}
-    depth_like = [t for t in images if encodings[t.name] in DEPTH_ENCODINGS]
-    colour_like = [t for t in images if encodings[t.name] not in DEPTH_ENCODINGS]
-
-    if options.depth_topic is not None:
-        depth = _pick(source, options.depth_topic, (IMAGE,), "depth image", "--depth-topic", True)
-    elif len(depth_like) == 1:
-        depth = depth_like[0]
-    elif not depth_like:
-        raise InputError(
-            f"{source.path}: no aligned depth image (sensor_msgs/Image, 16UC1 or 32FC1); the bag has: "
-            f"{_listing(source.topics.values())}"
-        )
-    else:
-        raise InputError(
-            f"{source.path}: several depth images, choose one with --depth-topic: "
-            + "; ".join(f"{t.describe()} {encodings[t.name]}" for t in depth_like)
-        )
-    assert depth is not None
-
-    if options.detections_topic is not None:
-        perception = _pick(
-            source, options.detections_topic, (DETECTION_2D_ARRAY,), "", "--detections-topic", True
-        )
-    elif options.image_topic is not None:
-        perception = _pick(source, options.image_topic, (IMAGE, COMPRESSED_IMAGE), "", "--image-topic", True)
-    else:
-        detections = [t for t in source.topics.values() if t.msgtype == DETECTION_2D_ARRAY]
-        compressed = [t for t in source.topics.values() if t.msgtype == COMPRESSED_IMAGE]
-        colour = [t for t in colour_like if t.name != depth.name]
-        if len(detections) == 1:
-            perception = detections[0]
-        elif detections:
-            raise InputError(
-                f"{source.path}: several detection topics, choose one with --detections-topic: "
-                f"{_listing(detections)}"
-            )
-        elif len(colour) + len(compressed) == 1:
-            perception = (colour + compressed)[0]
-        elif not colour and not compressed:
-            raise InputError(
-                f"{source.path}: no colour image or vision_msgs/Detection2DArray topic; the bag has: "
-                f"{_listing(source.topics.values())}"
-            )
-        else:
-            listed = "; ".join(f"{t.describe()}" for t in colour + compressed)
-            raise InputError(
-                f"{source.path}: several colour image topics, choose one with --image-topic: {listed}"
-            )
-    assert perception is not None
-    if perception.name == depth.name:
-        raise InputError(f"{depth.name} is the depth image; the colour image must be another topic")
-
-    camera_info = _pick(
-        source, options.camera_info_topic, (CAMERA_INFO,), "camera info", "--camera-info-topic", False
-    )
-    if camera_info is None:
-        raise InputError(
-            f"{source.path}: no sensor_msgs/CameraInfo topic: the camera intrinsics are needed "
-            f"(the bag has: {_listing(source.topics.values())})"
-        )
-    odom = _pick(source, options.odom_topic, (ODOMETRY,), "odometry", "--odom-topic", False)
-    tf = source.topics.get("/tf") if source.topics.get("/tf", Topic("", "")).msgtype == TF_MESSAGE else None
-    tf_static = (
-        source.topics.get("/tf_static")
-        if source.topics.get("/tf_static", Topic("", "")).msgtype == TF_MESSAGE
-        else None
-    )
-    if odom is None and tf is None:
-        raise InputError(f"{source.path}: no odometry: neither nav_msgs/Odometry nor /tf in the bag")
-    scan = _pick(source, options.scan_topic, (LASER_SCAN,), "laser scan", "--scan-topic", False)
-    return BagTopics(perception, depth, camera_info, odom, tf, tf_static, scan)
+# --- message contents ------------------------------------------------------------------------------
 
 
 @dataclass
@@ -389,7 +280,50 @@ def bag_to_records(
     path = Path(path)
     with BagSource(path) as source:
         topics = choose_topics(source, options)
-        total = sum(
+        tick = _Ticker(topics, stats, progress)
+        first = _FirstPass.read(source, topics, tick)  # everything but the images
+        if first.camera_msg is None:
+            raise InputError(f"{topics.camera_info.name}: no CameraInfo message in the bag")
+        camera = intrinsics(first.camera_msg, topics.camera_info.name)
+        optical_frame = frame_name(first.camera_msg.header.frame_id)
+        base, odom_samples = _base_odometry(first, topics, options)
+        rotation, translation = first.tree.lookup(base, optical_frame)
+        mount: CameraMount = mount_from_optical(rotation, translation)
+        trajectory = _Trajectory.of(odom_samples)
+        origin = Pose2D(float(trajectory.x[0]), float(trajectory.y[0]), float(trajectory.yaw[0])).inverse()
+
+        records: list[Odom | Scan | Detections] = []  # each with a time stamp t
+        for i in range(len(trajectory.t)):
+            p = origin * Pose2D(float(trajectory.x[i]), float(trajectory.y[i]), float(trajectory.yaw[i]))
+            records.append(Odom(float(trajectory.t[i]), p.x, p.y, float(wrap_angle(p.yaw))))
+        stats.odom = len(trajectory.t)
+        records.extend(first.scans)
+        stats.scans = len(first.scans)
+        # Pass 2: perception, each with the depth image nearest in time.
+        _PerceptionPass(topics, options, stats, camera, trajectory, origin, records).read(source, tick)
+        if progress is not None:
+            progress(tick.total, tick.total)
+
+    _check_images(path, topics, stats)
+    records.sort(key=lambda r: r.t)
+    meta = Meta(
+        camera=camera,
+        camera_pose=mount,
+        depth_window=options.depth_window,
+        source=f"bim-init bag2log {path.name} ({topics.perception.name}, base frame {base})",
+    )
+    stats.seconds = time.perf_counter() - started
+    return [meta, *records], stats
+
+
+class _Ticker:
+    """Counts the messages read; ``progress(done, total)`` every 50."""
+
+    def __init__(self, topics: BagTopics, stats: Bag2LogStats, progress: Progress | None) -> None:
+        self.stats = stats
+        self.progress = progress
+        self.done = 0
+        self.total = sum(
             t.count
             for t in (
                 topics.perception,
@@ -402,143 +336,145 @@ def bag_to_records(
             )
             if t is not None
         )
-        done = 0
 
-        def tick() -> None:
-            nonlocal done
-            done += 1
-            stats.messages += 1
-            if progress is not None and done % 50 == 0:
-                progress(done, total)
+    def __call__(self) -> None:
+        self.done += 1
+        self.stats.messages += 1
+        if self.progress is not None and self.done % 50 == 0:
+            self.progress(self.done, self.total)
 
-        # Pass 1: everything but the images.
-        tree = TransformTree()
-        camera_msg = None
-        odom_samples: list[tuple[float, Pose2D]] = []
-        odom_child: str | None = None
-        tf_edges: list[tuple[float, str, str, Pose2D]] = []
-        scans: list[Scan] = []
-        clock: dict[str, list[float]] = {}
-        first_pass = [
-            t.name for t in (topics.camera_info, topics.odom, topics.tf, topics.tf_static, topics.scan) if t
-        ]
-        for name, bag_ns, msg in source.messages(first_pass):
+
+@dataclass
+class _FirstPass:
+    """Pass 1 over a bag: everything but the images (camera info, transforms, odometry, scans)."""
+
+    topics: BagTopics
+    tree: TransformTree = field(default_factory=TransformTree)
+    camera_msg: Any = None  # the first CameraInfo
+    odom_samples: list[tuple[float, Pose2D]] = field(default_factory=list)  # from the odometry topic
+    odom_child: str | None = None  # the odometry's child frame
+    tf_edges: list[tuple[float, str, str, Pose2D]] = field(default_factory=list)  # t, parent, child, pose
+    scans: list[Scan] = field(default_factory=list)
+    clock: dict[str, list[float]] = field(default_factory=dict)  # stamps per topic
+
+    @staticmethod
+    def read(source: BagSource, topics: BagTopics, tick: Callable[[], None]) -> _FirstPass:
+        """Read pass 1; InputError when a topic's clock jumps back."""
+        first = _FirstPass(topics)
+        wanted = (topics.camera_info, topics.odom, topics.tf, topics.tf_static, topics.scan)
+        for name, bag_ns, msg in source.messages([t.name for t in wanted if t]):
             tick()
-            if name == topics.camera_info.name:
-                if camera_msg is None:
-                    camera_msg = msg
-                continue
-            if topics.tf_static is not None and name == topics.tf_static.name:
-                for tr in msg.transforms:
-                    tree.add(checked_transform(name, tr))
-                continue
-            if topics.tf is not None and name == topics.tf.name:
-                for tr in msg.transforms:
-                    e = checked_transform(name, tr)
-                    tf_edges.append(
-                        (stamp_seconds(tr, bag_ns), e.parent, e.child, _planar(e.rotation, e.translation))
-                    )
-                continue
-            t = stamp_seconds(msg, bag_ns)
-            clock.setdefault(name, []).append(t)
-            if topics.odom is not None and name == topics.odom.name:
-                p, q = msg.pose.pose.position, msg.pose.pose.orientation
-                finite(name, "an Odometry pose", p.x, p.y, q.x, q.y, q.z, q.w)
-                odom_samples.append((t, Pose2D(float(p.x), float(p.y), quaternion_yaw(q.x, q.y, q.z, q.w))))
-                odom_child = frame_name(msg.child_frame_id) or odom_child
-            elif topics.scan is not None and name == topics.scan.name:
-                finite(
-                    name,
-                    "a LaserScan's angles or range_max",
-                    msg.angle_min,
-                    msg.angle_increment,
-                    msg.range_max,
-                )
-                ranges = np.asarray(msg.ranges, dtype=float)  # NaN, inf: no return (the sensor's way)
-                ranges = np.where(np.isfinite(ranges) & (ranges >= float(msg.range_min)), ranges, math.nan)
-                scans.append(
-                    Scan(
-                        t,
-                        float(msg.angle_min),
-                        float(msg.angle_increment),
-                        float(msg.range_max),
-                        tuple(ranges.tolist()),
-                    )
-                )
-        for name, times in clock.items():
+            first.add(name, bag_ns, msg)
+        for name, times in first.clock.items():
             _check_clock(name, times)
-        if camera_msg is None:
-            raise InputError(f"{topics.camera_info.name}: no CameraInfo message in the bag")
-        camera = intrinsics(camera_msg, topics.camera_info.name)
-        optical_frame = frame_name(camera_msg.header.frame_id)
+        return first
 
-        base = frame_name(options.base_frame) if options.base_frame else None
-        if topics.odom is not None:
-            if not odom_samples:
-                raise InputError(f"{topics.odom.name}: no odometry message")
-            base = base or odom_child or "base_link"
-            if odom_child and odom_child != base:  # odometry of another frame: carry it to the base
-                r, tr = tree.lookup(odom_child, base)
-                offset = _planar(r, tr)
-                odom_samples = [(t, p * offset) for t, p in odom_samples]
-        else:
-            children = sorted({c for _, parent, c, _ in tf_edges if parent == "odom"})
-            if base is None:
-                if len(children) != 1:
-                    raise InputError(
-                        "/tf: cannot tell the base frame (children of odom: "
-                        f"{', '.join(children) or 'none'}); "
-                        "use --base-frame"
-                    )
-                base = children[0]
-            odom_samples = [(t, p) for t, parent, c, p in tf_edges if c == base and parent == "odom"]
-            if not odom_samples:
-                raise InputError(f"/tf: no odom -> {base} transform; use --base-frame or --odom-topic")
-            _check_clock(f"/tf odom -> {base}", [t for t, _ in odom_samples])
-        rotation, translation = tree.lookup(base, optical_frame)
-        mount: CameraMount = mount_from_optical(rotation, translation)
-        trajectory = _Trajectory.of(odom_samples)
-        origin = Pose2D(float(trajectory.x[0]), float(trajectory.y[0]), float(trajectory.yaw[0])).inverse()
+    def add(self, name: str, bag_ns: int, msg: Any) -> None:
+        topics = self.topics
+        if name == topics.camera_info.name:
+            if self.camera_msg is None:
+                self.camera_msg = msg
+            return
+        if topics.tf_static is not None and name == topics.tf_static.name:
+            for tr in msg.transforms:
+                self.tree.add(checked_transform(name, tr))
+            return
+        if topics.tf is not None and name == topics.tf.name:
+            for tr in msg.transforms:
+                e = checked_transform(name, tr)
+                self.tf_edges.append(
+                    (stamp_seconds(tr, bag_ns), e.parent, e.child, _planar(e.rotation, e.translation))
+                )
+            return
+        t = stamp_seconds(msg, bag_ns)
+        self.clock.setdefault(name, []).append(t)
+        if topics.odom is not None and name == topics.odom.name:
+            p, q = msg.pose.pose.position, msg.pose.pose.orientation
+            finite(name, "an Odometry pose", p.x, p.y, q.x, q.y, q.z, q.w)
+            self.odom_samples.append((t, Pose2D(float(p.x), float(p.y), quaternion_yaw(q.x, q.y, q.z, q.w))))
+            self.odom_child = frame_name(msg.child_frame_id) or self.odom_child
+        elif topics.scan is not None and name == topics.scan.name:
+            finite(
+                name, "a LaserScan's angles or range_max", msg.angle_min, msg.angle_increment, msg.range_max
+            )
+            ranges = np.asarray(msg.ranges, dtype=float)  # NaN, inf: no return (the sensor's way)
+            ranges = np.where(np.isfinite(ranges) & (ranges >= float(msg.range_min)), ranges, math.nan)
+            self.scans.append(
+                Scan(
+                    t,
+                    float(msg.angle_min),
+                    float(msg.angle_increment),
+                    float(msg.range_max),
+                    tuple(ranges.tolist()),
+                )
+            )
 
-        records: list[Odom | Scan | Detections] = []  # each with a time stamp t
-        for i in range(len(trajectory.t)):
-            p = origin * Pose2D(float(trajectory.x[i]), float(trajectory.y[i]), float(trajectory.yaw[i]))
-            records.append(Odom(float(trajectory.t[i]), p.x, p.y, float(wrap_angle(p.yaw))))
-        stats.odom = len(trajectory.t)
-        records.extend(scans)
-        stats.scans = len(scans)
 
-        # Pass 2: perception, each with the depth image nearest in time.
-        perceiver = _Perceiver(topics.perception_kind, options, stats, topics.perception.name)
-        depths: deque[tuple[float, Any]] = deque(maxlen=DEPTH_BUFFER)
-        pending: deque[tuple[float, Any]] = deque()
+def _base_odometry(
+    first: _FirstPass, topics: BagTopics, options: Bag2LogOptions
+) -> tuple[str, list[tuple[float, Pose2D]]]:
+    """The robot's base frame and its odometry poses over time (from the odometry topic, carried to
+    the base frame, or from the /tf odom -> base transforms)."""
+    base = frame_name(options.base_frame) if options.base_frame else None
+    if topics.odom is None:
+        return _tf_odometry(first, base)
+    if not first.odom_samples:
+        raise InputError(f"{topics.odom.name}: no odometry message")
+    base = base or first.odom_child or "base_link"
+    odom_child = first.odom_child
+    if odom_child and odom_child != base:  # odometry of another frame: carry it to the base
+        r, tr = first.tree.lookup(odom_child, base)
+        offset = _planar(r, tr)
+        return base, [(t, p * offset) for t, p in first.odom_samples]
+    return base, first.odom_samples
+
+
+def _tf_odometry(first: _FirstPass, base: str | None) -> tuple[str, list[tuple[float, Pose2D]]]:
+    """The base frame (the one child of odom unless given) and its odom -> base transforms on /tf."""
+    children = sorted({c for _, parent, c, _ in first.tf_edges if parent == "odom"})
+    if base is None:
+        if len(children) != 1:
+            raise InputError(
+                f"/tf: cannot tell the base frame (children of odom: {', '.join(children) or 'none'}); "
+                "use --base-frame"
+            )
+        base = children[0]
+    samples = [(t, p) for t, parent, c, p in first.tf_edges if c == base and parent == "odom"]
+    if not samples:
+        raise InputError(f"/tf: no odom -> {base} transform; use --base-frame or --odom-topic")
+    _check_clock(f"/tf odom -> {base}", [t for t, _ in samples])
+    return base, samples
+
+
+class _PerceptionPass:
+    """Pass 2 over a bag: each perception message (at most ``--rate`` often) with the depth image
+    nearest in time, at the odometry pose of its stamp, appended to ``records`` as detections."""
+
+    def __init__(
+        self,
+        topics: BagTopics,
+        options: Bag2LogOptions,
+        stats: Bag2LogStats,
+        camera: CameraIntrinsics,
+        trajectory: _Trajectory,
+        origin: Pose2D,
+        records: list[Odom | Scan | Detections],
+    ) -> None:
+        self.topics = topics
+        self.options = options
+        self.stats = stats
+        self.camera = camera
+        self.trajectory = trajectory
+        self.origin = origin
+        self.records = records
+        self.perceiver = _Perceiver(topics.perception_kind, options, stats, topics.perception.name)
+        self.depths: deque[tuple[float, Any]] = deque(maxlen=DEPTH_BUFFER)
+        self.pending: deque[tuple[float, Any]] = deque()
+
+    def read(self, source: BagSource, tick: Callable[[], None]) -> None:
+        topics, options, depths, pending = self.topics, self.options, self.depths, self.pending
         last_kept = -math.inf
         seen: dict[str, list[float]] = {topics.perception.name: [], topics.depth.name: []}
-
-        def resolve(item_t: float, msg: Any) -> None:
-            best = min(depths, key=lambda d: abs(d[0] - item_t), default=None)
-            if best is None or abs(best[0] - item_t) > DEPTH_SYNC_S:
-                stats.without_depth += 1
-                return
-            pose = trajectory.at(item_t)
-            if pose is None:
-                stats.outside_odometry += 1
-                return
-            depth = decode_depth(best[1])
-            if depth.shape != (camera.height, camera.width):
-                raise InputError(
-                    f"{topics.depth.name}: depth image {depth.shape[1]}x{depth.shape[0]} is not aligned with "
-                    f"the colour camera ({camera.width}x{camera.height})"
-                )
-            objects = perceiver.objects(msg, depth)
-            local = origin * pose
-            records.append(
-                Detections(item_t, Pose2D(local.x, local.y, float(wrap_angle(local.yaw))), objects)
-            )
-            stats.images += 1
-            stats.objects += len(objects)
-            stats.objects_without_depth += sum(o.depth is None for o in objects)
-
         for name, bag_ns, msg in source.messages([topics.perception.name, topics.depth.name]):
             tick()
             t = stamp_seconds(msg, bag_ns)
@@ -547,22 +483,49 @@ def bag_to_records(
                 depths.append((t, msg))
             else:
                 if options.rate is not None and t - last_kept < 1.0 / options.rate - 1e-9:
-                    stats.skipped_rate += 1
+                    self.stats.skipped_rate += 1
                     continue
                 last_kept = t
                 pending.append((t, msg))
             latest = depths[-1][0] if depths else -math.inf
             while pending and latest >= pending[0][0]:
-                resolve(*pending.popleft())
+                self.resolve(*pending.popleft())
             while pending and len(depths) == depths.maxlen and depths[0][0] > pending[0][0] + DEPTH_SYNC_S:
-                resolve(*pending.popleft())
+                self.resolve(*pending.popleft())
         while pending:
-            resolve(*pending.popleft())
+            self.resolve(*pending.popleft())
         for name, times in seen.items():
             _check_clock(name, times)
-        if progress is not None:
-            progress(total, total)
 
+    def resolve(self, item_t: float, msg: Any) -> None:
+        """One perception message with the buffered depth image nearest in time (or counted as
+        without depth / outside the odometry)."""
+        stats, camera = self.stats, self.camera
+        best = min(self.depths, key=lambda d: abs(d[0] - item_t), default=None)
+        if best is None or abs(best[0] - item_t) > DEPTH_SYNC_S:
+            stats.without_depth += 1
+            return
+        pose = self.trajectory.at(item_t)
+        if pose is None:
+            stats.outside_odometry += 1
+            return
+        depth = decode_depth(best[1])
+        if depth.shape != (camera.height, camera.width):
+            raise InputError(
+                f"{self.topics.depth.name}: depth image {depth.shape[1]}x{depth.shape[0]} is not aligned "
+                f"with the colour camera ({camera.width}x{camera.height})"
+            )
+        objects = self.perceiver.objects(msg, depth)
+        local = self.origin * pose
+        pose_local = Pose2D(local.x, local.y, float(wrap_angle(local.yaw)))
+        self.records.append(Detections(item_t, pose_local, objects))
+        stats.images += 1
+        stats.objects += len(objects)
+        stats.objects_without_depth += sum(o.depth is None for o in objects)
+
+
+def _check_images(path: Path, topics: BagTopics, stats: Bag2LogStats) -> None:
+    """No image converted is bad input (saying why); images skipped are warnings."""
     if stats.images == 0:
         if stats.without_depth:
             raise InputError(
@@ -582,12 +545,3 @@ def bag_to_records(
         )
     if stats.outside_odometry:
         stats.warnings.append(f"{stats.outside_odometry} image(s) outside the odometry's time span skipped")
-    records.sort(key=lambda r: r.t)
-    meta = Meta(
-        camera=camera,
-        camera_pose=mount,
-        depth_window=options.depth_window,
-        source=f"bim-init bag2log {path.name} ({topics.perception.name}, base frame {base})",
-    )
-    stats.seconds = time.perf_counter() - started
-    return [meta, *records], stats

@@ -57,6 +57,31 @@ from initcli.ros.records import (
 )
 from initcli.ros.tf import matrix_quaternion, yaw_quaternion
 
+__all__ = [
+    "BASE_FRAME",
+    "BagMessage",
+    "BagWriter",
+    "CAMERA_FRAME",
+    "CAMERA_INFO_TOPIC",
+    "DEPTH_TOPIC",
+    "DETECTIONS_TOPIC",
+    "OPTICAL_FRAME",
+    "camera_info",
+    "camera_tf",
+    "colour_image",
+    "depth_image",
+    "detection_array",
+    "header",
+    "laser_scan",
+    "ns",
+    "occupancy_grid",
+    "odometry",
+    "record_session",
+    "session_messages",
+    "transform_stamped",
+    "write_bag",
+]
+
 BASE_FRAME = "base_link"
 CAMERA_FRAME = "camera_link"
 OPTICAL_FRAME = "camera_color_optical_frame"

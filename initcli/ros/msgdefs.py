@@ -22,6 +22,19 @@ import numpy as np
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
+__all__ = [
+    "MSG_TEXT",
+    "VISION_MSGS_LAYOUTS",
+    "bbox_centre",
+    "detection_fields",
+    "from_dict",
+    "register_missing",
+    "ros1_typestore",
+    "ros2_typestore",
+    "to_dict",
+    "vision_types",
+]
+
 VISION_MSGS_LAYOUTS = ("humble", "foxy")
 
 _COMMON = {

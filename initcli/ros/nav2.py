@@ -18,6 +18,18 @@ from initcli.io.detection_log import Detections, HypothesesRecord, Odom, read_lo
 from initcli.ros.records import InitialPose
 from initcli.ros.tf import yaw_quaternion
 
+__all__ = [
+    "covariance_6x6",
+    "hypothesis_poses",
+    "initial_pose_message",
+    "pose_array_message",
+    "pose_dict",
+    "read_summary",
+    "session_initial_pose",
+    "stamp_dict",
+    "state_message",
+]
+
 # 6x6 (x, y, z, roll, pitch, yaw) indices of the planar 3x3 (x, y, yaw); AMCL reads 0, 7 and 35.
 _PLANAR = (0, 1, 5)
 

@@ -9,6 +9,33 @@ import numpy as np
 
 from initcli.detector import DETECTOR_CONFIDENCE
 
+__all__ = [
+    "Bag2LogOptions",
+    "Bag2LogStats",
+    "BagTopics",
+    "CAMERA_INFO",
+    "CMD_VEL_TOPIC",
+    "COMPRESSED_IMAGE",
+    "DEPTH_ENCODINGS",
+    "DETECTION_2D_ARRAY",
+    "HYPOTHESES_TOPIC",
+    "IMAGE",
+    "INITIALPOSE_TOPIC",
+    "InitialPose",
+    "LASER_SCAN",
+    "MAP_TOPIC",
+    "OCCUPANCY_GRID",
+    "ODOMETRY",
+    "POSE_ARRAY",
+    "POSE_WITH_COVARIANCE_STAMPED",
+    "STATE_TOPIC",
+    "STRING",
+    "TF_MESSAGE",
+    "TWIST",
+    "Topic",
+    "Transform",
+]
+
 # Message types, ROS 2 spelling (rosbags names ROS 1 types the same way).
 IMAGE = "sensor_msgs/msg/Image"
 COMPRESSED_IMAGE = "sensor_msgs/msg/CompressedImage"

@@ -16,6 +16,15 @@ from bimkit.errors import InputError
 from initcli.ros.nav2 import initial_pose_message, state_message
 from initcli.ros.records import INITIALPOSE_TOPIC, STATE_TOPIC, InitialPose
 
+__all__ = [
+    "ADVERTISE_SETTLE_S",
+    "CONNECT_TIMEOUT_S",
+    "DEFAULT_PORT",
+    "RosbridgeLink",
+    "publish_initial_pose",
+    "ros_type",
+]
+
 DEFAULT_PORT = 9090
 CONNECT_TIMEOUT_S = 5.0
 HANDSHAKE_SERVICE = "/bim_init/handshake"  # no robot offers it: rosbridge answers with a failure

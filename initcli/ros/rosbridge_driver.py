@@ -42,6 +42,8 @@ from initcli.ros.records import (
 from initcli.ros.rosbridge import RosbridgeLink
 from initcli.ros.tf import quaternion_yaw
 
+__all__ = ["CONTROL_RATE", "ODOM_TIMEOUT_S", "RosbridgeDriver", "json_depth"]
+
 CONTROL_RATE = 10.0  # Hz
 ODOM_TIMEOUT_S = 1.0  # s without odometry: the robot is stopped and the session ends
 

@@ -9,6 +9,16 @@ import numpy as np
 from bimkit.errors import InputError
 from initcli.ros.records import Transform
 
+__all__ = [
+    "TransformTree",
+    "frame_name",
+    "matrix_quaternion",
+    "msg_transform",
+    "quaternion_matrix",
+    "quaternion_yaw",
+    "yaw_quaternion",
+]
+
 
 def quaternion_matrix(x: float, y: float, z: float, w: float) -> np.ndarray:
     """Rotation matrix of a unit quaternion (normalised first)."""

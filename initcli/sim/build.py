@@ -68,6 +68,67 @@ def build_sim(
     rng = np.random.default_rng(seed)
     model = world_storey(site, world_site, storey)
     circulation = Circulation.of(model)
+    built, clutter = _as_built(config, model, circulation, seed, rng)
+    static = SimWorld.from_obstacles(built.obstacles, clutter)
+    workers = place_workers(model, circulation, static.static, int(config.sim.workers), rng)
+    world = SimWorld.from_obstacles(built.obstacles, clutter, workers)
+    # Starts lie where a robot can be: the free space connected to the corridors with the doors as
+    # the simulated world has them (closed leaves, hoardings), material stacks, and the robot's size.
+    closed = [o for o in built.obstacles if o.ifc_class in (LEAF_CLASS, HOARDING_CLASS)]
+    reachable = Circulation.of(
+        model, closed=closed, boxes=clutter, footprint=config.robot.radius + START_MARGIN
+    )
+    start, enclosed = _start(config, start, reachable, world, rng)
+    n = config.sim.odometry_noise
+    o = config.sim.odometry
+    noise_model = OdometryNoise(n.alpha1, n.alpha2, n.alpha3, n.alpha4, o.scale_error, o.slip)
+    robot = DiffDriveRobot(start, config.robot.radius, noise_model, rng)
+    camera, mount = camera_of(config)
+    phantoms = _phantoms(model, circulation, int(config.sim.phantoms), rng)
+    detector: Callable[[Pose2D, float], list[DetectedObject]]
+    if not detect_features:
+        detector = _no_detections
+    elif config.detector.kind == "onnx":
+        from initcli.sim.onnx_camera import OnnxCamera, OnnxCameraSpec
+
+        onnx = OnnxCameraSpec(
+            config.detector.model,
+            config.detector.score_threshold,
+            config.camera.depth_window,
+            config.camera.depth_noise,
+            config.camera.min_range,
+            config.camera.range,
+            config.detector.classes,
+        )
+        detector = OnnxCamera(onnx, model, world, camera, mount, rng).detect
+    else:
+        detector = SimulatedDetector(
+            built.features + phantoms, camera, mount, _camera_noise(config), config.detector.rate, world, rng
+        ).detect
+    spec = config.lidar
+    lidar = LidarSpec(int(spec.beams), math.radians(spec.fov), spec.max_range, spec.noise, spec.dropout)
+    driver = SimDriver(
+        world,
+        robot,
+        lidar,
+        camera,
+        mount,
+        detector,
+        config.detector.rate,
+        config.robot.max_linear,
+        config.robot.max_angular,
+        rng,
+        depth_window=int(config.camera.depth_window),
+    )
+    ideal = built.changes == {}
+    return SimSetup(driver, start, world, storey, None if ideal else built, enclosed)
+
+
+def _as_built(
+    config: SessionConfig, model: StoreyModel, circulation: Circulation, seed: int, rng: np.random.Generator
+) -> tuple[AsBuiltWorld, list[np.ndarray]]:
+    """The storey as built (from its own generator, so that the starts are the same at every
+    as-built setting) and the material stacks placed in it (from ``rng``)."""
     cmap = ClassMap(config.detector.classes)
     design = sim_features_from_bim(model.features, cmap)
     doors = door_ids(model.features)
@@ -87,15 +148,18 @@ def build_sim(
         np.random.default_rng([seed, AS_BUILT_SEED, 1]),
         world_edges(built.obstacles, clutter)[0],
     )
-    static = SimWorld.from_obstacles(built.obstacles, clutter)
-    workers = place_workers(model, circulation, static.static, int(config.sim.workers), rng)
-    world = SimWorld.from_obstacles(built.obstacles, clutter, workers)
-    # Starts lie where a robot can be: the free space connected to the corridors with the doors as
-    # the simulated world has them (closed leaves, hoardings), material stacks, and the robot's size.
-    closed = [o for o in built.obstacles if o.ifc_class in (LEAF_CLASS, HOARDING_CLASS)]
-    reachable = Circulation.of(
-        model, closed=closed, boxes=clutter, footprint=config.robot.radius + START_MARGIN
-    )
+    return built, clutter
+
+
+def _start(
+    config: SessionConfig,
+    start: Pose2D | None,
+    reachable: Circulation,
+    world: SimWorld,
+    rng: np.random.Generator,
+) -> tuple[Pose2D, bool]:
+    """The start pose (given, the config's ``sim.start``, or drawn from the reachable free space
+    clear of obstacles) and whether a given one lies in a space closed off from the corridors."""
     if start is None:
         explicit = start_pose_degrees(config)
         start = Pose2D(*explicit) if explicit is not None else None
@@ -109,14 +173,12 @@ def build_sim(
         check_clearance(start, world, config.robot.radius)
         enclosed = not reachable.reaches(start.x, start.y, within=config.robot.radius + START_MARGIN)
     assert start is not None
-    n = config.sim.odometry_noise
-    o = config.sim.odometry
-    noise_model = OdometryNoise(n.alpha1, n.alpha2, n.alpha3, n.alpha4, o.scale_error, o.slip)
-    robot = DiffDriveRobot(start, config.robot.radius, noise_model, rng)
-    camera, mount = camera_of(config)
-    features = built.features
-    phantoms = _phantoms(model, circulation, int(config.sim.phantoms), rng)
-    noise = CameraNoise(
+    return start, enclosed
+
+
+def _camera_noise(config: SessionConfig) -> CameraNoise:
+    """The simulated detector's noise: misses, false positives, confusions, depth noise, range."""
+    return CameraNoise(
         miss_rate=config.sim.miss_rate,
         false_positives_per_minute=config.sim.false_positives_per_minute,
         confusion_rate=config.sim.confusion_rate,
@@ -124,43 +186,6 @@ def build_sim(
         range=config.camera.range,
         max_view_angle_deg=config.camera.max_view_angle,
     )
-    detector: Callable[[Pose2D, float], list[DetectedObject]]
-    if not detect_features:
-        detector = _no_detections
-    elif config.detector.kind == "onnx":
-        from initcli.sim.onnx_camera import OnnxCamera, OnnxCameraSpec
-
-        onnx = OnnxCameraSpec(
-            config.detector.model,
-            config.detector.score_threshold,
-            config.camera.depth_window,
-            config.camera.depth_noise,
-            config.camera.min_range,
-            config.camera.range,
-            config.detector.classes,
-        )
-        detector = OnnxCamera(onnx, model, world, camera, mount, rng).detect
-    else:
-        detector = SimulatedDetector(
-            features + phantoms, camera, mount, noise, config.detector.rate, world, rng
-        ).detect
-    spec = config.lidar
-    lidar = LidarSpec(int(spec.beams), math.radians(spec.fov), spec.max_range, spec.noise, spec.dropout)
-    driver = SimDriver(
-        world,
-        robot,
-        lidar,
-        camera,
-        mount,
-        detector,
-        config.detector.rate,
-        config.robot.max_linear,
-        config.robot.max_angular,
-        rng,
-        depth_window=int(config.camera.depth_window),
-    )
-    ideal = built.changes == {}
-    return SimSetup(driver, start, world, storey, None if ideal else built, enclosed)
 
 
 def check_clearance(start: Pose2D, world: SimWorld, radius: float) -> None:

@@ -19,6 +19,8 @@ from initcli.io.detection_log import DetectedObject
 from initcli.sim.synthetic_log import SimFeature, SyntheticParams, render_image
 from initcli.sim.world import SimWorld
 
+__all__ = ["CameraNoise", "SimulatedDetector"]
+
 
 @dataclass(frozen=True)
 class CameraNoise:

@@ -29,6 +29,24 @@ from initcli.core.raycast import ray_segment_distances, sight_blocked
 from initcli.sim.scenario import Circulation
 from initcli.sim.world import SimWorld
 
+__all__ = [
+    "FEATURE_CLEARANCE",
+    "MARKER_HEIGHT",
+    "MARKER_SIZE",
+    "MAX_CORRIDOR_WIDTH",
+    "MAX_SHIFT",
+    "MIN_SECTION_LENGTH",
+    "Marker",
+    "MarkerDetector",
+    "MarkerParams",
+    "SHIFT_STEP",
+    "WALL_CLEARANCE",
+    "camera_position",
+    "detect_markers",
+    "place_markers",
+    "project_marker",
+]
+
 MARKER_SIZE = 0.2  # m: "20 cm x 20 cm markers" (§4.3)
 MARKER_HEIGHT = 1.0  # m: tag centre above the floor (the sample configs' camera height)
 MAX_CORRIDOR_WIDTH = 6.0  # m: two facing walls further apart than this do not make one section

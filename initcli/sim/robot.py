@@ -22,6 +22,8 @@ import numpy as np
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.motion import apply_delta, motion_delta
 
+__all__ = ["DiffDriveRobot", "OdometryNoise"]
+
 
 @dataclass(frozen=True)
 class OdometryNoise:

@@ -15,6 +15,8 @@ from initcli.core.geometry import Pose2D
 from initcli.core.raycast import ray_segment_distances
 from initcli.sim.world import Worker
 
+__all__ = ["Circulation", "STACK_SIZE", "place_clutter", "place_workers", "random_start"]
+
 STACK_SIZE = (1.2, 0.5)  # m: a pallet of material against a wall
 
 

@@ -19,6 +19,8 @@ import numpy as np
 
 from initcli.sim.synthetic_log import SimFeature
 
+__all__ = ["SyntheticFloor", "corridor_walk", "doors_along", "make_floor", "write_site_folder"]
+
 
 @dataclass
 class SyntheticFloor:

@@ -26,6 +26,18 @@ from initcli.core.projection import CameraIntrinsics, CameraMount, box_for_point
 from initcli.core.raycast import sight_blocked
 from initcli.io.detection_log import DetectedObject, Detections, Meta, Odom, Record, Truth
 
+__all__ = [
+    "DEFAULT_CAMERA",
+    "DEFAULT_MOUNT",
+    "SimFeature",
+    "SyntheticLog",
+    "SyntheticParams",
+    "make_log",
+    "path_from_waypoints",
+    "render_image",
+    "sim_features_from_bim",
+]
+
 DEFAULT_CAMERA = CameraIntrinsics(fx=615.0, fy=615.0, cx=320.0, cy=240.0, width=640, height=480)
 DEFAULT_MOUNT = CameraMount(x=0.2, y=0.0, z=1.0, roll=0.0, pitch=0.0, yaw=0.0)
 

@@ -18,6 +18,8 @@ from scipy.sparse.csgraph import dijkstra
 
 from bimtools.site.records import OccupancyGrid
 
+__all__ = ["random_path"]
+
 
 def _coarse_clearance(grid: OccupancyGrid, cell: float) -> tuple[np.ndarray, float, np.ndarray]:
     free = grid.occupancy() == 0

@@ -12,6 +12,18 @@ import numpy as np
 from bimtools.site.records import Obstacle
 from initcli.core.raycast import cast_rays, nearest_segment_distance, ray_segment_params, segment_directions
 
+__all__ = [
+    "GLASS_ECHO_DEG",
+    "NEAR_CACHE_SIZE",
+    "SimWorld",
+    "Worker",
+    "box_edges",
+    "closed_ring",
+    "glass_echoes",
+    "polygon_edges",
+    "world_edges",
+]
+
 NEAR_CACHE_SIZE = 256  # blocks of grid cells whose segment indices SimWorld keeps
 
 

@@ -18,6 +18,8 @@ import numpy as np
 from bimtools.site.records import OccupancyGrid
 from initcli.core.raycast import sight_blocked
 
+__all__ = ["ENTRY_CANDIDATES", "Entry", "Loop", "follow_loops", "join_loop", "look_round"]
+
 ENTRY_CANDIDATES = 24  # nearest loop points tried for a line of sight when joining a loop
 
 

@@ -16,6 +16,8 @@ if TYPE_CHECKING:
     from matplotlib.collections import PathCollection
     from matplotlib.colors import Normalize
 
+__all__ = ["survey_png"]
+
 
 def _panel(
     ax: Axes,

@@ -27,6 +27,29 @@ from initcli.sim.world import polygon_edges
 from initcli.survey.exploration import Entry, Loop, follow_loops, join_loop, look_round
 from initcli.survey.uniqueness import UniquenessParams, first_unique
 
+__all__ = [
+    "FACED_BY",
+    "LANDMARK_CLASS",
+    "LANDMARK_HEIGHT",
+    "Landmark",
+    "SampleViews",
+    "StoreyPlan",
+    "StoreySurvey",
+    "SurveyParams",
+    "UNIQUE_WITHIN",
+    "landmark_candidates",
+    "occluders_of",
+    "plan_storey",
+    "sample_views",
+    "sequences",
+    "storey_features",
+    "suggest_landmarks",
+    "summarise",
+    "survey_storey",
+    "unique_distances",
+    "with_feature",
+]
+
 LANDMARK_CLASS = "landmark"  # each suggested landmark gets its own category: landmark_1, landmark_2
 LANDMARK_HEIGHT = 2.0  # m: a sign whose centre is at the camera's height
 UNIQUE_WITHIN = (5.0, 10.0, 20.0)  # m: the shares of survey.json

@@ -20,7 +20,7 @@ import numpy as np
 from initcli.core.hypotheses import drop_dominated, pose_groups, rank_order
 from initcli.core.matching import OUTLIER, BimIndex, Matcher, MatchOverflow, MatchParams, MatchState
 from initcli.core.pose import rigid_align_batch
-from initcli.core.verification import VerificationParams
+from initcli.core.verification_settings import VerificationParams
 from initcli.match.pipeline import MatchOptions
 
 AMBIGUOUS = 1 << 30  # the count given to a pattern that overflowed the matcher

@@ -53,6 +53,23 @@ from initcli.detector.synth.scene import (
     standard_decorations,
 )
 
+__all__ = [
+    "CELL",
+    "CLASS_COLOURS_BGR",
+    "Label",
+    "NoCirculation",
+    "Placement",
+    "Sample",
+    "SynthOptions",
+    "contact_sheet",
+    "dataset_preview",
+    "draw_boxes",
+    "load_placements",
+    "placement_for",
+    "render_sample",
+    "write_dataset",
+]
+
 CELL = 0.1  # m, raster of the free space used to place the camera
 SYNTH_MARKERS = ("synth.json",)  # a folder holding one was written by bim-init detector synth
 SYNTH_WRITES = ("images", "labels", "depth", "data.yaml", "synth.json")  # what synth writes there

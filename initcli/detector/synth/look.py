@@ -11,6 +11,22 @@ from functools import lru_cache
 
 import numpy as np
 
+__all__ = [
+    "DOORS",
+    "FLOORS",
+    "FeatureLooks",
+    "LIFTS",
+    "Look",
+    "STAIRS",
+    "TEX",
+    "WALLS",
+    "default_feature_looks",
+    "default_look",
+    "noise_tile",
+    "random_feature_looks",
+    "random_look",
+]
+
 TEX = 256  # texture tile size (pixels)
 
 

@@ -18,20 +18,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from initcli.core.raycast import ray_segment_params
-from initcli.detector.synth.look import TEX, FeatureLooks, Look, default_look, noise_tile
-from initcli.detector.synth.scene import (
-    CLUTTER_PERSON,
-    DECOR_CABINET,
-    DECOR_CALL_PANEL,
-    DECOR_EXIT_SIGN,
-    DECOR_INDICATOR,
-    DECOR_POSTER,
-    DECOR_SWITCH,
-    DECOR_WINDOW,
-    Camera,
-    Panels,
-    Scene,
-)
+from initcli.detector.synth.look import FeatureLooks, Look, default_look
+from initcli.detector.synth.paint import clutter_colours, decoration_colours, feature_colours, texture
+from initcli.detector.synth.scene import Camera, Panels, Scene
+
+__all__ = ["NEAR", "PANEL_TOLERANCE", "View", "VisibleFeature", "cast_rays", "render_view"]
 
 NEAR = 0.05  # m: nothing is rendered closer than this
 PANEL_TOLERANCE = 0.08  # m: a wall hit this close to a panel's plane is on the panel
@@ -64,11 +55,6 @@ class View:
     def bgr(self) -> np.ndarray:
         """The image in OpenCV's channel order (what :meth:`Detector.detect` takes)."""
         return np.ascontiguousarray(self.rgb[..., ::-1])
-
-
-def _tex(rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
-    tile = noise_tile()
-    return tile[rows.astype(np.int64) % TEX, cols.astype(np.int64) % TEX]
 
 
 def cast_rays(
@@ -141,135 +127,6 @@ def _panel_lookup(
     return which, across
 
 
-def _feature_colours(
-    code: np.ndarray,
-    a: np.ndarray,
-    h: np.ndarray,
-    hw: np.ndarray,
-    top: np.ndarray,
-    fl: FeatureLooks,
-    fid: np.ndarray,
-) -> np.ndarray:
-    """Colour of feature pixels: code 0 door, 1 lift, 2 stairs; a across (m), h height (m)."""
-    w = 2.0 * hw
-    u = a + hw
-    fw = fl.frame_w[fid]
-    leaf = fl.leaf_rgb[fid]
-    accent = fl.accent_rgb[fid]
-    out = leaf.copy()
-    grain = fl.grain[fid]
-    mid = np.abs(u - hw)
-
-    door = code == 0
-    if door.any():
-        tex = _tex(h * 6.0 + fid * 37, u * 160.0)
-        out[door] *= (1.0 + grain * tex)[door, None]
-        side = fl.handle_side[fid]
-        hu = np.where(side > 0, w - fw - 0.1, fw + 0.1)
-        rose = (np.abs(u - hu) < 0.03) & (np.abs(h - 1.0) < 0.06)
-        lever = (np.abs(u - hu + side * 0.06) < 0.065) & (np.abs(h - 1.03) < 0.016)
-        seam = fl.double[fid] & (mid < 0.008)
-        vision = fl.vision[fid] & (mid < 0.09) & (h > 1.2) & (h < 1.8)
-        kick = fl.kick[fid] & (h < 0.25)
-        plate = fl.plate[fid] & (mid < 0.07) & (np.abs(h - 1.6) < 0.035)
-        glass = np.array([55.0, 70.0, 80.0]) * (1.0 + 0.4 * (h - 1.2))[:, None]
-        out = np.where((door & kick)[:, None], leaf * 0.3 + 120.0, out)
-        out = np.where((door & vision)[:, None], glass, out)
-        out = np.where((door & plate)[:, None], 255.0 - accent * 0.6, out)
-        out = np.where((door & (rose | lever | seam))[:, None], accent, out)
-
-    lift = code == 1
-    if lift.any():
-        tex = _tex(h * 4.0 + fid * 53, u * 320.0)
-        band = 0.85 + 0.3 * (0.5 + 0.5 * np.sin(u * 2.3 + fid * 1.7))
-        lit = leaf * ((1.0 + 0.6 * grain * tex) * band)[:, None]
-        out = np.where(lift[:, None], lit, out)
-        seam_u = np.where(fl.double[fid], fw + (w - 2 * fw) / 3.0, hw)
-        seam = (np.abs(u - seam_u) < 0.007) | (np.abs(u - fw) < 0.006) | (np.abs(u - (w - fw)) < 0.006)
-        sill = h < 0.04
-        stripe = fl.vision[fid] & (np.abs(h - 1.0) < 0.025)
-        out = np.where((lift & sill)[:, None], np.array([150.0, 150.0, 150.0]), out)
-        out = np.where((lift & (seam | stripe))[:, None], accent, out)
-
-    stairs = code == 2
-    if stairs.any():
-        inner = np.maximum(top - fw, 0.3)
-        y = np.clip(h / inner, 0.0, 1.0)
-        half_in = np.maximum(hw - fw, 0.05) * (1.0 - 0.35 * y)
-        gamma = fl.step_gamma[fid]
-        y_top = 0.45 + 0.4 * gamma
-        s = (np.clip(y / y_top, 0, 1) ** gamma) * fl.steps[fid]
-        frac = s - np.floor(s)
-        tread = frac < 0.45
-        nosing = np.abs(frac - 0.45) < 0.06
-        shade_up = (1.0 - 0.35 * y)[:, None]
-        step_col = np.where(tread[:, None], leaf, accent) * shade_up
-        step_col = np.where(nosing[:, None], step_col * 0.55, step_col)
-        interior = fl.interior_rgb[fid] * (0.65 + 0.35 * (1 - y))[:, None]
-        col = np.where(((y >= y_top) | (mid > half_in))[:, None], interior, step_col)
-        sgn = fl.rail_side[fid]
-        x0 = hw + sgn * (hw - fw) * 0.95
-        x1 = hw + sgn * (hw - fw) * 0.55
-        t = np.clip((y - 0.45) / 0.5, 0.0, 1.0)
-        rail = (np.abs(u - (x0 + (x1 - x0) * t)) < 0.025) & (y > 0.45) & (y < 0.95)
-        col = np.where(rail[:, None], accent * 0.5, col)
-        out = np.where(stairs[:, None], col, out)
-
-    frame = (u < fw) | (u > w - fw) | (h > top - fw * np.where(code == 1, 1.6, 1.0))
-    out = np.where(frame[:, None], fl.frame_rgb[fid], out)
-    return out
-
-
-def _decoration_colours(
-    kind: np.ndarray,
-    a: np.ndarray,
-    h: np.ndarray,
-    bottom: np.ndarray,
-    top: np.ndarray,
-    hw: np.ndarray,
-    rgb: np.ndarray,
-    did: np.ndarray,
-) -> np.ndarray:
-    out = rgb.copy()
-    y = (h - bottom) / np.maximum(top - bottom, 1e-3)  # 0 at the bottom
-    x = (a + hw) / np.maximum(2 * hw, 1e-3)  # 0 at the left
-    border = (x < 0.06) | (x > 0.94) | (y < 0.06) | (y > 0.94)
-    poster = kind == DECOR_POSTER
-    if poster.any():
-        tex = _tex(h * 60 + did * 31, a * 60)
-        stripes = (np.floor(y * 7 + did) % 3 == 0) & (x > 0.15) & (x < 0.85)
-        col = rgb * (1.0 + 0.35 * tex)[:, None]
-        col = np.where(stripes[:, None], 255.0 - rgb * 0.7, col)
-        out = np.where(poster[:, None], np.where(border[:, None], 235.0, col), out)
-    panel = kind == DECOR_CALL_PANEL
-    if panel.any():
-        button = (np.abs(x - 0.5) < 0.25) & ((np.abs(y - 0.4) < 0.08) | (np.abs(y - 0.6) < 0.08))
-        out = np.where((panel & button)[:, None], np.array([250.0, 190.0, 90.0]), out)
-    indicator = kind == DECOR_INDICATOR
-    if indicator.any():
-        digits = (np.abs(x - 0.5) < 0.15) & (np.abs(y - 0.5) < 0.3) & (np.floor(x * 20) % 2 == 0)
-        out = np.where((indicator & digits)[:, None], np.array([255.0, 120.0, 40.0]), out)
-    exit_sign = kind == DECOR_EXIT_SIGN
-    if exit_sign.any():
-        figure = (np.abs(x - 0.3) < 0.12) & (np.abs(y - 0.5) < 0.3)
-        arrow = (np.abs(x - 0.7) < 0.15) & (np.abs(y - 0.5) < 0.08)
-        out = np.where((exit_sign & (figure | arrow))[:, None], 245.0, out)
-    cabinet = kind == DECOR_CABINET
-    if cabinet.any():
-        glass = (np.abs(x - 0.5) < 0.3) & (np.abs(y - 0.55) < 0.25)
-        out = np.where((cabinet & border)[:, None], 230.0, out)
-        out = np.where((cabinet & glass)[:, None], rgb * 0.6, out)
-    window = kind == DECOR_WINDOW
-    if window.any():
-        glass = np.array([120.0, 150.0, 170.0]) * (0.7 + 0.5 * y)[:, None]
-        mullion = border | (np.abs(x - 0.5) < 0.02)
-        out = np.where(window[:, None], np.where(mullion[:, None], rgb, glass), out)
-    switch = kind == DECOR_SWITCH
-    if switch.any():
-        out = np.where((switch & (np.abs(y - 0.5) < 0.2) & (np.abs(x - 0.5) < 0.2))[:, None], rgb * 0.8, out)
-    return out
-
-
 def _projected_rect(
     cam: np.ndarray,
     fwd: np.ndarray,
@@ -325,22 +182,70 @@ def render_view(
         look = default_look(scene.feature_panels.kind, scene.class_names)
     fl = look.features or default_look(scene.feature_panels.kind, scene.class_names).features
     assert fl is not None
-    W, H = camera.width, camera.height
-    cam = np.array([x0, y0])
-    fwd = np.array([math.cos(yaw), math.sin(yaw)])
-    right = np.array([fwd[1], -fwd[0]])
-    xn = (np.arange(W) + 0.5 - camera.cx) / camera.fx
-    dirs = fwd[None, :] + xn[:, None] * right[None, :]  # forward component 1: t is the optical depth
-    rv = ((np.arange(H) + 0.5 - camera.cy) / camera.fy).astype(np.float64)
-    cz, ceiling, max_range = camera.z, scene.ceiling, camera.max_range
-    cols = np.arange(W)
+    rays = _Rays.of(x0, y0, yaw, camera)
+    walls = _cast_walls(scene, rays, camera.max_range)
+    light = np.array([math.cos(look.light_angle), math.sin(look.light_angle)])
+    px = _Pixels.of(rays, walls, camera.z, scene.ceiling)
+    rgb = np.empty((camera.height, camera.width, 3), dtype=np.float64)
+    ids = _paint_walls(rgb, px, scene, look, fl, walls, light)
+    _paint_floor(rgb, px, rays, look)
+    _paint_ceiling(rgb, px, rays, look)
+    _paint_clutter(rgb, px, ids, scene, look, rays, walls.z, light, camera)
+    image, depth = _fade(rgb, px, look, camera.max_range)
+    return View(
+        image,
+        depth.astype(np.float32),
+        ids,
+        _visible_features(scene, ids, rays.cam, rays.fwd, rays.right, camera),
+        camera,
+        (x0, y0, yaw),
+    )
 
-    # --- walls: one ray per column ---------------------------------------------------------
-    wall_ids = _visible_walls(scene, cam, fwd, max_range)
+
+@dataclass(frozen=True)
+class _Rays:
+    """The camera's rays in the plan: one per image column, and each image row's vertical slope."""
+
+    cam: np.ndarray  # (2,) camera position
+    fwd: np.ndarray  # (2,) optical axis
+    right: np.ndarray  # (2,) image x axis
+    dirs: np.ndarray  # (W, 2) column rays, forward component 1: t is the optical depth
+    rv: np.ndarray  # (H,) row slopes: a row's ray falls rv metres per metre of depth
+
+    @staticmethod
+    def of(x0: float, y0: float, yaw: float, camera: Camera) -> _Rays:
+        fwd = np.array([math.cos(yaw), math.sin(yaw)])
+        right = np.array([fwd[1], -fwd[0]])
+        xn = (np.arange(camera.width) + 0.5 - camera.cx) / camera.fx
+        dirs = fwd[None, :] + xn[:, None] * right[None, :]
+        rv = ((np.arange(camera.height) + 0.5 - camera.cy) / camera.fy).astype(np.float64)
+        return _Rays(np.array([x0, y0]), fwd, right, dirs, rv)
+
+
+@dataclass(frozen=True)
+class _WallHits:
+    """Where each column's ray meets the walls, and the feature or decoration panel it lies on."""
+
+    z: np.ndarray  # (W,) optical depth of the hit; max_range where no wall is in range
+    void: np.ndarray  # (W,) no wall within range
+    normal: np.ndarray  # (W, 2) the wall's normal, towards the camera
+    tex_u: np.ndarray  # (W,) texture coordinate along the walls, m
+    feature: np.ndarray  # (W,) feature panel index, -1 none
+    feature_a: np.ndarray  # (W,) across coordinate on that panel, m
+    decoration: np.ndarray  # (W,) decoration index, -1 none
+    decoration_a: np.ndarray  # (W,) across coordinate on that decoration, m
+
+
+def _cast_walls(scene: Scene, rays: _Rays, max_range: float) -> _WallHits:
+    """One ray per column against the walls that can be hit."""
+    cam, dirs = rays.cam, rays.dirs
+    n_cols = len(dirs)
+    wall_ids = _visible_walls(scene, cam, rays.fwd, max_range)
     if len(wall_ids):
         segs = scene.walls[wall_ids]
         t_all, s_all, _ = cast_rays(cam, dirs, segs)
         j = np.argmin(t_all, axis=1)
+        cols = np.arange(n_cols)
         z_wall = t_all[cols, j]
         s_hit = np.clip(s_all[cols, j], 0.0, 1.0)
         seg = segs[j]
@@ -351,45 +256,68 @@ def render_view(
         hit_normal[flip] *= -1
         tex_u = scene.wall_offset[wall_ids][j] + s_hit * seg_len
     else:
-        z_wall = np.full(W, np.inf)
+        z_wall = np.full(n_cols, np.inf)
         hit_normal = -dirs / np.hypot(dirs[:, 0], dirs[:, 1])[:, None]
-        tex_u = np.zeros(W)
+        tex_u = np.zeros(n_cols)
     void_col = ~np.isfinite(z_wall) | (z_wall > max_range)
     z_wall = np.where(void_col, max_range, z_wall)
     hit = cam + dirs * z_wall[:, None]
-
     feat_col, feat_a = _panel_lookup(scene.feature_panels, cam, hit, dirs, hit_normal, max_range)
     feat_col[void_col] = -1
     dec_col, dec_a = _panel_lookup(scene.decorations, cam, hit, dirs, hit_normal, max_range)
     dec_col[void_col] = -1
+    return _WallHits(z_wall, void_col, hit_normal, tex_u, feat_col, feat_a, dec_col, dec_a)
 
-    light = np.array([math.cos(look.light_angle), math.sin(look.light_angle)])
-    shade_col = look.ambient + look.diffuse * np.abs(hit_normal @ light)
 
-    # --- per pixel ----------------------------------------------------------------------------
-    h_wall = cz - rv[:, None] * z_wall[None, :]  # height at which each pixel's ray meets the wall
-    is_floor = h_wall < 0
-    is_ceil = h_wall > ceiling
-    is_wall = ~(is_floor | is_ceil)
-    with np.errstate(divide="ignore"):
-        z_floor = np.where(rv > 0, cz / np.where(rv > 0, rv, 1.0), np.inf)
-        z_ceil = np.where(rv < 0, (ceiling - cz) / np.where(rv < 0, -rv, 1.0), np.inf)
-    depth = np.where(is_wall, z_wall[None, :], np.where(is_floor, z_floor[:, None], z_ceil[:, None]))
-    void = is_wall & void_col[None, :]
+@dataclass(frozen=True)
+class _Pixels:
+    """What each pixel's ray meets first of wall, floor and ceiling (clutter aside), and how far."""
 
-    rgb = np.empty((H, W, 3), dtype=np.float64)
+    h_wall: np.ndarray  # (H, W) height at which the pixel's ray meets the wall
+    is_floor: np.ndarray  # (H, W)
+    is_ceil: np.ndarray  # (H, W)
+    is_wall: np.ndarray  # (H, W)
+    z_floor: np.ndarray  # (H,) optical depth at which each row meets the floor (inf: never)
+    z_ceil: np.ndarray  # (H,) optical depth at which each row meets the ceiling (inf: never)
+    depth: np.ndarray  # (H, W) optical depth; the clutter painter writes its own into it
+    void: np.ndarray  # (H, W) nothing within range; the clutter painter clears what it covers
 
-    # walls
-    wr, wc = np.nonzero(is_wall)
-    hw_ = h_wall[wr, wc]
-    tex = _tex(hw_ * look.wall_tex_scale, tex_u[wc] * look.wall_tex_scale)
+    @staticmethod
+    def of(rays: _Rays, walls: _WallHits, cz: float, ceiling: float) -> _Pixels:
+        rv, z_wall = rays.rv, walls.z
+        h_wall = cz - rv[:, None] * z_wall[None, :]
+        is_floor = h_wall < 0
+        is_ceil = h_wall > ceiling
+        is_wall = ~(is_floor | is_ceil)
+        with np.errstate(divide="ignore"):
+            z_floor = np.where(rv > 0, cz / np.where(rv > 0, rv, 1.0), np.inf)
+            z_ceil = np.where(rv < 0, (ceiling - cz) / np.where(rv < 0, -rv, 1.0), np.inf)
+        depth = np.where(is_wall, z_wall[None, :], np.where(is_floor, z_floor[:, None], z_ceil[:, None]))
+        void = is_wall & walls.void[None, :]
+        return _Pixels(h_wall, is_floor, is_ceil, is_wall, z_floor, z_ceil, depth, void)
+
+
+def _paint_walls(
+    rgb: np.ndarray,
+    px: _Pixels,
+    scene: Scene,
+    look: Look,
+    fl: FeatureLooks,
+    walls: _WallHits,
+    light: np.ndarray,
+) -> np.ndarray:
+    """Paint the wall pixels (texture, skirting, features, decorations); the feature index map."""
+    wr, wc = np.nonzero(px.is_wall)
+    hw_ = px.h_wall[wr, wc]
+    ceiling = scene.ceiling
+    tex = texture(hw_ * look.wall_tex_scale, walls.tex_u[wc] * look.wall_tex_scale)
     wall_col = look.wall_rgb[None, :] * (1.0 + look.wall_tex * tex)[:, None]
     if look.skirting_h > 0:
         wall_col = np.where((hw_ < look.skirting_h)[:, None], look.skirting_rgb, wall_col)
     wall_col *= (1.0 + 0.12 * (hw_ / ceiling - 0.5))[:, None]
 
-    ids = np.full((H, W), -1, dtype=np.int16)
-    fidx = feat_col[wc]
+    ids = np.full(px.h_wall.shape, -1, dtype=np.int16)
+    fidx = walls.feature[wc]
     on_feat = fidx >= 0
     if on_feat.any():
         fi = fidx[on_feat]
@@ -399,9 +327,9 @@ def render_view(
         fi = fi[inside]
         if len(sel):
             code = _feature_codes(scene)[fi]
-            wall_col[sel] = _feature_colours(
+            wall_col[sel] = feature_colours(
                 code,
-                feat_a[wc[sel]],
+                walls.feature_a[wc[sel]],
                 hw_[sel],
                 scene.feature_panels.half_width[fi],
                 scene.feature_panels.top[fi],
@@ -409,7 +337,7 @@ def render_view(
                 fi,
             )
             ids[wr[sel], wc[sel]] = fi
-    didx = dec_col[wc]
+    didx = walls.decoration[wc]
     on_dec = (didx >= 0) & (ids[wr, wc] < 0)
     if on_dec.any():
         di = didx[on_dec]
@@ -419,31 +347,44 @@ def render_view(
         sel = np.flatnonzero(on_dec)[inside]
         di = di[inside]
         if len(sel):
-            wall_col[sel] = _decoration_colours(
-                d.kind[di], dec_a[wc[sel]], hw_[sel], d.bottom[di], d.top[di], d.half_width[di], d.rgb[di], di
+            wall_col[sel] = decoration_colours(
+                d.kind[di],
+                walls.decoration_a[wc[sel]],
+                hw_[sel],
+                d.bottom[di],
+                d.top[di],
+                d.half_width[di],
+                d.rgb[di],
+                di,
             )
+    shade_col = look.ambient + look.diffuse * np.abs(walls.normal @ light)
     rgb[wr, wc] = wall_col * shade_col[wc, None]
+    return ids
 
-    # floor
-    fr, fc = np.nonzero(is_floor)
-    zf = z_floor[fr]
-    px = cam[0] + zf * dirs[fc, 0]
-    py = cam[1] + zf * dirs[fc, 1]
+
+def _paint_floor(rgb: np.ndarray, px: _Pixels, rays: _Rays, look: Look) -> None:
+    """Paint the floor pixels: checkered tiles with grout."""
+    fr, fc = np.nonzero(px.is_floor)
+    zf = px.z_floor[fr]
+    x = rays.cam[0] + zf * rays.dirs[fc, 0]
+    y = rays.cam[1] + zf * rays.dirs[fc, 1]
     tile = look.floor_tile
-    gx, gy = px / tile, py / tile
+    gx, gy = x / tile, y / tile
     checker = ((np.floor(gx) + np.floor(gy)) % 2 == 0)[:, None]
     floor_col = np.where(checker, look.floor_rgb, look.floor_rgb2)
-    floor_col = floor_col * (1.0 + look.floor_tex * _tex(px * 50.0, py * 50.0))[:, None]
+    floor_col = floor_col * (1.0 + look.floor_tex * texture(x * 50.0, y * 50.0))[:, None]
     if look.grout > 0:
         grout = ((gx - np.floor(gx)) < look.grout) | ((gy - np.floor(gy)) < look.grout)
         floor_col = np.where(grout[:, None], look.grout_rgb, floor_col)
     rgb[fr, fc] = floor_col * (look.ambient + 0.5 * look.diffuse)
 
-    # ceiling
-    cr, cc = np.nonzero(is_ceil)
-    zc = z_ceil[cr]
-    qx = cam[0] + zc * dirs[cc, 0]
-    qy = cam[1] + zc * dirs[cc, 1]
+
+def _paint_ceiling(rgb: np.ndarray, px: _Pixels, rays: _Rays, look: Look) -> None:
+    """Paint the ceiling pixels: a tile grid and lamps."""
+    cr, cc = np.nonzero(px.is_ceil)
+    zc = px.z_ceil[cr]
+    qx = rays.cam[0] + zc * rays.dirs[cc, 0]
+    qy = rays.cam[1] + zc * rays.dirs[cc, 1]
     ceil_col = np.broadcast_to(look.ceiling_rgb, (len(cr), 3)) * 0.92
     if look.ceiling_grid > 0:
         g = look.ceiling_grid
@@ -455,71 +396,67 @@ def render_view(
         ceil_col = np.where(lamp[:, None], 255.0 * 1.3, ceil_col)
     rgb[cr, cc] = ceil_col * look.ambient * 1.1
 
-    # clutter (free-standing boxes and people): side faces and visible top faces
-    cl = scene.clutter
-    if cl.count:
-        near = np.flatnonzero(_segment_distance(cam, cl.segments) < max_range)
-        if len(near):
-            t_all, _, _ = cast_rays(cam, dirs, cl.segments[near])
-            j = np.argmin(t_all, axis=1)
-            z_in = t_all[cols, j]
-            has = np.isfinite(z_in) & (z_in < z_wall)
-            if has.any():
-                obj = cl.obj[near][j]
-                same = cl.obj[near][None, :] == obj[:, None]
-                z_out = np.where(same & np.isfinite(t_all), t_all, -np.inf).max(axis=1)
-                top = cl.top[obj]
-                h_in = cz - rv[:, None] * z_in[None, :]
-                h_out = cz - rv[:, None] * z_out[None, :]
-                side = has[None, :] & (h_in >= 0) & (h_in <= top[None, :])
-                lid = has[None, :] & (h_in > top[None, :]) & (h_out <= top[None, :]) & (rv[:, None] > 0)
-                seg = cl.segments[near][j]
-                e = seg[:, 2:4] - seg[:, 0:2]
-                nrm = (
-                    np.column_stack([e[:, 1], -e[:, 0]])
-                    / np.maximum(np.hypot(e[:, 0], e[:, 1]), 1e-9)[:, None]
-                )
-                shade = look.ambient + look.diffuse * np.abs(nrm @ light)
-                sr, sc = np.nonzero(side)
-                hh = h_in[sr, sc]
-                o = obj[sc]
-                base = cl.rgb[o] * (1.0 + 0.15 * _tex(hh * 40.0 + o * 17, z_in[sc] * 3 + sc * 0.5))[:, None]
-                person = cl.kind[o] == CLUTTER_PERSON
-                rel = hh / np.maximum(top[sc], 1e-3)
-                vest = person & (rel > 0.5) & (rel < 0.82)
-                head = person & (rel >= 0.86)
-                legs = person & (rel <= 0.5)
-                base = np.where(vest[:, None], np.array([250.0, 170.0, 30.0]), base)
-                base = np.where(head[:, None], np.array([200.0, 150.0, 120.0]), base)
-                base = np.where(legs[:, None], np.array([45.0, 50.0, 70.0]), base)
-                bands = (~person) & ((np.floor(hh * 6.0 + o) % 4) == 0)
-                base = np.where(bands[:, None], base * 0.75, base)
-                rgb[sr, sc] = base * shade[sc, None]
-                depth[sr, sc] = z_in[sc]
-                ids[sr, sc] = -1
-                lr, lc = np.nonzero(lid & ~side)
-                if len(lr):
-                    rgb[lr, lc] = cl.rgb[obj[lc]] * 1.1 * (look.ambient + look.diffuse)
-                    depth[lr, lc] = (cz - top[lc]) / rv[lr]
-                    ids[lr, lc] = -1
-                void[side | lid] = False
 
-    # light falloff, fog beyond range
-    depth = np.where(void | (depth > max_range), 0.0, depth)
+def _paint_clutter(
+    rgb: np.ndarray,
+    px: _Pixels,
+    ids: np.ndarray,
+    scene: Scene,
+    look: Look,
+    rays: _Rays,
+    z_wall: np.ndarray,
+    light: np.ndarray,
+    camera: Camera,
+) -> None:
+    """Paint the free-standing boxes and people in front of the walls: side faces and visible top
+    faces (their depth into ``px.depth``; no feature behind them in ``ids``)."""
+    cl = scene.clutter
+    if not cl.count:
+        return
+    cam, rv, cz = rays.cam, rays.rv, camera.z
+    near = np.flatnonzero(_segment_distance(cam, cl.segments) < camera.max_range)
+    if not len(near):
+        return
+    t_all, _, _ = cast_rays(cam, rays.dirs, cl.segments[near])
+    j = np.argmin(t_all, axis=1)
+    cols = np.arange(camera.width)
+    z_in = t_all[cols, j]
+    has = np.isfinite(z_in) & (z_in < z_wall)
+    if not has.any():
+        return
+    obj = cl.obj[near][j]
+    same = cl.obj[near][None, :] == obj[:, None]
+    z_out = np.where(same & np.isfinite(t_all), t_all, -np.inf).max(axis=1)
+    top = cl.top[obj]
+    h_in = cz - rv[:, None] * z_in[None, :]
+    h_out = cz - rv[:, None] * z_out[None, :]
+    side = has[None, :] & (h_in >= 0) & (h_in <= top[None, :])
+    lid = has[None, :] & (h_in > top[None, :]) & (h_out <= top[None, :]) & (rv[:, None] > 0)
+    seg = cl.segments[near][j]
+    e = seg[:, 2:4] - seg[:, 0:2]
+    nrm = np.column_stack([e[:, 1], -e[:, 0]]) / np.maximum(np.hypot(e[:, 0], e[:, 1]), 1e-9)[:, None]
+    shade = look.ambient + look.diffuse * np.abs(nrm @ light)
+    sr, sc = np.nonzero(side)
+    rgb[sr, sc] = clutter_colours(cl, obj[sc], h_in[sr, sc], top[sc], z_in[sc], sc) * shade[sc, None]
+    px.depth[sr, sc] = z_in[sc]
+    ids[sr, sc] = -1
+    lr, lc = np.nonzero(lid & ~side)
+    if len(lr):
+        rgb[lr, lc] = cl.rgb[obj[lc]] * 1.1 * (look.ambient + look.diffuse)
+        px.depth[lr, lc] = (cz - top[lc]) / rv[lr]
+        ids[lr, lc] = -1
+    px.void[side | lid] = False
+
+
+def _fade(rgb: np.ndarray, px: _Pixels, look: Look, max_range: float) -> tuple[np.ndarray, np.ndarray]:
+    """Light falloff with depth and fog beyond range: the uint8 image and the depth (0: no return)."""
+    depth = np.where(px.void | (px.depth > max_range), 0.0, px.depth)
     atten = 1.0 / (1.0 + look.falloff * np.where(depth > 0, depth, max_range))
     rgb *= atten[..., None]
     far = np.clip((depth - 0.6 * max_range) / (0.4 * max_range), 0.0, 1.0)
     far = np.where(depth > 0, far, 1.0)
     rgb = rgb * (1.0 - far[..., None]) + look.fog_rgb * far[..., None]
-    image = np.clip(rgb, 0, 255).astype(np.uint8)
-    return View(
-        image,
-        depth.astype(np.float32),
-        ids,
-        _visible_features(scene, ids, cam, fwd, right, camera),
-        camera,
-        (x0, y0, yaw),
-    )
+    return np.clip(rgb, 0, 255).astype(np.uint8), depth
 
 
 def _feature_codes(scene: Scene) -> np.ndarray:

@@ -25,6 +25,27 @@ from initcli.core.classes import ClassMap
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.detector import CLASS_NAMES
 
+__all__ = [
+    "CLUTTER_BOX",
+    "CLUTTER_PERSON",
+    "Camera",
+    "Clutter",
+    "DECOR_CABINET",
+    "DECOR_CALL_PANEL",
+    "DECOR_EXIT_SIGN",
+    "DECOR_INDICATOR",
+    "DECOR_POSTER",
+    "DECOR_SWITCH",
+    "DECOR_WINDOW",
+    "Panels",
+    "Scene",
+    "SceneFeature",
+    "camera_pose_in_world",
+    "panels_from_rows",
+    "standard_decorations",
+    "wall_line",
+]
+
 # Decoration kinds (unlabelled things on walls).
 DECOR_POSTER = 0
 DECOR_CALL_PANEL = 1
@@ -261,52 +282,8 @@ class Scene:
         Features whose category is not one of ``class_names`` (after ``class_map``) are left out.
         With ``decorate``, lifts get a call panel and floor indicator and stairs an exit sign.
         """
-        cmap = class_map or ClassMap()
-        polys = []
-        for o in storey.obstacles:
-            try:
-                p = Polygon(o.exterior, o.holes)
-            except (ValueError, TypeError):
-                continue
-            if not p.is_valid:
-                p = p.buffer(0)
-            if not p.is_empty and p.area > 1e-6:
-                polys.append(p)
-        footprint = None
-        if polys:
-            footprint = (
-                shapely.unary_union(polys)
-                .buffer(0.002, join_style="mitre")
-                .buffer(-0.002, join_style="mitre")
-            )
-            walls, two_sided = _outline_segments(footprint)
-        elif storey.walls:
-            walls = np.array([[w.x1, w.y1, w.x2, w.y2] for w in storey.walls], dtype=float)
-            two_sided = np.ones(len(walls), dtype=bool)
-        else:
-            raise InputError(
-                f"storey {storey.name!r}: no walls or obstacles to render (walls.geojson missing?)"
-            )
-        index = {c: i for i, c in enumerate(class_names)}
-        feats = []
-        for f in storey.features:
-            cls = cmap.canonical(f.category)
-            if cls not in index:
-                continue
-            n = math.hypot(f.norm_x, f.norm_y) or 1.0
-            feats.append(
-                SceneFeature(
-                    f.id,
-                    f.category,
-                    cls,
-                    index[cls],
-                    f.x,
-                    f.y,
-                    (f.norm_x / n, f.norm_y / n),
-                    max(f.width, 0.3),
-                    max(f.height, 0.5),
-                )
-            )
+        footprint, walls, two_sided = _storey_walls(storey)
+        feats = _scene_features(storey, class_names, class_map or ClassMap())
         # Real models' section cuts leave the door openings open: close each feature's opening with a
         # two-sided segment in its plane, so that rays stop on the feature (it is drawn there) and the
         # circulation area does not leak through an entrance to the outside. Behind a closed wall
@@ -340,6 +317,57 @@ class Scene:
         if decorate:
             scene.decorations = standard_decorations(scene)
         return scene
+
+
+def _storey_walls(storey: StoreyModel) -> tuple[Polygon | MultiPolygon | None, np.ndarray, np.ndarray]:
+    """The union of the storey's obstacle footprints (None without obstacles) and the wall segments
+    to render: the footprint's outline, else the storey's wall surfaces (two-sided)."""
+    polys = []
+    for o in storey.obstacles:
+        try:
+            p = Polygon(o.exterior, o.holes)
+        except (ValueError, TypeError):
+            continue
+        if not p.is_valid:
+            p = p.buffer(0)
+        if not p.is_empty and p.area > 1e-6:
+            polys.append(p)
+    if polys:
+        footprint = (
+            shapely.unary_union(polys).buffer(0.002, join_style="mitre").buffer(-0.002, join_style="mitre")
+        )
+        walls, two_sided = _outline_segments(footprint)
+        return footprint, walls, two_sided
+    if storey.walls:
+        walls = np.array([[w.x1, w.y1, w.x2, w.y2] for w in storey.walls], dtype=float)
+        return None, walls, np.ones(len(walls), dtype=bool)
+    raise InputError(f"storey {storey.name!r}: no walls or obstacles to render (walls.geojson missing?)")
+
+
+def _scene_features(storey: StoreyModel, class_names: tuple[str, ...], cmap: ClassMap) -> list[SceneFeature]:
+    """The storey's features whose category (after ``cmap``) is one of ``class_names``; unit normals,
+    at least 0.3 m wide and 0.5 m tall."""
+    index = {c: i for i, c in enumerate(class_names)}
+    feats = []
+    for f in storey.features:
+        cls = cmap.canonical(f.category)
+        if cls not in index:
+            continue
+        n = math.hypot(f.norm_x, f.norm_y) or 1.0
+        feats.append(
+            SceneFeature(
+                f.id,
+                f.category,
+                cls,
+                index[cls],
+                f.x,
+                f.y,
+                (f.norm_x / n, f.norm_y / n),
+                max(f.width, 0.3),
+                max(f.height, 0.5),
+            )
+        )
+    return feats
 
 
 def _outline_segments(geom: Polygon | MultiPolygon) -> tuple[np.ndarray, np.ndarray]:

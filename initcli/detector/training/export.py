@@ -26,6 +26,8 @@ from initcli.detector.preprocess import PAD_VALUE
 from initcli.detector.training.checkpoint import load_checkpoint, model_from_checkpoint
 from initcli.detector.training.model import ExportHead
 
+__all__ = ["ExportReport", "OPSET", "export_onnx", "model_metadata", "package_version", "verify_export"]
+
 OPSET = 17
 
 

@@ -23,6 +23,29 @@ from torch import nn
 
 from bimkit.errors import InputError
 
+__all__ = [
+    "Arch",
+    "BACKBONES",
+    "ConvBN",
+    "Detector",
+    "ExportHead",
+    "LITE0_CHANNELS",
+    "LITE0_TAPS",
+    "Lite0Backbone",
+    "Residual",
+    "ResidualBackbone",
+    "STRIDE",
+    "boxes_from_ltrb",
+    "cell_centres",
+    "count_parameters",
+    "detection_loss",
+    "focal_loss",
+    "giou_loss",
+    "head_parameter_names",
+    "lite0_weights_path",
+    "upgrade_state_dict",
+]
+
 STRIDE = 8
 
 

@@ -42,6 +42,24 @@ from initcli.detector.training.model import (
     upgrade_state_dict,
 )
 
+__all__ = [
+    "ALPHA",
+    "Callback",
+    "EpochRecord",
+    "ModelEMA",
+    "TrainOptions",
+    "TrainSet",
+    "balanced_weights",
+    "build_targets",
+    "collate",
+    "evaluate",
+    "freeze",
+    "frozen_modules",
+    "pick_device",
+    "set_train_mode",
+    "train",
+]
+
 ALPHA = 0.54  # Gaussian size relative to the box (TTFNet)
 
 
@@ -298,68 +316,18 @@ def train(opts: TrainOptions, on_event: Callback | None = None) -> dict:
     torch.manual_seed(opts.seed)
     device = pick_device(opts.device)
     nc = len(ds.names)
-    arch = Arch(nc=nc, widths=tuple(opts.widths), neck=opts.neck, backbone=opts.backbone)
-    init = None
-    if opts.init is not None:  # fine-tune: start from another checkpoint's (EMA) weights
-        init = load_init(opts.init)
-        if [str(n) for n in init["names"]] != ds.names:
-            raise InputError(
-                f"--init {opts.init}: trained on classes {init['names']}, the dataset has {ds.names}"
-            )
-        arch = Arch.from_dict(init["arch"])
-    net = Detector(arch, pretrained=init is None and not opts.resume).to(device)
-    if init is not None:
-        net.load_state_dict(upgrade_state_dict({k: v.float() for k, v in init["model"].items()}))
+    arch, init, net = _build_net(opts, ds, device)
     frozen = frozen_modules(net, opts.freeze_backbone)
     freeze(frozen)
     steps_per_epoch = math.ceil(len(ds.train) / opts.batch)
     total_steps = steps_per_epoch * opts.epochs
     decay = 1.0 - 1.0 / max(50.0, 0.05 * total_steps)
     trainable = [(n, p) for n, p in net.named_parameters() if p.requires_grad]
-    decay_params = [p for n, p in trainable if p.ndim > 1]
-    other_params = [p for n, p in trainable if p.ndim <= 1]
-    optimizer = torch.optim.AdamW(
-        [
-            {"params": decay_params, "weight_decay": opts.weight_decay},
-            {"params": other_params, "weight_decay": 0.0},
-        ],
-        lr=opts.lr,
-    )
-    warmup = min(300, max(steps_per_epoch, total_steps // 10))
-
-    limit_s = opts.time_limit * 60.0
-    started = time.time()
-
-    def progress(step: int) -> float:
-        """Fraction of the run done: by steps, or by time under a time limit (whichever is further)."""
-        p = step / max(1, total_steps)
-        if limit_s > 0:
-            p = max(p, (time.time() - started) / limit_s)
-        return min(p, 1.0)
-
-    def lr_at(step: int) -> float:
-        if step < warmup:
-            return opts.lr * (0.1 + 0.9 * step / warmup)
-        p = progress(step)
-        p0 = warmup / max(1, total_steps)
-        q = (p - p0) / max(1e-9, 1 - p0) if p > p0 else 0.0
-        return opts.lr * (0.05 + 0.95 * 0.5 * (1 + math.cos(math.pi * min(q, 1.0))))
-
+    optimizer = _optimizer(trainable, opts)
+    schedule = _Schedule(opts, steps_per_epoch, total_steps)
     ema = ModelEMA(net, decay)
-    start_epoch, step, history = 0, 0, []
-    if opts.resume:
-        ckpt = load_checkpoint(opts.out)
-        if ckpt.get("names") != ds.names:
-            raise InputError(
-                f"{opts.out}: trained on classes {ckpt.get('names')}, the dataset has {ds.names}"
-            )
-        net.load_state_dict(ckpt["raw"])
-        ema.ema.load_state_dict(ckpt["model"])
-        ema.updates = int(ckpt.get("ema_updates", 0))
-        if "optimizer" in ckpt:
-            optimizer.load_state_dict(ckpt["optimizer"])
-        start_epoch, step = int(ckpt["epoch"]), int(ckpt.get("step", 0))
-        history = list(ckpt.get("history", []))
+    run = _Training(net, ema, optimizer, trainable, schedule, device)
+    start_epoch, step, history = _resume(opts, ds, run) if opts.resume else (0, 0, [])
     workers = opts.workers if opts.workers >= 0 else (4 if device.type == "cuda" else 0)
     train_set = TrainSet(ds.train, nc, opts, augment=True)
     sample_weights = balanced_weights(ds.train, nc) if opts.balance else None
@@ -374,90 +342,202 @@ def train(opts: TrainOptions, on_event: Callback | None = None) -> dict:
             "params": sum(p.numel() for p in net.parameters()),
         },
     )
-    ckpt = {}
+    ckpt: dict = {}
     for epoch in range(start_epoch, opts.epochs):
         train_set.epoch = epoch
-        gen = torch.Generator().manual_seed(opts.seed * 1000 + epoch)
-        sampler = (
-            WeightedRandomSampler(sample_weights.tolist(), len(ds.train), replacement=True, generator=gen)
-            if sample_weights is not None
-            else None
-        )
-        loader = DataLoader(
-            train_set,
-            batch_size=opts.batch,
-            shuffle=sampler is None,
-            sampler=sampler,
-            num_workers=workers,
-            collate_fn=collate,
-            drop_last=len(ds.train) > opts.batch,
-            generator=gen,
-            persistent_workers=False,
-        )
+        loader = _epoch_loader(train_set, sample_weights, opts, epoch, workers)
         set_train_mode(net, frozen, frozen_bn=init is not None)
         t0 = time.time()
-        sums = np.zeros(3)
-        n = 0
-        for x, hm_t, box_t, box_w, _gt in loader:
-            for g in optimizer.param_groups:
-                g["lr"] = lr_at(step)
-            x = x.to(device, non_blocking=True).float() / 255.0
-            hm_logits, ltrb = net(x)
-            loss, hm_l, box_l = detection_loss(
-                hm_logits, ltrb, hm_t.to(device), box_t.to(device), box_w.to(device)
-            )
-            optimizer.zero_grad(set_to_none=True)
-            loss.backward()
-            torch.nn.utils.clip_grad_norm_([p for _, p in trainable], 10.0)
-            optimizer.step()
-            ema.update(net)
-            step += 1
-            n += 1
-            sums += [float(loss.detach()), float(hm_l), float(box_l)]
-            emit(
-                "step",
-                {
-                    "epoch": epoch,
-                    "loss": sums[0] / n,
-                    "hm": sums[1] / n,
-                    "box": sums[2] / n,
-                    "last": float(loss.detach()),
-                    "step": step,
-                    "lr": lr_at(step),
-                },
-            )
-            if (opts.max_steps and step >= opts.max_steps) or (limit_s > 0 and progress(step) >= 1.0):
-                break
+        step, losses = _train_epoch(run, loader, epoch, step, emit)
         metrics = evaluate(ema.ema, val_items, ds.names, opts.imgsz, device, opts.conf) if val_items else None
-        record = EpochRecord(
-            epoch + 1,
-            sums[0] / max(n, 1),
-            sums[1] / max(n, 1),
-            sums[2] / max(n, 1),
-            time.time() - t0,
-            metrics.to_dict() if metrics else {},
-        )
+        record = EpochRecord(epoch + 1, *losses, time.time() - t0, metrics.to_dict() if metrics else {})
         history.append(asdict(record))
-        ckpt = {
-            "format": "bim-init.detector/1",
-            "arch": arch.to_dict(),
-            "model": {k: v.detach().cpu() for k, v in ema.ema.state_dict().items()},
-            "raw": {k: v.detach().cpu() for k, v in net.state_dict().items()},
-            "optimizer": optimizer.state_dict(),
-            "ema_updates": ema.updates,
-            "epoch": epoch + 1,
-            "step": step,
-            "names": ds.names,
-            "imgsz": opts.imgsz,
-            "history": history,
-            "options": {k: (str(v) if isinstance(v, Path) else v) for k, v in asdict(opts).items()},
-        }
+        ckpt = _checkpoint(run, arch, epoch, step, ds.names, history, opts)
         save_checkpoint(opts.out, ckpt)
         _write_history_csv(opts.out.with_suffix(".csv"), history, ds.names)
         emit("epoch", {"record": record, "metrics": metrics, "epochs": opts.epochs})
-        if (opts.max_steps and step >= opts.max_steps) or (limit_s > 0 and progress(step) >= 1.0):
+        if schedule.done(step):
             break
     return ckpt or load_checkpoint(opts.out)
+
+
+def _build_net(opts: TrainOptions, ds: Dataset, device: torch.device) -> tuple[Arch, dict | None, Detector]:
+    """The network to train: a new one, or fine-tuning (``--init``) another checkpoint's (EMA)
+    weights and architecture; also that checkpoint (None for a new network)."""
+    arch = Arch(nc=len(ds.names), widths=tuple(opts.widths), neck=opts.neck, backbone=opts.backbone)
+    init = None
+    if opts.init is not None:
+        init = load_init(opts.init)
+        if [str(n) for n in init["names"]] != ds.names:
+            raise InputError(
+                f"--init {opts.init}: trained on classes {init['names']}, the dataset has {ds.names}"
+            )
+        arch = Arch.from_dict(init["arch"])
+    net = Detector(arch, pretrained=init is None and not opts.resume).to(device)
+    if init is not None:
+        net.load_state_dict(upgrade_state_dict({k: v.float() for k, v in init["model"].items()}))
+    return arch, init, net
+
+
+def _optimizer(trainable: list[tuple[str, torch.nn.Parameter]], opts: TrainOptions) -> torch.optim.AdamW:
+    """AdamW, with weight decay on the weight matrices and kernels only (not biases, norms)."""
+    decay_params = [p for n, p in trainable if p.ndim > 1]
+    other_params = [p for n, p in trainable if p.ndim <= 1]
+    return torch.optim.AdamW(
+        [
+            {"params": decay_params, "weight_decay": opts.weight_decay},
+            {"params": other_params, "weight_decay": 0.0},
+        ],
+        lr=opts.lr,
+    )
+
+
+class _Schedule:
+    """The learning rate: a linear warm-up, then cosine decay to 5 %; under ``--time-limit`` the run's
+    progress follows elapsed time when that is further along than the steps."""
+
+    def __init__(self, opts: TrainOptions, steps_per_epoch: int, total_steps: int) -> None:
+        self.lr = opts.lr
+        self.max_steps = opts.max_steps
+        self.total_steps = total_steps
+        self.warmup = min(300, max(steps_per_epoch, total_steps // 10))
+        self.limit_s = opts.time_limit * 60.0
+        self.started = time.time()
+
+    def progress(self, step: int) -> float:
+        """Fraction of the run done: by steps, or by time under a time limit (whichever is further)."""
+        p = step / max(1, self.total_steps)
+        if self.limit_s > 0:
+            p = max(p, (time.time() - self.started) / self.limit_s)
+        return min(p, 1.0)
+
+    def lr_at(self, step: int) -> float:
+        if step < self.warmup:
+            return self.lr * (0.1 + 0.9 * step / self.warmup)
+        p = self.progress(step)
+        p0 = self.warmup / max(1, self.total_steps)
+        q = (p - p0) / max(1e-9, 1 - p0) if p > p0 else 0.0
+        return self.lr * (0.05 + 0.95 * 0.5 * (1 + math.cos(math.pi * min(q, 1.0))))
+
+    def done(self, step: int) -> bool:
+        """Stop: ``--max-steps`` reached or the time limit spent."""
+        return bool(self.max_steps and step >= self.max_steps) or (
+            self.limit_s > 0 and self.progress(step) >= 1.0
+        )
+
+
+@dataclass
+class _Training:
+    """What is trained and how: the network, its EMA, the optimizer over its trainable parameters,
+    the learning-rate schedule and the device."""
+
+    net: Detector
+    ema: ModelEMA
+    optimizer: torch.optim.AdamW
+    trainable: list[tuple[str, torch.nn.Parameter]]
+    schedule: _Schedule
+    device: torch.device
+
+
+def _resume(opts: TrainOptions, ds: Dataset, run: _Training) -> tuple[int, int, list]:
+    """Load the checkpoint at ``--out`` into the network, its EMA and the optimizer; the epoch and
+    step it ended at and its history."""
+    ckpt = load_checkpoint(opts.out)
+    if ckpt.get("names") != ds.names:
+        raise InputError(f"{opts.out}: trained on classes {ckpt.get('names')}, the dataset has {ds.names}")
+    run.net.load_state_dict(ckpt["raw"])
+    run.ema.ema.load_state_dict(ckpt["model"])
+    run.ema.updates = int(ckpt.get("ema_updates", 0))
+    if "optimizer" in ckpt:
+        run.optimizer.load_state_dict(ckpt["optimizer"])
+    return int(ckpt["epoch"]), int(ckpt.get("step", 0)), list(ckpt.get("history", []))
+
+
+def _epoch_loader(
+    train_set: TrainSet, sample_weights: np.ndarray | None, opts: TrainOptions, epoch: int, workers: int
+) -> DataLoader:
+    """One epoch's batches: class-balanced sampling with ``sample_weights``, else a shuffle; drawn
+    from a generator seeded by the seed and the epoch."""
+    n = len(train_set)
+    gen = torch.Generator().manual_seed(opts.seed * 1000 + epoch)
+    sampler = (
+        WeightedRandomSampler(sample_weights.tolist(), n, replacement=True, generator=gen)
+        if sample_weights is not None
+        else None
+    )
+    return DataLoader(
+        train_set,
+        batch_size=opts.batch,
+        shuffle=sampler is None,
+        sampler=sampler,
+        num_workers=workers,
+        collate_fn=collate,
+        drop_last=n > opts.batch,
+        generator=gen,
+        persistent_workers=False,
+    )
+
+
+def _train_epoch(
+    run: _Training, loader: DataLoader, epoch: int, step: int, emit: Callback
+) -> tuple[int, tuple[float, float, float]]:
+    """One epoch of optimiser steps (or fewer: :meth:`_Schedule.done`); the step count after it and
+    the epoch's mean losses (total, heatmap, box)."""
+    net, optimizer, schedule, device = run.net, run.optimizer, run.schedule, run.device
+    sums = np.zeros(3)
+    n = 0
+    for x, hm_t, box_t, box_w, _gt in loader:
+        for g in optimizer.param_groups:
+            g["lr"] = schedule.lr_at(step)
+        x = x.to(device, non_blocking=True).float() / 255.0
+        hm_logits, ltrb = net(x)
+        loss, hm_l, box_l = detection_loss(
+            hm_logits, ltrb, hm_t.to(device), box_t.to(device), box_w.to(device)
+        )
+        optimizer.zero_grad(set_to_none=True)
+        loss.backward()
+        torch.nn.utils.clip_grad_norm_([p for _, p in run.trainable], 10.0)
+        optimizer.step()
+        run.ema.update(net)
+        step += 1
+        n += 1
+        sums += [float(loss.detach()), float(hm_l), float(box_l)]
+        emit(
+            "step",
+            {
+                "epoch": epoch,
+                "loss": sums[0] / n,
+                "hm": sums[1] / n,
+                "box": sums[2] / n,
+                "last": float(loss.detach()),
+                "step": step,
+                "lr": schedule.lr_at(step),
+            },
+        )
+        if schedule.done(step):
+            break
+    return step, (sums[0] / max(n, 1), sums[1] / max(n, 1), sums[2] / max(n, 1))
+
+
+def _checkpoint(
+    run: _Training, arch: Arch, epoch: int, step: int, names: list[str], history: list, opts: TrainOptions
+) -> dict:
+    """The checkpoint after ``epoch``: the EMA weights (what is exported), the raw weights and the
+    optimizer (what ``--resume`` continues from), the history and the options."""
+    return {
+        "format": "bim-init.detector/1",
+        "arch": arch.to_dict(),
+        "model": {k: v.detach().cpu() for k, v in run.ema.ema.state_dict().items()},
+        "raw": {k: v.detach().cpu() for k, v in run.net.state_dict().items()},
+        "optimizer": run.optimizer.state_dict(),
+        "ema_updates": run.ema.updates,
+        "epoch": epoch + 1,
+        "step": step,
+        "names": names,
+        "imgsz": opts.imgsz,
+        "history": history,
+        "options": {k: (str(v) if isinstance(v, Path) else v) for k, v in asdict(opts).items()},
+    }
 
 
 def _write_history_csv(path: Path, history: list[dict], names: list[str]) -> None:

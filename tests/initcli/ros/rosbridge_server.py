@@ -66,47 +66,10 @@ class RosbridgeServer:
     def _client(self, conn: socket.socket) -> None:
         conn.settimeout(0.2)
         try:
-            request = b""
-            deadline = time.monotonic() + 5
-            while b"\r\n\r\n" not in request and time.monotonic() < deadline:
-                try:
-                    request += conn.recv(4096)
-                except TimeoutError:
-                    continue
-            key = next(
-                line.split(":", 1)[1].strip()
-                for line in request.decode("latin-1").split("\r\n")
-                if line.lower().startswith("sec-websocket-key:")
-            )
-            accept = base64.b64encode(hashlib.sha1((key + _GUID).encode()).digest()).decode()
-            conn.sendall(
-                (
-                    "HTTP/1.1 101 Switching Protocols\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
-                    f"Sec-WebSocket-Accept: {accept}\r\n\r\n"
-                ).encode()
-            )
+            _handshake(conn)
             with self._lock:
                 self.clients.append(conn)
-            buffer = b""
-            while not self._stop.is_set():
-                try:
-                    chunk = conn.recv(65536)
-                except TimeoutError:
-                    continue
-                if not chunk:
-                    break
-                buffer += chunk
-                while True:
-                    frame, buffer = _parse_frame(buffer)
-                    if frame is None:
-                        break
-                    opcode, payload = frame
-                    if opcode == 8:  # close
-                        return
-                    if opcode == 9:  # ping -> pong
-                        conn.sendall(_frame(payload, 10))
-                    elif opcode in (1, 2):
-                        self._handle(conn, json.loads(payload.decode()))
+            self._receive(conn)
         except (OSError, StopIteration):
             pass
         finally:
@@ -117,6 +80,29 @@ class RosbridgeServer:
                     if conn in subs:
                         subs.remove(conn)
             conn.close()
+
+    def _receive(self, conn: socket.socket) -> None:
+        """Frames until the client closes: pings answered, text and binary frames handled."""
+        buffer = b""
+        while not self._stop.is_set():
+            try:
+                chunk = conn.recv(65536)
+            except TimeoutError:
+                continue
+            if not chunk:
+                break
+            buffer += chunk
+            while True:
+                frame, buffer = _parse_frame(buffer)
+                if frame is None:
+                    break
+                opcode, payload = frame
+                if opcode == 8:  # close
+                    return
+                if opcode == 9:  # ping -> pong
+                    conn.sendall(_frame(payload, 10))
+                elif opcode in (1, 2):
+                    self._handle(conn, json.loads(payload.decode()))
 
     def _handle(self, conn: socket.socket, op: dict[str, Any]) -> None:
         with self._lock:
@@ -195,6 +181,30 @@ def _frame(payload: bytes, opcode: int) -> bytes:
     else:
         head += bytes([127]) + struct.pack(">Q", n)
     return head + payload
+
+
+def _handshake(conn: socket.socket) -> None:
+    """The websocket upgrade: read the request (5 s at most), answer with the accept key
+    (StopIteration when the request has no key)."""
+    request = b""
+    deadline = time.monotonic() + 5
+    while b"\r\n\r\n" not in request and time.monotonic() < deadline:
+        try:
+            request += conn.recv(4096)
+        except TimeoutError:
+            continue
+    key = next(
+        line.split(":", 1)[1].strip()
+        for line in request.decode("latin-1").split("\r\n")
+        if line.lower().startswith("sec-websocket-key:")
+    )
+    accept = base64.b64encode(hashlib.sha1((key + _GUID).encode()).digest()).decode()
+    conn.sendall(
+        (
+            "HTTP/1.1 101 Switching Protocols\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+            f"Sec-WebSocket-Accept: {accept}\r\n\r\n"
+        ).encode()
+    )
 
 
 def _parse_frame(buf: bytes) -> tuple[tuple[int, bytes] | None, bytes]:

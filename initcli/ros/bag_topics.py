@@ -1,0 +1,154 @@
+"""The topics of a bag that ``bag2log`` reads: chosen by message type when the bag holds exactly one
+of a kind (colour and depth images told apart by their encoding), otherwise by the options; an
+:class:`InputError` naming the candidates when the choice is not clear."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import TYPE_CHECKING
+
+from bimkit.errors import InputError
+from initcli.ros.records import (
+    CAMERA_INFO,
+    COMPRESSED_IMAGE,
+    DEPTH_ENCODINGS,
+    DETECTION_2D_ARRAY,
+    IMAGE,
+    LASER_SCAN,
+    ODOMETRY,
+    TF_MESSAGE,
+    Bag2LogOptions,
+    BagTopics,
+    Topic,
+)
+
+if TYPE_CHECKING:
+    from initcli.ros.bag_reader import BagSource
+
+__all__ = ["choose_topics"]
+
+
+def _listing(topics: Iterable[Topic]) -> str:
+    return "; ".join(t.describe() for t in topics) or "none"
+
+
+def _pick(
+    source: BagSource, given: str | None, types: tuple[str, ...], what: str, flag: str, required: bool
+) -> Topic | None:
+    if given is not None:
+        topic = source.topics.get(given)
+        if topic is None:
+            raise InputError(
+                f"{source.path}: no topic {given} ({flag}); the bag has: {_listing(source.topics.values())}"
+            )
+        if topic.msgtype not in types:
+            raise InputError(f"{given} is {topic.msgtype}, {flag} needs {' or '.join(types)}")
+        return topic
+    found = [t for t in source.topics.values() if t.msgtype in types]
+    if len(found) == 1:
+        return found[0]
+    if not found:
+        if required:
+            raise InputError(
+                f"{source.path}: no {what} topic ({' or '.join(types)}); the bag has: "
+                f"{_listing(source.topics.values())}"
+            )
+        return None
+    raise InputError(f"{source.path}: several {what} topics, choose one with {flag}: {_listing(found)}")
+
+
+def _encoding(source: BagSource, topic: Topic) -> str:
+    msg = source.first(topic.name)
+    return str(getattr(msg, "encoding", "")) if msg is not None else ""
+
+
+def choose_topics(source: BagSource, options: Bag2LogOptions) -> BagTopics:
+    """The topics to read; InputError naming the candidates when the choice is not clear."""
+    if options.image_topic and options.detections_topic:
+        raise InputError("give --image-topic or --detections-topic, not both")
+    images = [t for t in source.topics.values() if t.msgtype == IMAGE]
+    encodings = {t.name: _encoding(source, t) for t in images}
+    depth = _depth_topic(source, options, images, encodings)
+    colour_like = [t for t in images if encodings[t.name] not in DEPTH_ENCODINGS]
+    perception = _perception_topic(source, options, [t for t in colour_like if t.name != depth.name])
+    if perception.name == depth.name:
+        raise InputError(f"{depth.name} is the depth image; the colour image must be another topic")
+
+    camera_info = _pick(
+        source, options.camera_info_topic, (CAMERA_INFO,), "camera info", "--camera-info-topic", False
+    )
+    if camera_info is None:
+        raise InputError(
+            f"{source.path}: no sensor_msgs/CameraInfo topic: the camera intrinsics are needed "
+            f"(the bag has: {_listing(source.topics.values())})"
+        )
+    odom = _pick(source, options.odom_topic, (ODOMETRY,), "odometry", "--odom-topic", False)
+    tf = source.topics.get("/tf") if source.topics.get("/tf", Topic("", "")).msgtype == TF_MESSAGE else None
+    tf_static = (
+        source.topics.get("/tf_static")
+        if source.topics.get("/tf_static", Topic("", "")).msgtype == TF_MESSAGE
+        else None
+    )
+    if odom is None and tf is None:
+        raise InputError(f"{source.path}: no odometry: neither nav_msgs/Odometry nor /tf in the bag")
+    scan = _pick(source, options.scan_topic, (LASER_SCAN,), "laser scan", "--scan-topic", False)
+    return BagTopics(perception, depth, camera_info, odom, tf, tf_static, scan)
+
+
+def _depth_topic(
+    source: BagSource, options: Bag2LogOptions, images: list[Topic], encodings: dict[str, str]
+) -> Topic:
+    """The aligned depth image: ``--depth-topic``, else the one image topic with a depth encoding."""
+    depth_like = [t for t in images if encodings[t.name] in DEPTH_ENCODINGS]
+    if options.depth_topic is not None:
+        depth = _pick(source, options.depth_topic, (IMAGE,), "depth image", "--depth-topic", True)
+    elif len(depth_like) == 1:
+        depth = depth_like[0]
+    elif not depth_like:
+        raise InputError(
+            f"{source.path}: no aligned depth image (sensor_msgs/Image, 16UC1 or 32FC1); the bag has: "
+            f"{_listing(source.topics.values())}"
+        )
+    else:
+        raise InputError(
+            f"{source.path}: several depth images, choose one with --depth-topic: "
+            + "; ".join(f"{t.describe()} {encodings[t.name]}" for t in depth_like)
+        )
+    assert depth is not None
+    return depth
+
+
+def _perception_topic(source: BagSource, options: Bag2LogOptions, colour: list[Topic]) -> Topic:
+    """What the detections come from: ``--detections-topic`` or ``--image-topic``, else the one
+    Detection2DArray topic, else the one colour image (``colour``: raw colour images but the depth)."""
+    if options.detections_topic is not None:
+        perception = _pick(
+            source, options.detections_topic, (DETECTION_2D_ARRAY,), "", "--detections-topic", True
+        )
+    elif options.image_topic is not None:
+        perception = _pick(source, options.image_topic, (IMAGE, COMPRESSED_IMAGE), "", "--image-topic", True)
+    else:
+        perception = _only_perception_topic(source, colour)
+    assert perception is not None
+    return perception
+
+
+def _only_perception_topic(source: BagSource, colour: list[Topic]) -> Topic:
+    detections = [t for t in source.topics.values() if t.msgtype == DETECTION_2D_ARRAY]
+    compressed = [t for t in source.topics.values() if t.msgtype == COMPRESSED_IMAGE]
+    if len(detections) == 1:
+        return detections[0]
+    if detections:
+        raise InputError(
+            f"{source.path}: several detection topics, choose one with --detections-topic: "
+            f"{_listing(detections)}"
+        )
+    if len(colour) + len(compressed) == 1:
+        return (colour + compressed)[0]
+    if not colour and not compressed:
+        raise InputError(
+            f"{source.path}: no colour image or vision_msgs/Detection2DArray topic; the bag has: "
+            f"{_listing(source.topics.values())}"
+        )
+    listed = "; ".join(f"{t.describe()}" for t in colour + compressed)
+    raise InputError(f"{source.path}: several colour image topics, choose one with --image-topic: {listed}")
