@@ -32,6 +32,8 @@ from initcli.match.verify import check_hypotheses
 from initcli.ros.convert import log_or_bag
 from initcli.settings import describe, settings_of
 
+__all__ = ["match", "print_report"]
+
 
 def _fail(message: object) -> typer.Exit:
     typer.echo(error_line(PROG, message), err=True)

@@ -42,6 +42,31 @@ from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.core.verification_settings import VerificationParams
 from initcli.core.visibility import CameraModel, FeatureArrays, visible
 
+__all__ = [
+    "AlignmentMoves",
+    "BeamEnds",
+    "CameraView",
+    "FreeSpace",
+    "PathTrack",
+    "RIVAL_MARGIN",
+    "SCAN_TURN_STEP_DEG",
+    "ScanSample",
+    "TRACK_HYPOTHESES",
+    "Verification",
+    "best_scan_alignment",
+    "explained",
+    "frames_in_view",
+    "judge",
+    "misses_reject",
+    "outranks",
+    "rival_search",
+    "track_favoured",
+    "track_outranks",
+    "tracked_scan_fit",
+    "trails",
+    "verify_hypothesis",
+]
+
 RIVAL_MARGIN = 2  # more outliers than a noisy claim was found with that its rival search allows, at least
 # several hypotheses are compared by the lidar along the path (track_favoured) up to this many
 TRACK_HYPOTHESES = 12

@@ -26,6 +26,8 @@ from initcli.core.wall_following import ScanView, WallFollowParams
 from initcli.drivers.base import SensorFrame
 from initcli.match.pipeline import Hypothesis
 
+__all__ = ["ActiveExploration", "Target"]
+
 
 @dataclass(frozen=True)
 class Target:

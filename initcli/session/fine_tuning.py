@@ -24,6 +24,8 @@ from initcli.core.wall_following import ScanView, WallFollowParams, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
 from initcli.settings_session import FineTuningSection
 
+__all__ = ["FineLost", "FineTuned", "FineTuning", "FineTuningHooks", "Settlement", "matched_pairs", "settle"]
+
 Settlement = Literal["keep rectified", "reseed", "lost", "accept"]
 
 

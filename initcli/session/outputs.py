@@ -12,6 +12,8 @@ from bimtools.site.load import StoreyModel
 from initcli.core.geometry import Pose2D
 from initcli.session.result import SessionResult
 
+__all__ = ["render_report", "summary_document", "write_summary"]
+
 
 def _pose(p: Pose2D | None) -> dict | None:
     if p is None:

@@ -33,6 +33,8 @@ from initcli.match.pipeline import Hypothesis, MatchOptions, MatchReport, match_
 from initcli.match.sightings import image_sightings
 from initcli.match.verify import PathEvidence
 
+__all__ = ["HYPOTHESES_LOGGED", "Perception"]
+
 HYPOTHESES_LOGGED = 5  # hypotheses (most probable first) written with each match step
 
 

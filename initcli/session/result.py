@@ -15,6 +15,8 @@ from initcli.core.geometry import Pose2D, wrap_angle
 if TYPE_CHECKING:
     from initcli.match.pipeline import Hypothesis
 
+__all__ = ["CoarseClaim", "MatchStep", "SessionResult"]
+
 
 @dataclass
 class MatchStep:

@@ -45,6 +45,25 @@ from initcli.sim.scenario import Circulation
 from initcli.sim.synthetic_log import SimFeature
 from initcli.sim.world import polygon_edges
 
+__all__ = [
+    "AsBuiltWorld",
+    "CORRIDOR_WIDTH",
+    "DOOR_CLASSES",
+    "HOARDING_CLASS",
+    "HOARDING_THICKNESS",
+    "LEAF_CLASS",
+    "LEAF_THICKNESS",
+    "MIN_PASSAGE",
+    "STAND_OUT",
+    "closed_doors",
+    "corridor_length",
+    "derive_as_built",
+    "door_ids",
+    "door_leaf",
+    "is_exterior",
+    "stand_out",
+]
+
 CORRIDOR_WIDTH = 2.0  # m: circulation area / this = corridor length for the per-100 m rates
 HOARDING_THICKNESS = 0.1  # m
 LEAF_THICKNESS = 0.04  # m: a closed door leaf

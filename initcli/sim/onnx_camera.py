@@ -21,6 +21,8 @@ from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.io.detection_log import DetectedObject
 from initcli.sim.world import SimWorld
 
+__all__ = ["OnnxCamera", "OnnxCameraSpec"]
+
 
 @dataclass(frozen=True)
 class OnnxCameraSpec:

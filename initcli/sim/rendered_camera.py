@@ -34,6 +34,15 @@ from initcli.detector.synth.scene import (
 from initcli.io.detection_log import DetectedObject
 from initcli.sim.world import SimWorld, box_edges
 
+__all__ = [
+    "Observation",
+    "RenderedCamera",
+    "d455_depth",
+    "detections_to_objects",
+    "to_detected_objects",
+    "world_clutter",
+]
+
 
 def detections_to_objects(
     detections: Sequence[Detection],

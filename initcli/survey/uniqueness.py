@@ -23,6 +23,8 @@ from initcli.core.pose import rigid_align_batch
 from initcli.core.verification_settings import VerificationParams
 from initcli.match.pipeline import MatchOptions
 
+__all__ = ["AMBIGUOUS", "UniquenessParams", "count_hypotheses", "first_unique"]
+
 AMBIGUOUS = 1 << 30  # the count given to a pattern that overflowed the matcher
 _MATCH = MatchOptions()  # the matching settings' one default each
 _CHECKS = VerificationParams()
