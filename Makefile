@@ -44,7 +44,7 @@ $(DOCS_STAMP): $(STAMP)
 
 # The site config's JSON Schema, generated from the settings records (a test fails when it is stale).
 schemas: install
-	$(BIN)/python -m initcli.settings --write
+	$(BIN)/python -m initcli.config --write
 
 # Every file reader fed mutated and random files for FUZZ_SECONDS each (14 readers: under 2 minutes);
 # an input that gives anything but the file read or one InputError line fails (tests/fuzz/targets.py).

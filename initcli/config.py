@@ -10,6 +10,7 @@ import copy
 import dataclasses
 import json
 import math
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -92,7 +93,7 @@ SCHEMA_ID = "https://bim-init.example/schemas/site_config.schema.json"
 
 
 def site_config_schema() -> dict[str, Any]:
-    """The JSON Schema of site.yaml, generated from the records (``python -m initcli.settings
+    """The JSON Schema of site.yaml, generated from the records (``python -m initcli.config
     --write`` writes it to :data:`SCHEMA_PATH`; a test fails when the committed file differs)."""
     body = schema_of(SessionConfig)
     return {
@@ -317,3 +318,25 @@ def camera_of(config: SessionConfig) -> tuple[CameraIntrinsics, CameraMount]:
     intrinsics = CameraIntrinsics(c.fx, c.fy, c.cx, c.cy, int(c.width), int(c.height))
     p = c.pose
     return intrinsics, CameraMount(p.x, p.y, p.z, p.roll, p.pitch, p.yaw)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m initcli.config``: print the site config's JSON Schema, generated from its
+    records; ``--write``: write it to ``bimkit/schemas/site_config.schema.json`` (atomically)."""
+    from bimkit.atomic import write_text_atomic
+
+    args = sys.argv[1:] if argv is None else argv
+    text = json.dumps(site_config_schema(), indent=2) + "\n"
+    if args == ["--write"]:
+        write_text_atomic(SCHEMA_PATH, text)
+        print(f"wrote {SCHEMA_PATH}")
+    elif not args:
+        sys.stdout.write(text)
+    else:
+        print("usage: python -m initcli.config [--write]", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -9,7 +9,7 @@ A record is a plain dataclass whose fields are declared with :func:`setting` (a 
         window: float = setting(45.0, "s of path checked for a loop", above=0, maximum=3600)
 
 Everything else is derived from those fields: the JSON Schema of the site config
-(:func:`schema_of`; ``python -m initcli.settings --write`` regenerates
+(:func:`schema_of`; ``python -m initcli.config --write`` regenerates
 ``bimkit/schemas/site_config.schema.json``, and a test fails when the committed file differs),
 the range checks of a record built in code (:func:`check_ranges`, used for ``bim-init match``'s
 options) and the command-line options of ``bim-init match`` (``metavar`` and ``flag``). The bounds
@@ -22,8 +22,6 @@ from __future__ import annotations
 
 import copy
 import dataclasses
-import json
-import sys
 import types
 import typing
 from collections.abc import Callable, Iterator, Mapping
@@ -217,26 +215,3 @@ def check_ranges(record: object, name: Callable[[str], str] = str) -> None:
         bounds = meta.bounds()
         if bounds or (isinstance(value, float) and not isinstance(value, bool)):
             check_number(value, name(f.name), **bounds)
-
-
-def main(argv: list[str] | None = None) -> int:
-    """``python -m initcli.settings``: print the site config's JSON Schema, generated from its
-    records; ``--write``: write it to ``bimkit/schemas/site_config.schema.json`` (atomically)."""
-    from bimkit.atomic import write_text_atomic
-    from initcli.config import SCHEMA_PATH, site_config_schema
-
-    args = sys.argv[1:] if argv is None else argv
-    text = json.dumps(site_config_schema(), indent=2) + "\n"
-    if args == ["--write"]:
-        write_text_atomic(SCHEMA_PATH, text)
-        print(f"wrote {SCHEMA_PATH}")
-    elif not args:
-        sys.stdout.write(text)
-    else:
-        print("usage: python -m initcli.settings [--write]", file=sys.stderr)
-        return 2
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -95,7 +95,7 @@ def test_check_ranges_names_the_setting_out_of_range() -> None:
 
 
 def test_the_committed_site_config_schema_is_the_generated_one() -> None:
-    """``bimkit/schemas/site_config.schema.json`` is written by ``python -m initcli.settings --write``
+    """``bimkit/schemas/site_config.schema.json`` is written by ``python -m initcli.config --write``
     (``make schemas``) from the records: a setting added, removed or changed without regenerating it
     fails here."""
     generated = json.dumps(site_config_schema(), indent=2) + "\n"
