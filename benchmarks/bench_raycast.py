@@ -24,8 +24,8 @@ from _common import SAMPLES, parse_args
 from bimtools.site.records import FREE
 from initcli.config import load_config
 from initcli.core.raycast import ray_segment_distances
-from initcli.drivers.sim import LidarSpec
 from initcli.sim.build import build_sim
+from initcli.sim.driver import LidarSpec
 from initcli.sim.world import SimWorld
 from initcli.site import choose_storey, prepare_site
 

@@ -7,7 +7,8 @@ Layout (like the ``evo`` tool):
 - :mod:`initcli.io` -- file formats (the detection log, JSON Lines version 1; the match result).
 - :mod:`initcli.match` -- ``bim-init match``: a detection log and a site model -> hypotheses.
 - :mod:`initcli.session` -- ``bim-init run``: a whole initialisation session on a robot driver.
-- :mod:`initcli.drivers` -- the robot driver interface and the embedded simulated robot.
+- :mod:`initcli.drivers` -- the robot driver interface (the simulated robot is :mod:`initcli.sim.driver`,
+  the live one :mod:`initcli.ros.rosbridge_driver`).
 - :mod:`initcli.sim` -- the simulated world, robot, camera and synthetic logs built from the BIM.
 - :mod:`initcli.detector` -- the object detector: ONNX runtime, synthetic data, training.
 - :mod:`initcli.ros` -- ROS bags in and out, Nav2 messages and the rosbridge link, without ROS.

@@ -26,8 +26,8 @@ from initcli.cli import PROG
 from initcli.cli.progress import message_progress
 from initcli.core.geometry import Pose2D
 from initcli.core.verification import TRACK_HYPOTHESES, Verification
-from initcli.io.match_result import report_to_dict
 from initcli.match.pipeline import EXIT_BAD_INPUT, MatchOptions, MatchReport, run_match
+from initcli.match.report_file import report_to_dict
 from initcli.match.verify import check_hypotheses
 from initcli.ros.convert import log_or_bag
 from initcli.settings import describe, settings_of

@@ -14,20 +14,19 @@ from __future__ import annotations
 import math
 import time
 from collections import deque
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from bimkit.documents import check_regular
 from bimkit.errors import InputError
-from bimkit.limits import MAX_BAG_BYTES
 from initcli.core.depth import window_depth
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.projection import CameraIntrinsics, CameraMount, mount_from_optical
 from initcli.io.detection_log import DetectedObject, Detections, Meta, Odom, Record, Scan
+from initcli.ros.bag_source import BagSource
 from initcli.ros.bag_topics import choose_topics
 from initcli.ros.messages import (
     checked_transform,
@@ -37,8 +36,8 @@ from initcli.ros.messages import (
     intrinsics,
     stamp_seconds,
 )
-from initcli.ros.msgdefs import bbox_centre, detection_fields, register_missing, ros2_typestore
-from initcli.ros.records import Bag2LogOptions, Bag2LogStats, BagTopics, Topic
+from initcli.ros.msgdefs import bbox_centre, detection_fields
+from initcli.ros.records import Bag2LogOptions, Bag2LogStats, BagTopics
 from initcli.ros.tf import TransformTree, frame_name, quaternion_yaw
 
 __all__ = [
@@ -48,7 +47,6 @@ __all__ = [
     "DEPTH_SYNC_S",
     "ODOM_MARGIN_S",
     "Progress",
-    "bag_paths",
     "bag_to_records",
     "decode_depth",
     "decode_image",
@@ -63,83 +61,6 @@ CLOCK_JUMP_S = 0.5  # s: a topic whose stamps go back by more than this has a br
 DEPTH_BUFFER = 30  # depth images kept while waiting for their colour image
 
 Progress = Callable[[int, int], None]  # (messages done, messages in all)
-
-
-# --- opening ---------------------------------------------------------------------------------------
-
-
-def bag_paths(path: Path) -> list[Path]:
-    """What rosbags opens for ``path``: a ROS 1 .bag, a ROS 2 bag folder or a bare .mcap file."""
-    if not path.exists():
-        raise InputError(f"{path}: no such bag")
-    if path.is_file() and path.suffix == ".db3":
-        return [path.parent]  # a ROS 2 sqlite3 file: its folder holds the metadata
-    if path.is_dir() and not (path / "metadata.yaml").exists():
-        mcaps = sorted(path.glob("*.mcap"))
-        if len(mcaps) == 1:
-            return mcaps
-        raise InputError(f"{path}: a folder without metadata.yaml; expected a ROS 2 bag folder")
-    if not path.is_dir():
-        check_regular(path, "a ROS bag (.bag, .mcap or .db3)", MAX_BAG_BYTES)
-    return [path]
-
-
-class BagSource:
-    """An open bag: its topics, and its messages deserialised (definitions registered if missing)."""
-
-    def __init__(self, path: Path | str) -> None:
-        from rosbags.highlevel import AnyReader
-
-        self.path = Path(path)
-        try:
-            self.reader = AnyReader(bag_paths(self.path), default_typestore=ros2_typestore())
-            self.reader.open()
-        except InputError:
-            raise
-        except Exception as exc:  # noqa: BLE001 - rosbags raises many types for a bad file
-            raise InputError(f"{self.path}: not a readable ROS bag ({_first_line(exc)})") from None
-        register_missing(self.reader.typestore, {c.msgtype for c in self.reader.connections})
-        self.topics: dict[str, Topic] = {}
-        for c in self.reader.connections:
-            old = self.topics.get(c.topic)
-            self.topics[c.topic] = Topic(c.topic, c.msgtype, (old.count if old else 0) + c.msgcount)
-
-    def close(self) -> None:
-        self.reader.close()
-
-    def __enter__(self) -> BagSource:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-    @property
-    def message_count(self) -> int:
-        return sum(t.count for t in self.topics.values())
-
-    def messages(self, topics: Iterable[str]) -> Iterator[tuple[str, int, Any]]:
-        """(topic, bag time ns, message) in bag time order."""
-        wanted = set(topics)
-        conns = [c for c in self.reader.connections if c.topic in wanted]
-        if not conns:
-            return
-        try:
-            for conn, stamp, raw in self.reader.messages(connections=conns):
-                yield conn.topic, stamp, self.reader.deserialize(raw, conn.msgtype)
-        except InputError:
-            raise
-        except Exception as exc:  # noqa: BLE001
-            raise InputError(f"{self.path}: cannot read a message ({_first_line(exc)})") from None
-
-    def first(self, topic: str) -> Any | None:
-        for _, _, msg in self.messages([topic]):
-            return msg
-        return None
-
-
-def _first_line(exc: BaseException) -> str:
-    text = str(exc).strip().splitlines()
-    return text[0] if text else type(exc).__name__
 
 
 # --- message contents ------------------------------------------------------------------------------

@@ -23,7 +23,7 @@ from initcli.ros.records import (
 )
 
 if TYPE_CHECKING:
-    from initcli.ros.bag_reader import BagSource
+    from initcli.ros.bag_source import BagSource
 
 __all__ = ["choose_topics"]
 

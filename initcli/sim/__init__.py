@@ -1,6 +1,7 @@
 """The embedded robot: a differential-drive robot simulated in the storey's walls (from the BIM).
 
 - :mod:`~initcli.sim.build` -- the simulated robot in its world, built from a session config;
+- :mod:`~initcli.sim.driver` -- the simulated robot behind the driver interface (lidar, camera, odometry);
 - :mod:`~initcli.sim.world` -- the world: the storey's obstacles plus clutter and walking workers;
 - :mod:`~initcli.sim.as_built` -- the site as built, not as designed (doors missing, shifted, open);
 - :mod:`~initcli.sim.scenario` -- the circulation area, random starts, clutter and workers;

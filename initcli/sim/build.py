@@ -17,7 +17,6 @@ from bimtools.site.records import FREE, OCCUPIED
 from initcli.config import SessionConfig, as_built_params, camera_of, start_pose_degrees
 from initcli.core.classes import ClassMap
 from initcli.core.geometry import Pose2D
-from initcli.drivers.sim import LidarSpec, SimDriver
 from initcli.io.detection_log import DetectedObject
 from initcli.sim.as_built import (
     HOARDING_CLASS,
@@ -28,6 +27,7 @@ from initcli.sim.as_built import (
     stand_out,
 )
 from initcli.sim.camera import CameraNoise, SimulatedDetector
+from initcli.sim.driver import LidarSpec, SimDriver
 from initcli.sim.robot import DiffDriveRobot, OdometryNoise
 from initcli.sim.scenario import Circulation, place_clutter, place_workers, random_start
 from initcli.sim.synthetic_log import sim_features_from_bim

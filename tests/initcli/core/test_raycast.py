@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from initcli.core.raycast import cast_rays, nearest_segment_distance, ray_segment_distances
-from initcli.drivers.sim import LidarSpec
+from initcli.sim.driver import LidarSpec
 
 LIDAR = LidarSpec()
 

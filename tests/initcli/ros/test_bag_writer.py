@@ -13,7 +13,8 @@ from typer.testing import CliRunner
 from initcli.cli.main import app
 from initcli.io.detection_log import read_log, write_log
 from initcli.match.pipeline import MatchOptions, run_match
-from initcli.ros.bag_reader import BagSource, bag_to_records
+from initcli.ros.bag_reader import bag_to_records
+from initcli.ros.bag_source import BagSource
 from initcli.ros.tf import quaternion_yaw
 from tests.helpers import replayed_claim
 

@@ -11,7 +11,7 @@ import pytest
 from benchmarks._recordings import CAMERA, MOUNT, POINTS, make_recording, write
 from bimkit.errors import InputError
 from initcli.config import RosbridgeSection
-from initcli.ros.bag_reader import BagSource
+from initcli.ros.bag_source import BagSource
 from initcli.ros.msgdefs import to_dict
 from tests.initcli.ros.rosbridge_server import RosbridgeServer
 

@@ -11,8 +11,8 @@ import pytest
 from bimtools.site.records import FREE, Obstacle
 from initcli.config import load_config
 from initcli.core.raycast import ray_segment_distances
-from initcli.drivers.sim import LidarSpec
 from initcli.sim.build import build_sim
+from initcli.sim.driver import LidarSpec
 from initcli.sim.world import SimWorld, Worker
 from initcli.site import choose_storey, prepare_site
 from tests.helpers import SAMPLES

@@ -1,4 +1,4 @@
-"""The match-result JSON document (initcli.io.match_result) against its schema."""
+"""The match-result JSON document (initcli.match.report_file) against its schema."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import jsonschema
 import numpy as np
 
 from initcli.io.detection_log import write_log
-from initcli.io.match_result import RESULT_FORMAT, report_to_dict
 from initcli.match.pipeline import MatchOptions, run_match
+from initcli.match.report_file import RESULT_FORMAT, report_to_dict
 from initcli.sim.synthetic_floor import write_site_folder
 from initcli.sim.synthetic_log import SimFeature, make_log, path_from_waypoints
 from tests.helpers import ROOT
