@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DOCS_STAMP := $(VENV)/.installed-docs
 
-.PHONY: install run test lint schemas docs fuzz wheel-check samples bench bench-quick eval eval-real eval-construction clean sample-bag
+.PHONY: install run test lint schemas docs fuzz wheel-check samples bench bench-quick train-detector eval eval-real eval-construction clean sample-bag
 
 install: $(STAMP)
 
@@ -79,6 +79,11 @@ bench-quick: install
 		$(BIN)/python benchmarks/bench_$$b.py --quick; \
 		echo "== bench_$$b --quick: $$(( $$(date +%s) - start )) s"; \
 	done
+
+# Train the shipped detector's recipe (initcli/detector/models/default.md) from scratch: a GPU when
+# torch sees one; ARGS=--smoke checks every step in a few minutes on CPU.
+train-detector: install
+	BIN=$(BIN) scripts/train_detector.sh $(ARGS)
 
 # The paper's Tables 2 and 3 on the three samples: 100 starts x 4 methods each (about 10 min on 2 cores).
 eval: install

@@ -106,3 +106,33 @@ def test_shared_doordetect_split_sizes():
         for line in p.read_text().splitlines()
         if line.strip()
     )
+
+
+def test_one_folder_as_two_domains_weights_the_sampler(tmp_path):
+    """The shipped recipe's data.yaml: the renders folder listed twice, split in halves by the hash
+    hold-out under two domain names, so that balanced sampling draws renders twice as often as photos."""
+    train_mod = pytest.importorskip("initcli.detector.training.train")
+    make_doordetect(tmp_path / "photos")
+    make_doordetect(tmp_path / "renders", n=60)
+    half = {"path": str(tmp_path / "renders"), "classes": {0: "door"}, "holdout": 0.5}
+    doc = {
+        "names": NAMES,
+        "train": [
+            {"path": str(tmp_path / "photos"), "classes": {0: "door"}, "domain": "photos"},
+            {**half, "part": "train", "domain": "renders_a"},
+            {**half, "part": "holdout", "domain": "renders_b"},
+        ],
+    }
+    (tmp_path / "data.yaml").write_text(yaml.safe_dump(doc))
+    items = load_dataset(tmp_path / "data.yaml").train
+    halves = [{i.image.name for i in items if i.domain == d} for d in ("renders_a", "renders_b")]
+    assert halves[0] and halves[1] and not halves[0] & halves[1] and len(halves[0] | halves[1]) == 60
+    w = train_mod.balanced_weights(items, len(NAMES))
+    share = {
+        d: sum(wi for wi, it in zip(w, items, strict=True) if it.domain == d)
+        for d in ("photos", "renders_a", "renders_b")
+    }
+    assert share["photos"] == pytest.approx(1 / 3) and share["renders_a"] == pytest.approx(1 / 3)
+    # within the photos, images with a door and images without one are drawn equally often
+    doors = sum(wi for wi, it in zip(w, items, strict=True) if it.domain == "photos" and len(it.classes))
+    assert doors == pytest.approx(1 / 6)

@@ -74,9 +74,10 @@ def test_lite0_loads_packaged_imagenet_weights_offline(no_network):
 def test_default_onnx_rebuilds_as_checkpoint():
     ckpt = checkpoint_from_onnx(DEFAULT_ONNX)
     net = model_from_checkpoint(ckpt)
-    x = np.random.default_rng(0).random((1, 3, 320, 320), dtype=np.float32)
-    ours = ExportHead(net, (320, 320))(torch.from_numpy(x)).detach().numpy()
     sess = ort.InferenceSession(str(DEFAULT_ONNX), providers=["CPUExecutionProvider"])
+    h, w = sess.get_inputs()[0].shape[2:]
+    x = np.random.default_rng(0).random((1, 3, h, w), dtype=np.float32)
+    ours = ExportHead(net, (h, w))(torch.from_numpy(x)).detach().numpy()
     theirs = sess.run(None, {sess.get_inputs()[0].name: x})[0]
     assert ours.shape == theirs.shape
     assert np.allclose(ours, theirs, rtol=1e-3, atol=1e-3)
