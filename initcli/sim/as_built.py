@@ -191,7 +191,109 @@ def _hoarding(
     return _box(centre, along, length / 2, HOARDING_THICKNESS / 2)
 
 
-def derive_as_built(  # noqa: C901 - initcli/sim/as_built.py is being rewritten (issue 28)
+@dataclass
+class _DoorsBuilt:
+    """The design obstacles as the doors were built: ``obstacles[k]`` None where a door's piece
+    went (missing or open), ``moved`` the pieces shifted with their door, ``closed`` the leaves and
+    boards across openings, ``features`` what stays detectable."""
+
+    obstacles: list[Obstacle | None]
+    moved: set[int] = field(default_factory=set)
+    closed: list[Obstacle] = field(default_factory=list)
+    features: list[SimFeature] = field(default_factory=list)
+    changes: dict[str, int] = field(
+        default_factory=lambda: {"missing_doors": 0, "shifted_doors": 0, "open_doors": 0, "never_seen": 0}
+    )
+
+    def remove(self, pieces: list[int]) -> None:
+        for k in pieces:
+            self.obstacles[k] = None
+
+    def shift(self, pieces: list[int], dx: float, dy: float) -> None:
+        for k in pieces:
+            piece = self.obstacles[k]
+            if piece is not None:
+                self.obstacles[k] = _shift(piece, dx, dy)
+                self.moved.add(k)
+
+
+def _build_door(
+    built: _DoorsBuilt,
+    f: SimFeature,
+    pieces: list[int],
+    leaf: bool,
+    exterior: bool,
+    p: AsBuiltParams,
+    rng: np.random.Generator,
+) -> SimFeature | None:
+    """One door as built (``missing_doors``, ``door_shift``, ``open_doors``): the feature where it
+    stands, or None when it was never installed. ``leaf``: the feature is a door leaf (IfcDoor)."""
+    design = f
+    if leaf and p.missing_doors > 0 and rng.random() < p.missing_doors:
+        built.remove(pieces)
+        built.changes["missing_doors"] += 1
+        if exterior:  # the envelope stays closed: a board across the opening
+            built.closed.append(door_leaf(f))
+        return None
+    if p.door_shift > 0:
+        s = float(rng.normal(0.0, p.door_shift))
+        dx, dy = -f.norm_y * s, f.norm_x * s  # along the host wall
+        f = replace(f, x=f.x + dx, y=f.y + dy)
+        built.shift(pieces, dx, dy)
+        built.changes["shifted_doors"] += 1
+    if p.open_doors > 0 and rng.random() < p.open_doors and not exterior:
+        built.remove(pieces)
+        built.changes["open_doors"] += 1
+    elif leaf:
+        built.closed.append(door_leaf(f))
+        if f is not design:
+            # The wall's opening stays where the design has it: a leaf built off its place would
+            # leave a gap there beside it (out of a room, out of the building), so the design
+            # opening is closed too (by the shifted door's wall).
+            built.closed.append(door_leaf(design))
+    return f
+
+
+def _build_doors(
+    obstacles: list[Obstacle],
+    features: list[SimFeature],
+    circulation: Circulation,
+    p: AsBuiltParams,
+    rng: np.random.Generator,
+    doors: frozenset[str],
+) -> _DoorsBuilt:
+    """Every feature as built: doors missing, shifted or open, and features never seen."""
+    by_element: dict[str, list[int]] = {}
+    for k, design_piece in enumerate(obstacles):
+        by_element.setdefault(design_piece.element, []).append(k)
+    built = _DoorsBuilt(list(obstacles))
+    for f in features:
+        if f.cls in DOOR_CLASSES:
+            leaf = f.id in doors
+            exterior = leaf and is_exterior(f, circulation)
+            placed = _build_door(built, f, by_element.get(f.id, []), leaf, exterior, p, rng)
+            if placed is None:
+                continue
+            f = placed
+        if p.never_seen > 0 and rng.random() < p.never_seen:
+            built.changes["never_seen"] += 1
+            continue
+        built.features.append(f)
+    return built
+
+
+def _offset_walls(built: _DoorsBuilt, sigma: float, rng: np.random.Generator) -> None:
+    """``wall_offset``: every piece not moved with its door, built off its place."""
+    if sigma <= 0:
+        return
+    for k, element in enumerate(built.obstacles):
+        if element is None or k in built.moved:
+            continue
+        dx, dy = rng.normal(0.0, sigma, 2)
+        built.obstacles[k] = _shift(element, float(dx), float(dy))
+
+
+def derive_as_built(
     obstacles: list[Obstacle],
     walls: list,
     features: list[SimFeature],
@@ -207,58 +309,9 @@ def derive_as_built(  # noqa: C901 - initcli/sim/as_built.py is being rewritten 
     p = params
     if p == AsBuiltParams():
         return AsBuiltWorld(list(obstacles) + closed_doors(features, doors), list(features))
-    closed: list[Obstacle] = []
-    changes = {"missing_doors": 0, "shifted_doors": 0, "open_doors": 0, "never_seen": 0}
-    by_element: dict[str, list[int]] = {}
-    for k, design_piece in enumerate(obstacles):
-        by_element.setdefault(design_piece.element, []).append(k)
-    out_obstacles: list[Obstacle | None] = list(obstacles)
-    moved_obstacles: set[int] = set()
-    out_features: list[SimFeature] = []
-    for f in features:
-        pieces = by_element.get(f.id, [])  # indices of the door's own obstacles
-        design = f
-        if f.cls in DOOR_CLASSES:
-            exterior = f.id in doors and is_exterior(f, circulation)
-            if f.id in doors and p.missing_doors > 0 and rng.random() < p.missing_doors:
-                for k in pieces:
-                    out_obstacles[k] = None
-                changes["missing_doors"] += 1
-                if exterior:  # the envelope stays closed: a board across the opening
-                    closed.append(door_leaf(f))
-                continue
-            if p.door_shift > 0:
-                s = float(rng.normal(0.0, p.door_shift))
-                dx, dy = -f.norm_y * s, f.norm_x * s  # along the host wall
-                f = replace(f, x=f.x + dx, y=f.y + dy)
-                for k in pieces:
-                    piece = out_obstacles[k]
-                    if piece is not None:
-                        out_obstacles[k] = _shift(piece, dx, dy)
-                        moved_obstacles.add(k)
-                changes["shifted_doors"] += 1
-            if p.open_doors > 0 and rng.random() < p.open_doors and not exterior:
-                for k in pieces:
-                    out_obstacles[k] = None
-                changes["open_doors"] += 1
-            elif f.id in doors:
-                closed.append(door_leaf(f))
-                if f is not design:
-                    # The wall's opening stays where the design has it: a leaf built off its place
-                    # would leave a gap there beside it (out of a room, out of the building), so
-                    # the design opening is closed too (by the shifted door's wall).
-                    closed.append(door_leaf(design))
-        if p.never_seen > 0 and rng.random() < p.never_seen:
-            changes["never_seen"] += 1
-            continue
-        out_features.append(f)
-    if p.wall_offset > 0:
-        for k, element in enumerate(out_obstacles):
-            if element is None or k in moved_obstacles:
-                continue
-            dx, dy = rng.normal(0.0, p.wall_offset, 2)
-            out_obstacles[k] = _shift(element, float(dx), float(dy))
-    kept = [o for o in out_obstacles if o is not None] + closed
+    built = _build_doors(obstacles, features, circulation, p, rng, doors)
+    _offset_walls(built, p.wall_offset, rng)
+    kept = [o for o in built.obstacles if o is not None] + built.closed
     length = corridor_length(circulation)
     corridor_walls = _corridor_walls(walls, circulation, 2.0)
     segments = (
@@ -277,8 +330,10 @@ def derive_as_built(  # noqa: C901 - initcli/sim/as_built.py is being rewritten 
     phantoms = _wall_features(
         corridor_walls, _count(p.persistent_phantoms, length, rng), "phantom-persistent", rng, occupied
     )
-    changes.update(hoardings=len(hoardings), extra_doors=len(extra), persistent_phantoms=len(phantoms))
-    return AsBuiltWorld(kept, out_features + extra + phantoms, hoardings, changes)
+    changes = dict(
+        built.changes, hoardings=len(hoardings), extra_doors=len(extra), persistent_phantoms=len(phantoms)
+    )
+    return AsBuiltWorld(kept, built.features + extra + phantoms, hoardings, changes)
 
 
 STAND_OUT = 0.6  # m a stack standing out in the corridor is moved off its wall
