@@ -10,6 +10,7 @@ lists them in the order they run.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any
 
 from bimkit.checks import show_number
@@ -18,7 +19,7 @@ from initcli.detector.profile import DetectorProfile, read_profile, resolve_prof
 from initcli.settings_session import SessionConfig
 from initcli.settings_sim import PROFILE_REPLACES
 
-__all__ = ["CHECKS", "check_config", "detector_profile", "given_paths"]
+__all__ = ["CHECKS", "check_config", "detector_profile", "given_paths", "problems", "profile_path"]
 
 Check = Callable[[SessionConfig, set[str]], str | None]
 
@@ -34,13 +35,17 @@ def given_paths(doc: Any, prefix: str = "") -> set[str]:
     return out
 
 
-def detector_profile(config: SessionConfig) -> DetectorProfile | None:
-    """The measured profile the simulated detector draws from (``sim.detector.profile``, relative to
-    the config's folder), or None."""
+def profile_path(config: SessionConfig) -> Path | None:
+    """The file ``sim.detector.profile`` names (a shipped profile's, or relative to the config's
+    folder), or None."""
     name = config.sim.detector.profile
-    if not name:
-        return None
-    return read_profile(resolve_profile(name, config.source.parent if config.source else None))
+    return resolve_profile(name, config.source.parent if config.source else None) if name else None
+
+
+def detector_profile(config: SessionConfig) -> DetectorProfile | None:
+    """The measured profile the simulated detector draws from (``sim.detector.profile``), or None."""
+    path = profile_path(config)
+    return None if path is None else read_profile(path)
 
 
 def _n(value: float) -> str:
@@ -51,8 +56,8 @@ def depth_limits(c: SessionConfig, given: set[str]) -> str | None:
     m = c.matching
     if m.min_depth >= m.max_depth:
         return (
-            f"matching.min_depth ({_n(m.min_depth)} m) must be below matching.max_depth ({_n(m.max_depth)} m):"
-            " every detection would be ignored"
+            f"matching.min_depth ({_n(m.min_depth)} m) must be below matching.max_depth"
+            f" ({_n(m.max_depth)} m): every detection would be ignored"
         )
     return None
 
@@ -102,8 +107,8 @@ def fine_travel(c: SessionConfig, given: set[str]) -> str | None:
     f = c.fine_tuning
     if f.enabled and f.min_travel > f.distance:
         return (
-            f"fine_tuning.min_travel ({_n(f.min_travel)} m) is above fine_tuning.distance ({_n(f.distance)} m):"
-            " the filter could never count as converged"
+            f"fine_tuning.min_travel ({_n(f.min_travel)} m) is above fine_tuning.distance"
+            f" ({_n(f.distance)} m): the filter could never count as converged"
         )
     return None
 

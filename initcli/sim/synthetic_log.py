@@ -192,8 +192,8 @@ def render_image(
             d = float(depth[i] + (rng.normal(0.0, sigma) if sigma > 0 else 0.0))
             out.append((DetectedObject(f.cls, p.score, tuple(float(b) for b in box), d), f.id))  # type: ignore[arg-type]
     if p.false_positive_rate > 0 and rng.random() < p.false_positive_rate:
-        box, d = false_box(camera, p, rng)
-        fake = DetectedObject(str(rng.choice(list(classes))), p.score, box, d)
+        false, d = false_box(camera, p, rng)
+        fake = DetectedObject(str(rng.choice(list(classes))), p.score, false, d)
         out.append((fake, None))
     return out
 

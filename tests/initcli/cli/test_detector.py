@@ -41,3 +41,34 @@ def test_cli_corrupt_model_one_line(tmp_path):
     assert result.returncode == 2
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "model.onnx" in lines[0] and "Traceback" not in result.stderr
+
+
+def test_calibrate_cli_writes_a_profile_and_refuses_bad_input_in_one_line(tmp_path):
+    import json
+
+    from typer.testing import CliRunner
+
+    from initcli.cli.detector import detector_app
+    from initcli.detector.profile import read_profile
+    from tests.initcli.detector.test_calibrate import _dataset
+
+    data = _dataset(tmp_path / "ds", n=3)
+    out = tmp_path / "p.json"
+    ok = CliRunner().invoke(detector_app, ["calibrate", "default", "--data", str(data), "-o", str(out)])
+    assert ok.exit_code == 0, ok.output
+    assert read_profile(out).images == 3 and "recall door" in ok.output
+    assert json.loads(out.read_text())["dataset"]["boxes"] == {"door": 3, "lift": 1}
+    for args, message in [
+        (["--data", str(tmp_path / "none.yaml"), "-o", str(tmp_path / "q.json")], "none.yaml: no such file"),
+        (["--data", str(data), "-o", str(tmp_path / "q.txt")], "-o/--out"),
+        (
+            ["--data", str(data), "-o", str(tmp_path / "q.json"), "--split", "test"],
+            "--split: expected val or train",
+        ),
+        (["--data", str(data), "-o", str(tmp_path / "q.json"), "--iou", "0"], "--iou"),
+        (["--data", str(data), "-o", str(data)], "data.yaml"),
+    ]:
+        bad = CliRunner().invoke(detector_app, ["calibrate", "default", *args])
+        lines = bad.output.strip().splitlines()
+        assert bad.exit_code == 2 and len(lines) == 1 and message in lines[0], bad.output
+        assert not (tmp_path / "q.json").exists()
