@@ -17,7 +17,7 @@ import pytest
 
 from tests.hostile.cases_misc import ROSBRIDGE, TRACEBACKS, WORK
 from tests.hostile.cases_outputs import SACRED, UNWRITABLE
-from tests.hostile.cases_parsing import BAGS, DEVICES, LOGS, MAPS, SUMMARIES, YAML
+from tests.hostile.cases_parsing import BAGS, DATASETS, DEVICES, LOGS, MAPS, MODELS, SUMMARIES, YAML
 from tests.hostile.harness import Case, ForkServer, prepare, run_script, snapshot, verify
 from tests.hostile.workspace import build
 from tests.initcli.ros.rosbridge_server import PlainWebsocketServer
@@ -27,6 +27,8 @@ CASES: list[Case] = [
     *UNWRITABLE,
     *YAML,
     *MAPS,
+    *MODELS,
+    *DATASETS,
     *LOGS,
     *DEVICES,
     *BAGS,
