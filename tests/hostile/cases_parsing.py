@@ -563,3 +563,48 @@ DATASETS = [
         text("data/labels/train/a.txt", "0 1.5 0.5 0.2 0.2\n"),
     ),
 ]
+
+CONFIGS = [  # issue 29: values a robot cannot have, settings that contradict one another
+    Case(
+        "robot.radius 5",
+        (*RUN, "c.yaml"),
+        r"c.yaml: robot.radius: 5 is above the maximum 2",
+        config_plus("c.yaml", "robot:\n  radius: 5\n"),
+    ),
+    Case(
+        "min_depth above max_depth",
+        (*RUN, "c.yaml"),
+        r"c.yaml: matching.min_depth \(9 m\) must be below matching.max_depth \(3 m\)",
+        config_plus("c.yaml", "matching:\n  min_depth: 9\n  max_depth: 3\n"),
+    ),
+    Case(
+        "principal point outside the image",
+        (*RUN, "c.yaml"),
+        r"c.yaml: camera.cx \(900 px\) lies outside the image \(camera.width 640 px\)",
+        config_plus("c.yaml", "camera:\n  cx: 900\n"),
+    ),
+    Case(
+        "verification p_right above p_wrong",
+        (*RUN, "c.yaml"),
+        r"c.yaml: verification.p_right \(0.9\) is above verification.p_wrong \(0.1\)",
+        config_plus("c.yaml", "verification:\n  p_right: 0.9\n  p_wrong: 0.1\n"),
+    ),
+    Case(
+        "a 1 cm lidar range",
+        (*RUN, "c.yaml"),
+        r"c.yaml: lidar.max_range: 0.01 is below the minimum 1",
+        config_plus("c.yaml", "lidar:\n  max_range: 0.01\n"),
+    ),
+    Case(
+        "a detector profile and a flat miss rate",
+        (*RUN, "c.yaml"),
+        r"c.yaml: sim.detector.profile replaces sim.miss_rate: set the profile or the flat rate, not both",
+        config_plus("c.yaml", "sim:\n  miss_rate: 0.1\n  detector:\n    profile: default-real\n"),
+    ),
+    Case(
+        "a detector profile that is not there",
+        (*RUN, "c.yaml"),
+        r"c.yaml: sim.detector.profile: .*nothere.json: no such detector profile",
+        config_plus("c.yaml", "sim:\n  detector:\n    profile: nothere.json\n"),
+    ),
+]
