@@ -13,7 +13,6 @@ merged until every bin holds :data:`MIN_BOXES` boxes, so that no bin's recall re
 
 from __future__ import annotations
 
-import hashlib
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -22,6 +21,7 @@ from typing import Protocol
 
 import numpy as np
 
+from bimkit.documents import file_sha256
 from bimkit.errors import InputError
 from initcli.core.classes import ClassMap
 from initcli.detector import DETECTOR_CONFIDENCE
@@ -160,14 +160,6 @@ class ProfileAccumulator:
         )
 
 
-def _sha256(path: Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 def calibrate_model(
     model: str | Path,
     data: Path,
@@ -214,5 +206,5 @@ def calibrate_model(
             ],
         )
     path = Path(detector.path)
-    profile = acc.profile(path.name, _sha256(path), names, str(data), split)
+    profile = acc.profile(path.name, file_sha256(path), names, str(data), split)
     return profile, warnings if lacking else []
