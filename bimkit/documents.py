@@ -16,6 +16,7 @@ Every problem is one :class:`~bimkit.errors.InputError` naming the file (and lin
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
@@ -32,6 +33,7 @@ from bimkit.limits import MAX_DEPTH, MAX_INT_DIGITS, MAX_TEXT_BYTES, MAX_YAML_AL
 __all__ = [
     "check_finite_tree",
     "check_regular",
+    "file_sha256",
     "open_input",
     "parse_json",
     "parse_yaml",
@@ -336,3 +338,12 @@ def read_json(path: Path, what: str = "a JSON file", limit: int = MAX_TEXT_BYTES
     finite."""
     path = Path(path)
     return parse_json(read_text(path, what, limit=limit), str(path))
+
+
+def file_sha256(path: Path) -> str:
+    """The hex sha256 of a file's bytes, read in blocks of 1 MiB."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()

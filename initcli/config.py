@@ -20,6 +20,7 @@ from bimkit import checks
 from bimkit.checks import check_finite_tree, range_problem
 from bimkit.errors import InputError
 from bimkit.schemas import schema_path
+from initcli.config_checks import check_config, given_paths
 from initcli.core.particle_filter import LaserModel
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.core.wall_following import WallFollowParams
@@ -45,6 +46,7 @@ from initcli.settings_sim import (
     AsBuiltParams,
     AsBuiltSection,
     OdometryNoiseSection,
+    PersistentDetectorErrors,
     SimDetectorSection,
     SimOdometrySection,
     SimSection,
@@ -201,6 +203,7 @@ def parse_config(doc: Any, source: Path | None = None) -> SessionConfig:
     if doc is None:
         doc = {}
     validate_document(doc, SCHEMA_PATH, where)
+    given = given_paths(doc)
     doc = with_reality(doc, (doc.get("sim") or {}).get("reality", "ideal"))
     config = _merge(SessionConfig(), doc)
     config.source = source
@@ -212,6 +215,7 @@ def parse_config(doc: Any, source: Path | None = None) -> SessionConfig:
     if not config.site.path:
         raise InputError(f"{where}: site.path: required (an IFC file or a bim-extract output folder)")
     check_resources(config, where)
+    check_config(config, given, where)
     return config
 
 
@@ -261,7 +265,10 @@ def load_config(path: Path, reality: str | None = None) -> SessionConfig:
 
 def as_built_params(config: SessionConfig) -> AsBuiltParams:
     """The simulated world's deviations from the design (sim.as_built + sim.detector)."""
-    return AsBuiltParams(**dataclasses.asdict(config.sim.as_built), **dataclasses.asdict(config.sim.detector))
+    persistent = {
+        f.name: getattr(config.sim.detector, f.name) for f in dataclasses.fields(PersistentDetectorErrors)
+    }
+    return AsBuiltParams(**dataclasses.asdict(config.sim.as_built), **persistent)
 
 
 def start_pose_degrees(config: SessionConfig) -> tuple[float, float, float] | None:

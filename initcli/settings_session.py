@@ -69,7 +69,7 @@ class RobotSection:
         "sim: the simulated robot (sim:); rosbridge: a live robot over rosbridge",
         enum=("sim", "rosbridge"),
     )
-    radius: float = setting(0.3, "m: the robot's footprint radius", above=0, maximum=5)
+    radius: float = setting(0.3, "m: the robot's footprint radius", above=0, maximum=2)
     max_linear: float = setting(0.5, "m/s: top linear speed", above=0, maximum=5)
     max_angular: float = setting(1.0, "rad/s: top turn rate", above=0, maximum=10)
     drive: bool = setting(True, "rosbridge: false listens only while a person drives")
@@ -119,7 +119,7 @@ class CameraSection:
 class LidarSection:
     beams: int = setting(360, "beams per scan", above=0, maximum=10000)
     fov: float = setting(360.0, "degrees: field of view", above=0, maximum=360)
-    max_range: float = setting(20.0, "m: the farthest range the lidar reads", above=0, maximum=200)
+    max_range: float = setting(20.0, "m: the farthest range the lidar reads", minimum=1, maximum=200)
     noise: float = setting(0.02, "m: range noise standard deviation", minimum=0, maximum=5)
     dropout: float = setting(0.01, "fraction of beams returning nothing", minimum=0, maximum=1)
     log_every: int = setting(

@@ -18,6 +18,8 @@ __all__ = [
     "AsBuiltParams",
     "AsBuiltSection",
     "OdometryNoiseSection",
+    "PROFILE_REPLACES",
+    "PersistentDetectorErrors",
     "SimDetectorSection",
     "SimOdometrySection",
     "SimSection",
@@ -61,7 +63,7 @@ class AsBuiltSection:
 
 
 @dataclass
-class SimDetectorSection:
+class PersistentDetectorErrors:
     """What the simulated detector gets wrong persistently (beyond sim.miss_rate per image)."""
 
     persistent_phantoms: float = setting(
@@ -72,6 +74,23 @@ class SimDetectorSection:
     )
     never_seen: float = setting(
         0.0, "share of the real features the detector never fires on", minimum=0, maximum=1
+    )
+
+
+PROFILE_REPLACES = ("miss_rate", "false_positives_per_minute", "confusion_rate")  # of sim:
+
+
+@dataclass
+class SimDetectorSection(PersistentDetectorErrors):
+    """The simulated detector's persistent errors, and the measured profile it may draw from."""
+
+    profile: str = setting(
+        "",
+        "a detector profile (bim-init detector calibrate): default-real (the shipped model on real"
+        " photos), default-renders (on renders) or a JSON file, relative to this file; the simulated"
+        " detector then draws recall by box height, false boxes per image, class confusion and scores"
+        " from it, in place of sim.miss_rate, sim.false_positives_per_minute and sim.confusion_rate"
+        " (a config that sets one of those and a profile is refused); empty: those three",
     )
 
 
@@ -102,7 +121,7 @@ class OdometryNoiseSection:
 
 
 @dataclass
-class AsBuiltParams(SimDetectorSection, AsBuiltSection):
+class AsBuiltParams(PersistentDetectorErrors, AsBuiltSection):
     """Every deviation of the simulated world from the design (sim.as_built and sim.detector's
     persistent errors; all 0: the design), as :func:`initcli.sim.as_built.derive_as_built` takes them."""
 
@@ -174,7 +193,9 @@ class SimSection:
     as_built: AsBuiltSection = section(
         AsBuiltSection, "the site as built, derived from the design model with the session's seed"
     )
-    detector: SimDetectorSection = section(SimDetectorSection, "persistent detector errors")
+    detector: SimDetectorSection = section(
+        SimDetectorSection, "persistent detector errors and a measured detector profile"
+    )
     odometry: SimOdometrySection = section(SimOdometrySection, "systematic odometry errors")
     odometry_noise: OdometryNoiseSection = section(
         OdometryNoiseSection, "the odometry's random walk: variances that grow with each step's motion"

@@ -9,6 +9,7 @@ from pathlib import Path
 from bimkit.errors import InputError
 from bimtools.site.load import Site, StoreyModel, load_site
 from initcli.config import SessionConfig
+from initcli.config_checks import profile_path
 
 __all__ = ["choose_storey", "input_paths", "prepare_site", "prepare_world", "world_path", "world_storey"]
 
@@ -27,8 +28,9 @@ def world_path(config: SessionConfig) -> Path | None:
 
 
 def input_paths(config: SessionConfig) -> list[Path]:
-    """The files and folders a session reads: the config, ``site.path`` and ``sim.world``."""
-    paths = [config.site_path(), world_path(config)]
+    """The files and folders a session reads: the config, ``site.path``, ``sim.world`` and the
+    detector profile of ``sim.detector.profile``."""
+    paths = [config.site_path(), world_path(config), profile_path(config)]
     return [p for p in [config.source, *paths] if p is not None]
 
 

@@ -31,6 +31,7 @@ from bimtools.extract.section import polygons_of, projected_footprint, section_p
 from bimtools.extract.settings import (
     DEFAULT_RESOLUTION,
     DEFAULT_SECTION_HEIGHT,
+    MAX_STOREY_ELEVATION,
     RESOLUTION_RANGE,
     SECTION_HEIGHT_RANGE,
     LandmarkSettings,
@@ -266,6 +267,7 @@ def extract_site(
     storeys = list_storeys(model, info.unit_scale)
     if not storeys:
         raise InputError(f"{path}: model has no storeys (IfcBuildingStorey)")
+    _check_elevations(path, storeys)
     if storey not in (None, "all") and storey not in {s.name for s in storeys}:
         valid = ", ".join(repr(s.name) for s in storeys)
         raise InputError(f"{path}: no storey {storey!r}; valid storeys: {valid}")
@@ -280,19 +282,56 @@ def extract_site(
         all_storeys=[s.name for s in storeys],
         landmarks=categories.landmarks if categories.landmarks.enabled else None,
     )
+    heights = _storey_heights(storeys, candidates, meshes)
+    walls = 0
     for s in storeys:
         if storey not in (None, "all") and s.name != storey:
             continue
         storey_result = _extract_storey(
             s, storeys, candidates, meshes, where, categories, section_height, resolution, info.unit_scale
         )
+        walls += len(storey_result.plan.walls)
+        if section_height >= heights[s.name]:
+            result.warnings.append(
+                f"storey {s.name!r}: the section height {section_height:g} m is above the storey's height "
+                f"({heights[s.name]:.2f} m); its plan has {len(storey_result.plan.walls)} walls"
+            )
         result.warnings += storey_result.warnings
         if camera_features(storey_result.features) or storey is not None:
             result.storeys.append(storey_result)
+    if walls == 0 and candidates.obstacles:
+        raise InputError(
+            f"{path}: --section-height {section_height:g} m cuts no wall on any storey "
+            f"(the lowest storey is {min(heights.values()):.2f} m high); lower it"
+        )
     if not camera_features(result.features):
         asked = "any storey" if storey in (None, "all") else f"storey {storey!r}"
         raise InputError(f"{path}: no features found (no doors, lifts or stairs on {asked})")
     return result
+
+
+def _check_elevations(path: Path, storeys: list[Storey]) -> None:
+    """Refuse a storey whose floor lies beyond +-MAX_STOREY_ELEVATION (a unit or export error)."""
+    for s in storeys:
+        if not abs(s.elevation) <= MAX_STOREY_ELEVATION:
+            raise InputError(
+                f"{path}: storey {s.name!r} has an elevation of {s.elevation:g} m, beyond "
+                f"+-{MAX_STOREY_ELEVATION / 1000:g} km (a unit or export error in the model)"
+            )
+
+
+def _storey_heights(
+    storeys: list[Storey], candidates: Candidates, meshes: dict[str, Mesh]
+) -> dict[str, float]:
+    """Each storey's height: up to the next storey's floor (0.5 m or more above), the top storey's
+    up to the top of the highest wall, column, door or window (inf when the model has none)."""
+    tops = [meshes[e.GlobalId].zmax for e in candidates.obstacles if e.GlobalId in meshes]
+    heights: dict[str, float] = {}
+    for s in storeys:
+        above = [o.elevation for o in storeys if o.elevation > s.elevation + 0.5]
+        top = min(above) if above else max(tops, default=math.inf)
+        heights[s.name] = top - s.elevation if top > s.elevation else math.inf
+    return heights
 
 
 def _extract_storey(

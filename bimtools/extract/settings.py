@@ -7,12 +7,19 @@ from dataclasses import dataclass
 from bimkit.checks import range_problem
 from bimkit.errors import InputError
 
-__all__ = ["DEFAULT_RESOLUTION", "DEFAULT_SECTION_HEIGHT", "RESOLUTION_RANGE", "SECTION_HEIGHT_RANGE"]
+__all__ = [
+    "DEFAULT_RESOLUTION",
+    "DEFAULT_SECTION_HEIGHT",
+    "MAX_STOREY_ELEVATION",
+    "RESOLUTION_RANGE",
+    "SECTION_HEIGHT_RANGE",
+]
 
 DEFAULT_SECTION_HEIGHT = 1.0  # m above each storey's elevation
 DEFAULT_RESOLUTION = 0.05  # m per map pixel
 SECTION_HEIGHT_RANGE = {"above": 0.0, "maximum": 10.0}  # m: (0, 10]
 RESOLUTION_RANGE = {"minimum": 0.005, "maximum": 1.0}  # m per pixel: [0.005, 1]
+MAX_STOREY_ELEVATION = 10_000.0  # m: a storey floor beyond +-10 km is a unit or export error
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import hashlib
 import os
 import tempfile
 from dataclasses import dataclass
@@ -11,7 +10,7 @@ from pathlib import Path
 import ifcopenshell
 import ifcopenshell.util.unit
 
-from bimkit.documents import open_input
+from bimkit.documents import file_sha256, open_input
 from bimkit.errors import InputError
 from bimkit.limits import MAX_IFC_BYTES
 
@@ -36,14 +35,6 @@ class ModelInfo:
     application: str
     length_unit: str
     unit_scale: float  # project length unit -> metres
-
-
-def file_sha256(path: Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 def _parse(path: Path) -> ifcopenshell.file:

@@ -1,4 +1,4 @@
-"""``bim-init detector``: synth, train, export, predict, eval.
+"""``bim-init detector``: synth, train, export, predict, eval, calibrate.
 
 Heavy imports (torch, onnxruntime) happen inside the commands, so ``bim-init --help`` and the
 onnxruntime commands work without the ``[train]`` extra. Bad input: one line on stderr, exit 2.
@@ -26,7 +26,17 @@ from initcli.detector import DETECTOR_CONFIDENCE
 if TYPE_CHECKING:
     from initcli.detector.runtime import Detector
 
-__all__ = ["MODEL_HELP", "TORCH_MISSING", "detector_app", "evaluate", "export", "predict", "synth", "train"]
+__all__ = [
+    "MODEL_HELP",
+    "TORCH_MISSING",
+    "calibrate",
+    "detector_app",
+    "evaluate",
+    "export",
+    "predict",
+    "synth",
+    "train",
+]
 
 detector_app = typer.Typer(
     name="detector",
@@ -98,9 +108,9 @@ _ValFraction = Annotated[
     float,
     typer.Option(
         "--val-fraction",
-        callback=number_option(PROG, minimum=0, below=1),
+        callback=number_option(PROG, minimum=0, maximum=1),
         metavar="F",
-        help="Share of images in the val split.",
+        help="Share of images in the val split (1: a test set, every image in val).",
     ),
 ]
 _Preview = Annotated[
@@ -396,6 +406,42 @@ def _images(paths: list[Path]) -> list[Path]:
     return out
 
 
+_Conf = Annotated[
+    float,
+    typer.Option(
+        "--conf", callback=number_option(PROG, minimum=0, maximum=1), metavar="S", help="Score threshold."
+    ),
+]
+_Iou = Annotated[
+    float,
+    typer.Option(
+        "--iou", callback=number_option(PROG, minimum=0, maximum=1), metavar="T", help="NMS IoU threshold."
+    ),
+]
+_Threads = Annotated[
+    int,
+    typer.Option(
+        "--threads",
+        callback=number_option(PROG, minimum=1, maximum=256),
+        metavar="N",
+        help="onnxruntime intra-op threads.",
+    ),
+]
+_EvalData = Annotated[
+    Path, typer.Option("--data", metavar="data.yaml|COCO.json", help="Dataset with labels.")
+]
+_Split = Annotated[str, typer.Option("--split", metavar="val|train", help="Which split to evaluate.")]
+_MaxImages = Annotated[
+    int,
+    typer.Option(
+        "--max-images",
+        callback=number_option(PROG, minimum=0, maximum=10_000_000),
+        metavar="N",
+        help="0 = all.",
+    ),
+]
+
+
 @detector_app.command()
 def predict(
     model: Annotated[str, typer.Argument(metavar="MODEL.onnx", help=MODEL_HELP)],
@@ -403,30 +449,9 @@ def predict(
     out: Annotated[
         Path | None, typer.Option("--out", metavar="DIR", help="Write the images with boxes here.")
     ] = None,
-    conf: Annotated[
-        float,
-        typer.Option(
-            "--conf", callback=number_option(PROG, minimum=0, maximum=1), metavar="S", help="Score threshold."
-        ),
-    ] = DETECTOR_CONFIDENCE,
-    iou: Annotated[
-        float,
-        typer.Option(
-            "--iou",
-            callback=number_option(PROG, minimum=0, maximum=1),
-            metavar="T",
-            help="NMS IoU threshold.",
-        ),
-    ] = 0.5,
-    threads: Annotated[
-        int,
-        typer.Option(
-            "--threads",
-            callback=number_option(PROG, minimum=1, maximum=256),
-            metavar="N",
-            help="onnxruntime intra-op threads.",
-        ),
-    ] = 2,
+    conf: _Conf = DETECTOR_CONFIDENCE,
+    iou: _Iou = 0.5,
+    threads: _Threads = 2,
     json_out: Annotated[bool, typer.Option("--json", help="One JSON line per image.")] = False,
 ) -> None:
     """Detect doors, lifts and stairs in images; print the detections, optionally draw them."""
@@ -491,40 +516,12 @@ def _predict_all(det: Detector, files: list[Path], stage: Path | None, json_out:
 @detector_app.command("eval")
 def evaluate(
     model: Annotated[str, typer.Argument(metavar="MODEL.onnx", help=MODEL_HELP)],
-    data: Annotated[Path, typer.Option("--data", metavar="data.yaml|COCO.json", help="Dataset with labels.")],
-    split: Annotated[
-        str, typer.Option("--split", metavar="val|train", help="Which split to evaluate.")
-    ] = "val",
-    conf: Annotated[
-        float,
-        typer.Option(
-            "--conf",
-            callback=number_option(PROG, minimum=0, maximum=1),
-            metavar="S",
-            help="Score for precision and recall.",
-        ),
-    ] = DETECTOR_CONFIDENCE,
-    iou: Annotated[
-        float,
-        typer.Option(
-            "--iou",
-            callback=number_option(PROG, minimum=0, maximum=1),
-            metavar="T",
-            help="NMS IoU threshold.",
-        ),
-    ] = 0.5,
-    max_images: Annotated[
-        int,
-        typer.Option(
-            "--max-images",
-            callback=number_option(PROG, minimum=0, maximum=10_000_000),
-            metavar="N",
-            help="0 = all.",
-        ),
-    ] = 0,
-    threads: Annotated[
-        int, typer.Option("--threads", callback=number_option(PROG, minimum=1, maximum=256), metavar="N")
-    ] = 2,
+    data: _EvalData,
+    split: _Split = "val",
+    conf: _Conf = DETECTOR_CONFIDENCE,
+    iou: _Iou = 0.5,
+    max_images: _MaxImages = 0,
+    threads: _Threads = 2,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON document.")] = False,
 ) -> None:
     """Precision and recall (at --conf) and AP@0.5 per class of an ONNX model on a labelled dataset."""
@@ -547,3 +544,53 @@ def evaluate(
     console.print(f"mAP@0.5 {result.metrics.map50:.3f}" if result.metrics.map50 is not None else "mAP@0.5 -")
     for w in result.warnings:
         typer.echo(f"bim-init: warning: {w}", err=True)
+
+
+@detector_app.command()
+def calibrate(
+    model: Annotated[str, typer.Argument(metavar="MODEL.onnx", help=MODEL_HELP)],
+    data: _EvalData,
+    out: Annotated[Path, typer.Option("-o", "--out", metavar="PROFILE.json", help="The profile to write.")],
+    split: _Split = "val",
+    conf: _Conf = DETECTOR_CONFIDENCE,
+    iou: Annotated[
+        float,
+        typer.Option(
+            "--iou",
+            callback=number_option(PROG, above=0, maximum=1),
+            metavar="T",
+            help="IoU a detection needs with a labelled box to find it.",
+        ),
+    ] = 0.5,
+    max_images: _MaxImages = 0,
+    threads: _Threads = 2,
+) -> None:
+    """Measure a model's recall by box height, false boxes per image and class confusion on a
+    labelled dataset: a profile for the simulated detector (sim.detector.profile)."""
+    from initcli.detector.calibrate import calibrate_model
+    from initcli.detector.profile import write_profile
+
+    if split not in ("val", "train"):
+        raise _fail(f"--split: expected val or train, got {split!r}")
+    try:
+        check_outputs(
+            [data, None if model == "default" else Path(model)], [OutputFile(out, "-o/--out", (".json",))]
+        )
+        profile, warnings = calibrate_model(model, data, split, conf, iou, max_images, threads)
+        write_profile(profile, out)
+    except InputError as exc:
+        raise _fail(str(exc)) from None
+    for w in warnings:
+        typer.echo(f"bim-init: warning: {w}", err=True)
+    typer.echo(f"wrote {out}: {profile.model} on {profile.images} images of {data} ({split}), conf {conf:g}")
+    for cls, table in profile.recall.items():
+        found, boxes = sum(table.found), sum(table.boxes)
+        bins = ", ".join(
+            f"{table.edges[k]:g}-{table.edges[k + 1]:g} px {f}/{b}"
+            for k, (f, b) in enumerate(zip(table.found, table.boxes, strict=True))
+        )
+        typer.echo(f"  recall {cls}: {found}/{boxes} ({bins})")
+    fp = ", ".join(f"{c} {v:.3f}" for c, v in profile.false_boxes.items())
+    typer.echo(f"  false boxes per image: {profile.false_boxes_per_image():.3f} ({fp})")
+    for cls, row in profile.confusion.items():
+        typer.echo(f"  found {cls} given as: " + ", ".join(f"{c} {n}" for c, n in row.items()))

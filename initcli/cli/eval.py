@@ -33,13 +33,14 @@ from initcli.eval.campaign import (
     plan_jobs,
     prepare_sites,
     run_jobs,
+    site_configs,
     trial_count,
 )
 from initcli.eval.config import EvalConfig, load_eval_config, parse_methods
 from initcli.eval.records import TrialRecord
 from initcli.eval.report import RunStats, write_report
 from initcli.eval.results_file import ResultsWriter, read_results
-from initcli.eval.sweep import parse_sweep
+from initcli.eval.sweep import check_sweep, parse_sweep
 from initcli.eval.tables import NONE, table2, table3
 from initcli.eval.trial import TrialJob
 from initcli.executor import Executor, default_workers, make_executor
@@ -167,6 +168,8 @@ def evaluate(
         if reality is not None and reality not in REALITY_PROFILES:
             raise InputError(f"--reality: expected one of {', '.join(REALITY_PROFILES)}, got {reality!r}")
         only = _only_sites(sites, eval_config)
+        if the_sweep is not None:
+            check_sweep(the_sweep, site_configs(eval_config, only))
         check_outputs(
             campaign_inputs(eval_config, only), [OutputFolder(out, "--out", EVAL_MARKERS, EVAL_WRITES)], force
         )

@@ -175,7 +175,7 @@ def match(
         with message_progress() as progress, log_or_bag(log, progress=progress) as log_path:
             options.validate()
             listed = replace(options, top=max(top, TRACK_HYPOTHESES)) if verify else options
-            report = run_match(log_path, site, listed)
+            report = run_match(log_path, site, listed, source=log)
             if verify:
                 checks = check_hypotheses(log_path, site, report, options.skip_bad, top)
     except InputError as exc:

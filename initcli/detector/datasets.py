@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -48,6 +49,9 @@ from bimkit.errors import InputError
 from bimkit.limits import MAX_TEXT_BYTES
 
 __all__ = [
+    "DROPPED_CLASS",
+    "DROPPED_FLAT",
+    "DROPPED_OUTSIDE",
     "DOORDETECT_CLASSES",
     "Dataset",
     "DatasetItem",
@@ -81,6 +85,8 @@ class Dataset:
     val: list[DatasetItem] = field(default_factory=list)
     source: Path | None = None
     warnings: list[str] = field(default_factory=list)
+    # per split: label rows read but not kept, by reason (see DROPPED)
+    dropped: dict[str, Counter[str]] = field(default_factory=lambda: {"train": Counter(), "val": Counter()})
 
     def split(self, name: str) -> list[DatasetItem]:
         return self.train if name == "train" else self.val
@@ -178,8 +184,17 @@ def label_path(image: Path) -> Path:
     return Path(s).with_suffix(".txt")
 
 
-def read_yolo_labels(path: Path, nc: int) -> tuple[np.ndarray, np.ndarray]:
-    """Classes (n,) and normalised x1 y1 x2 y2 boxes (n, 4) of a YOLO label file; missing = empty."""
+DROPPED_OUTSIDE = "outside the image (nothing left after clipping to [0, 1])"
+DROPPED_FLAT = "of width or height 0"
+DROPPED_CLASS = "of a class the mapping leaves out"
+
+
+def read_yolo_labels(
+    path: Path, nc: int, dropped: Counter[str] | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Classes (n,) and normalised x1 y1 x2 y2 boxes (n, 4) of a YOLO label file; missing = empty.
+
+    Boxes with no area inside the image are left out, counted in ``dropped`` by reason."""
     if not path.exists():
         return np.zeros(0, dtype=np.int64), np.zeros((0, 4), dtype=np.float32)
     classes, boxes = [], []
@@ -205,8 +220,11 @@ def read_yolo_labels(path: Path, nc: int) -> tuple[np.ndarray, np.ndarray]:
             box = [xy[:, 0].min(), xy[:, 1].min(), xy[:, 0].max(), xy[:, 1].max()]
         else:
             raise InputError(f"{path}:{lineno}: expected 5 values 'class cx cy w h', got {len(values)}")
+        flat = box[2] - box[0] <= 0 or box[3] - box[1] <= 0
         box = list(np.clip(box, 0.0, 1.0))
         if box[2] - box[0] <= 0 or box[3] - box[1] <= 0:
+            if dropped is not None:
+                dropped[DROPPED_FLAT if flat else DROPPED_OUTSIDE] += 1
             continue
         classes.append(int(cls))
         boxes.append(box)
@@ -237,7 +255,7 @@ def load_yolo(yaml_path: Path) -> Dataset:
         items: list[DatasetItem] = []
         for entry in entries:
             if isinstance(entry, dict):
-                items += _remapped_entry(entry, root, yaml_dir, names, yaml_path)
+                items += _remapped_entry(entry, root, yaml_dir, names, yaml_path, ds.dropped[split])
                 continue
             source = _resolve(str(entry), root, yaml_dir)
             if source is None:
@@ -246,7 +264,7 @@ def load_yolo(yaml_path: Path) -> Dataset:
                 items += _coco_with_names(source, names)
                 continue
             for image in _list_images(source, yaml_path):
-                classes, boxes = read_yolo_labels(label_path(image), len(names))
+                classes, boxes = read_yolo_labels(label_path(image), len(names), ds.dropped[split])
                 items.append(DatasetItem(image, classes, boxes))
         ds.split(split).extend(items)
     return ds
@@ -272,6 +290,7 @@ def load_remapped(
     part: str = "train",
     where: Path | None = None,
     domain: str = "",
+    dropped: Counter[str] | None = None,
 ) -> list[DatasetItem]:
     """Images of another dataset with its classes mapped onto ``names``; other classes' boxes dropped.
 
@@ -297,8 +316,10 @@ def load_remapped(
         h = holdout_fraction(image.name)
         if (part == "train" and h < holdout) or (part == "holdout" and h >= holdout):
             continue
-        src_classes, boxes = read_yolo_labels(label_path(image), 10**6)
+        src_classes, boxes = read_yolo_labels(label_path(image), 10**6, dropped)
         keep = np.array([int(c) in lookup for c in src_classes], dtype=bool)
+        if dropped is not None and not keep.all():
+            dropped[DROPPED_CLASS] += int((~keep).sum())
         mapped = np.array([lookup[int(c)] for c in src_classes[keep]], dtype=np.int64)
         items.append(DatasetItem(image, mapped, boxes[keep].reshape(-1, 4), domain or root.name))
     if not items:
@@ -315,7 +336,7 @@ def load_doordetect(root: Path, holdout: float = 0.2, part: str = "train") -> Da
 
 
 def _remapped_entry(
-    entry: dict, root: Path, yaml_dir: Path, names: list[str], where: Path
+    entry: dict, root: Path, yaml_dir: Path, names: list[str], where: Path, dropped: Counter[str]
 ) -> list[DatasetItem]:
     if "path" not in entry:
         raise InputError(f"{where}: a mapping entry needs 'path' (and optionally classes, holdout, part)")
@@ -331,7 +352,8 @@ def _remapped_entry(
     except (TypeError, ValueError):
         raise InputError(f"{where}: classes keys must be integers and holdout a number") from None
     part = str(entry.get("part", "all"))
-    return load_remapped(source, names, cmap, holdout, part, where, str(entry.get("domain", "")))
+    domain = str(entry.get("domain", ""))
+    return load_remapped(source, names, cmap, holdout, part, where, domain, dropped)
 
 
 # --- COCO ------------------------------------------------------------------------------------------

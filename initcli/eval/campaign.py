@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from bimtools.site.load import load_site
-from initcli.config import load_config
+from initcli.config import SessionConfig, load_config
 from initcli.core.geometry import Pose2D
 from initcli.eval.config import EvalConfig, EvalSite
 from initcli.eval.records import TrialKey, TrialRecord
@@ -17,7 +17,7 @@ from initcli.executor import Executor, LocalExecutor, map_unordered
 from initcli.sim.build import check_start
 from initcli.site import choose_storey, input_paths, prepare_site, prepare_world
 
-__all__ = ["PreparedSite", "check_start_poses", "plan_jobs", "prepare_sites", "run_jobs"]
+__all__ = ["PreparedSite", "check_start_poses", "plan_jobs", "prepare_sites", "run_jobs", "site_configs"]
 
 
 @dataclass(frozen=True)
@@ -48,13 +48,17 @@ def prepare_sites(config: EvalConfig, workdir: Path, only: Iterable[str] | None 
     return out
 
 
+def site_configs(config: EvalConfig, only: Iterable[str] | None = None) -> list[SessionConfig]:
+    """The session config of every site the campaign runs (of ``only``, when given)."""
+    wanted = set(only) if only is not None else None
+    return [load_config(site.config) for site in config.sites if wanted is None or site.name in wanted]
+
+
 def campaign_inputs(config: EvalConfig, only: Iterable[str] | None = None) -> list[Path]:
     """Every file and folder the campaign reads: the eval config, each site config and what it names."""
-    wanted = set(only) if only is not None else None
     paths = [config.source] if config.source is not None else []
-    for site in config.sites:
-        if wanted is None or site.name in wanted:
-            paths += input_paths(load_config(site.config))
+    for site_config in site_configs(config, only):
+        paths += input_paths(site_config)
     return paths
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import json
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -12,8 +13,9 @@ from bimkit.checks import check_number
 from bimkit.errors import InputError
 from initcli.config import SCHEMA_PATH as SITE_SCHEMA
 from initcli.config import SessionConfig
+from initcli.config_checks import problems
 
-__all__ = ["SWEEP_KEYS", "Sweep", "apply_sweep", "format_value", "parse_sweep", "sweep_label"]
+__all__ = ["SWEEP_KEYS", "Sweep", "apply_sweep", "check_sweep", "format_value", "parse_sweep", "sweep_label"]
 
 # Short names for the parameters the issue asks to sweep; any dotted config path works too.
 SWEEP_KEYS: dict[str, str] = {
@@ -153,3 +155,14 @@ def apply_sweep(config: SessionConfig, sweep: Sweep, value: float) -> SessionCon
     else:
         setattr(node, name, type(current)(value) if isinstance(current, int) else float(value))
     return out
+
+
+def check_sweep(sweep: Sweep, configs: Iterable[SessionConfig]) -> None:
+    """Every swept value passes the site config's cross-field checks (:mod:`initcli.config_checks`)
+    on every site: ``matching.min_depth`` swept above ``matching.max_depth``, ``miss_rate`` swept in
+    a config that has a detector profile, ... are refused before any trial runs."""
+    for config in configs:
+        for value in sweep.values:
+            for problem in problems(apply_sweep(config, sweep, value), {sweep.path}):
+                where = f" ({config.source})" if config.source else ""
+                raise InputError(f"--sweep {sweep.key}={format_value(value)}{where}: {problem}")

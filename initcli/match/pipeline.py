@@ -254,17 +254,33 @@ def transform_poses_batch(transforms: np.ndarray, pose: Pose2D) -> np.ndarray:
 
 
 def run_match(
-    log_path: Path | str, site_path: Path | str, options: MatchOptions | None = None
+    log_path: Path | str,
+    site_path: Path | str,
+    options: MatchOptions | None = None,
+    source: Path | str | None = None,
 ) -> MatchReport:
     """The whole ``bim-init match`` pipeline; raises :class:`InputError` on bad input.
 
-    The class mapping is the site folder's (:func:`site_class_map`).
+    The class mapping is the site folder's (:func:`site_class_map`). ``source``: the file the user
+    named, when ``log_path`` was converted from it (a bag), for the messages.
     """
     opts = options or MatchOptions()
     opts.validate()
     log = read_log(log_path, skip_bad=opts.skip_bad)
+    _check_depths(log, source if source is not None else log.path)
     site = load_site(Path(site_path), with_maps=False)
     return match_log(log, site, opts, site_class_map(site))
+
+
+def _check_depths(log: DetectionLog, name: Path | str) -> None:
+    """Refuse a log whose camera detections all lack a depth: Eq. 1 places a box by its depth, so
+    none would become a sighting (and the match would end in 0 features with no reason given)."""
+    objects = [o for d in log.detections for o in d.objects]
+    if objects and not any(o.depth is not None and math.isfinite(o.depth) for o in objects):
+        raise InputError(
+            f"{name}: none of the {len(objects)} detections has a depth (every 'depth' is null): "
+            "a detection is placed by its depth (Eq. 1); record or convert with an aligned depth image"
+        )
 
 
 def match_log(

@@ -15,6 +15,7 @@ from bimkit.errors import InputError
 from bimtools.site.load import Site, StoreyModel
 from bimtools.site.records import FREE, OCCUPIED
 from initcli.config import SessionConfig, as_built_params, camera_of, start_pose_degrees
+from initcli.config_checks import detector_profile
 from initcli.core.classes import ClassMap
 from initcli.core.geometry import Pose2D
 from initcli.io.detection_log import DetectedObject
@@ -103,7 +104,14 @@ def build_sim(
         detector = OnnxCamera(onnx, model, world, camera, mount, rng).detect
     else:
         detector = SimulatedDetector(
-            built.features + phantoms, camera, mount, _camera_noise(config), config.detector.rate, world, rng
+            built.features + phantoms,
+            camera,
+            mount,
+            _camera_noise(config),
+            config.detector.rate,
+            world,
+            rng,
+            detector_profile(config),
         ).detect
     spec = config.lidar
     lidar = LidarSpec(int(spec.beams), math.radians(spec.fov), spec.max_range, spec.noise, spec.dropout)

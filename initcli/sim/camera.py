@@ -4,6 +4,15 @@ Reports the BIM features in the field of view, within range, facing the camera a
 behind walls, clutter or workers, as detector boxes with depth (the log format of
 ``bim-init match``): misses, transient false positives, class confusion, persistent phantoms
 (door-like things not in the BIM) and depth noise growing with range (D455: ~2 % at 4 m).
+
+The misses, false boxes, confusions and scores are flat rates (:class:`CameraNoise`) or drawn from a
+measured :class:`~initcli.detector.profile.DetectorProfile` (``sim.detector.profile``): a feature in
+view is then found with the profile's recall at its box height (scaled to the model's input, the
+letterbox of this camera's image), given a class from the profile's confusion matrix and a score
+from its quantiles of true boxes; each image gets a Poisson number of transient false boxes per
+class at the profile's rate per image, scored from its false boxes' quantiles. The profile's
+boxes are independent from image to image (its photos are), where a real camera's false boxes on
+the same poster repeat from frame to frame (``sim.detector.persistent_phantoms`` models those).
 """
 
 from __future__ import annotations
@@ -15,8 +24,9 @@ import numpy as np
 
 from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.detector.profile import DetectorProfile
 from initcli.io.detection_log import DetectedObject
-from initcli.sim.synthetic_log import SimFeature, SyntheticParams, render_image
+from initcli.sim.synthetic_log import SimFeature, SyntheticParams, false_box, render_image
 from initcli.sim.world import SimWorld
 
 __all__ = ["CameraNoise", "SimulatedDetector"]
@@ -43,8 +53,10 @@ class SimulatedDetector:
         rate_hz: float,
         world: SimWorld,
         rng: np.random.Generator,
+        profile: DetectorProfile | None = None,
     ):
         self.features = features
+        self.profile = profile
         self.camera = camera
         self.mount = mount
         self.world = world
@@ -60,9 +72,10 @@ class SimulatedDetector:
             pixel_noise=noise.pixel_noise,
             clip_boxes=True,
             score=0.9,
-            false_positive_rate=noise.false_positives_per_minute / (60.0 * rate_hz),
-            detect_probability=1.0 - noise.miss_rate,
+            false_positive_rate=0.0 if profile else noise.false_positives_per_minute / (60.0 * rate_hz),
+            detect_probability=1.0 if profile else 1.0 - noise.miss_rate,
         )
+        self.scale = profile.input_scale(camera.width, camera.height) if profile else 1.0
 
     def detect(self, truth: Pose2D, t: float) -> list[DetectedObject]:
         segments = self.world.segments_at(truth.x, truth.y, self.noise.range + 1.0, t)
@@ -76,6 +89,8 @@ class SimulatedDetector:
             rng=self.rng,
             classes=self.classes,
         )
+        if self.profile is not None:
+            return self._drawn(found, self.profile)
         out: list[DetectedObject] = []
         for obj, _source in found:
             if (
@@ -87,4 +102,22 @@ class SimulatedDetector:
                 obj = replace(obj, cls=others[int(self.rng.integers(len(others)))])
             score = float(np.clip(self.rng.normal(0.85, 0.08), 0.3, 0.99))
             out.append(replace(obj, score=round(score, 3)))
+        return out
+
+    def _drawn(
+        self, found: list[tuple[DetectedObject, str | None]], profile: DetectorProfile
+    ) -> list[DetectedObject]:
+        """The features in view found, classed and scored as the profile says, and its false boxes."""
+        out: list[DetectedObject] = []
+        for obj, _source in found:
+            height = (obj.bbox[3] - obj.bbox[1]) * self.scale  # px of the model's input
+            if self.rng.random() >= profile.recall_of(obj.cls, height):
+                continue
+            cls = profile.given_class(obj.cls, self.rng)
+            out.append(replace(obj, cls=cls, score=round(profile.score(self.rng, true=True), 3)))
+        for cls, rate in profile.false_boxes.items():
+            for _ in range(int(self.rng.poisson(rate)) if rate > 0 else 0):
+                box, depth = false_box(self.camera, self.params, self.rng)
+                score = round(profile.score(self.rng, true=False), 3)
+                out.append(DetectedObject(cls, score, box, depth))
         return out

@@ -32,6 +32,7 @@ __all__ = [
     "SimFeature",
     "SyntheticLog",
     "SyntheticParams",
+    "false_box",
     "make_log",
     "path_from_waypoints",
     "render_image",
@@ -191,14 +192,23 @@ def render_image(
             d = float(depth[i] + (rng.normal(0.0, sigma) if sigma > 0 else 0.0))
             out.append((DetectedObject(f.cls, p.score, tuple(float(b) for b in box), d), f.id))  # type: ignore[arg-type]
     if p.false_positive_rate > 0 and rng.random() < p.false_positive_rate:
-        cu, cv = rng.uniform(0, camera.width), rng.uniform(0, camera.height)
-        d = float(rng.uniform(p.min_range, p.max_range))
-        box = np.array(box_for_point(cu, cv, d, 1.0, 2.0, camera))
-        if p.clip_boxes:
-            box = np.clip(box, [0, 0, 0, 0], [camera.width, camera.height, camera.width, camera.height])
-        fake = DetectedObject(str(rng.choice(list(classes))), p.score, tuple(float(b) for b in box), d)  # type: ignore[arg-type]
+        false, d = false_box(camera, p, rng)
+        fake = DetectedObject(str(rng.choice(list(classes))), p.score, false, d)
         out.append((fake, None))
     return out
+
+
+def false_box(
+    camera: CameraIntrinsics, p: SyntheticParams, rng: np.random.Generator
+) -> tuple[tuple[float, float, float, float], float]:
+    """A transient false box: a 1 m x 2 m thing centred on a random pixel at a random depth within
+    ``[min_range, max_range]`` (the box, clipped as ``p`` says, and the depth)."""
+    cu, cv = rng.uniform(0, camera.width), rng.uniform(0, camera.height)
+    d = float(rng.uniform(p.min_range, p.max_range))
+    box = np.array(box_for_point(cu, cv, d, 1.0, 2.0, camera))
+    if p.clip_boxes:
+        box = np.clip(box, [0, 0, 0, 0], [camera.width, camera.height, camera.width, camera.height])
+    return (float(box[0]), float(box[1]), float(box[2]), float(box[3])), d
 
 
 def make_log(

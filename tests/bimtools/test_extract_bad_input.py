@@ -5,6 +5,9 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import ifcopenshell
+import ifcopenshell.api.aggregate
+import ifcopenshell.api.root
 import pytest
 from typer.testing import CliRunner
 
@@ -14,6 +17,23 @@ from tests.helpers import SAMPLES
 runner = CliRunner()
 MODEL = str(SAMPLES / "ntu_hallway.ifc")
 BINARY = bytes(range(256)) * 4
+
+
+def edited_model(target: Path, elevation: float | None = None, mezzanine: float | None = None) -> Path:
+    """The hallway model with its storey raised to ``elevation``, or an empty storey ``mezzanine`` m
+    above its floor (which makes the hallway's storey that high)."""
+    model = ifcopenshell.open(MODEL)
+    (storey,) = model.by_type("IfcBuildingStorey")
+    if elevation is not None:
+        storey.Elevation = elevation
+    if mezzanine is not None:
+        upper = ifcopenshell.api.root.create_entity(model, ifc_class="IfcBuildingStorey", name="Mezzanine")
+        upper.Elevation = mezzanine
+        ifcopenshell.api.aggregate.assign_object(
+            model, products=[upper], relating_object=model.by_type("IfcBuilding")[0]
+        )
+    model.write(str(target))
+    return target
 
 
 def snapshot(root: Path) -> dict[str, int]:
@@ -39,6 +59,8 @@ def work(tmp_path: Path) -> Path:
     (tmp_path / "other").mkdir()
     (tmp_path / "other" / "notes.txt").write_text("someone else's\n")
     (tmp_path / "model.ifc").write_bytes(BINARY)
+    edited_model(tmp_path / "far.ifc", elevation=1e9)
+    edited_model(tmp_path / "deep.ifc", elevation=-20000.0)
     return tmp_path
 
 
@@ -83,6 +105,17 @@ CASES = [
     ("-o under a file", [MODEL, "-o", "afile/site"], "is a file"),
     ("-o foreign folder", [MODEL, "-o", "other"], "pass --force"),
     ("binary model", ["model.ifc", "-o", "out"], "model.ifc"),
+    (
+        "storey elevation 1e9",
+        ["far.ifc", "-o", "out"],
+        "far.ifc: storey 'Level 1' has an elevation of 1e+09 m, beyond +-10 km",
+    ),
+    ("storey elevation -20 km", ["deep.ifc", "-o", "out"], "storey 'Level 1' has an elevation of -20000 m"),
+    (
+        "--section-height above every wall",
+        [MODEL, "--section-height", "10", "-o", "out"],
+        "--section-height 10 m cuts no wall on any storey (the lowest storey is 3.00 m high)",
+    ),
     ("missing model", ["missing.ifc", "-o", "out"], "missing.ifc"),
 ]
 
@@ -126,3 +159,15 @@ def test_force_writes_into_a_foreign_folder_and_keeps_its_files(work: Path) -> N
     result = runner.invoke(app, [MODEL, "-o", str(work / "other"), "--force", "--json"])
     assert result.exit_code == 0, result.output
     assert (work / "other" / "site.json").is_file() and (work / "other" / "notes.txt").is_file()
+
+
+def test_a_section_height_above_a_storeys_height_is_a_warning_naming_the_storey(tmp_path: Path) -> None:
+    model = edited_model(tmp_path / "mezz.ifc", mezzanine=1.5)  # Level 1 is 1.5 m high, its walls 3 m
+    result = runner.invoke(app, [str(model), "-o", str(tmp_path / "out"), "--section-height", "2", "--json"])
+    assert result.exit_code == 0, result.output
+    warnings = [line for line in result.stderr.splitlines() if "warning" in line]
+    assert len(warnings) == 2, result.stderr  # the mezzanine is 1.5 m high too: up to the walls' top
+    assert "storey 'Level 1': the section height 2 m is above the storey's height (1.50 m)" in warnings[0]
+    assert "storey 'Mezzanine'" in warnings[1] and "its plan has 0 walls" in warnings[1]
+    result = runner.invoke(app, [str(model), "-o", str(tmp_path / "out2"), "--json"])  # 1 m: below
+    assert result.exit_code == 0 and "warning" not in result.stderr, result.stderr

@@ -10,6 +10,7 @@ from tests.hostile.workspace import (
     BILLION_LAUGHS,
     bag_with,
     config_plus,
+    depthless_log,
     fifo,
     inf_transform,
     log_lines,
@@ -21,6 +22,7 @@ from tests.hostile.workspace import (
     nan_odometry,
     site_copy,
     sparse,
+    storey_elevation,
     summary_with,
     text,
 )
@@ -458,6 +460,18 @@ BAGS = [
         bag_with("d.mcap", nan_detection),
     ),
     Case(
+        "match on a bag with all-NaN depth",
+        (*MATCH, "z.mcap", "--site", "site"),
+        r"z.mcap: none of the \d+ detections has a depth",
+        bag_with("z.mcap", nan_depth),
+    ),
+    Case(
+        "match on a log without any depth",
+        (*MATCH, "nodepth.jsonl", "--site", "site"),
+        r"nodepth.jsonl: none of the 140 detections has a depth \(every 'depth' is null\)",
+        depthless_log("nodepth.jsonl"),
+    ),
+    Case(
         "match on a bag with NaN K",
         (*MATCH, "k.mcap", "--site", "site"),
         r"CameraInfo K matrix holds nan",
@@ -523,5 +537,74 @@ SUMMARIES = [
         ("bim-init", "publish-pose", "s.json", "--dry-run"),
         r"an integer of 5000 digits",
         text("s.json", '{"success": true, "duration_s": ' + DIGITS + "}"),
+    ),
+]
+
+MODELS = [
+    Case(
+        "extract a storey elevation of 1e9",
+        ("bim-extract", "far.ifc", "-o", "out"),
+        r"far.ifc: storey 'Level 1' has an elevation of 1e\+09 m, beyond \+-10 km",
+        storey_elevation("far.ifc", 1e9),
+    ),
+    Case(
+        "extract --section-height 10 on a 3 m storey",
+        ("bim-extract", "model.ifc", "--section-height", "10", "-o", "out"),
+        r"--section-height 10 m cuts no wall on any storey \(the lowest storey is 3.00 m high\)",
+    ),
+]
+
+DATASETS = [
+    Case(
+        "train on labels all outside the image",
+        ("bim-init", "detector", "train", "--data", "data/data.yaml", "--out", "m.pt"),
+        r"data/data.yaml: the train split's 1 image\(s\) hold 0 usable boxes \(1 label\(s\) were dropped: "
+        r"1 outside the image",
+        text("data/labels/train/a.txt", "0 1.5 0.5 0.2 0.2\n"),
+    ),
+]
+
+CONFIGS = [  # issue 29: values a robot cannot have, settings that contradict one another
+    Case(
+        "robot.radius 5",
+        (*RUN, "c.yaml"),
+        r"c.yaml: robot.radius: 5 is above the maximum 2",
+        config_plus("c.yaml", "robot:\n  radius: 5\n"),
+    ),
+    Case(
+        "min_depth above max_depth",
+        (*RUN, "c.yaml"),
+        r"c.yaml: matching.min_depth \(9 m\) must be below matching.max_depth \(3 m\)",
+        config_plus("c.yaml", "matching:\n  min_depth: 9\n  max_depth: 3\n"),
+    ),
+    Case(
+        "principal point outside the image",
+        (*RUN, "c.yaml"),
+        r"c.yaml: camera.cx \(900 px\) lies outside the image \(camera.width 640 px\)",
+        config_plus("c.yaml", "camera:\n  cx: 900\n"),
+    ),
+    Case(
+        "verification p_right above p_wrong",
+        (*RUN, "c.yaml"),
+        r"c.yaml: verification.p_right \(0.9\) is above verification.p_wrong \(0.1\)",
+        config_plus("c.yaml", "verification:\n  p_right: 0.9\n  p_wrong: 0.1\n"),
+    ),
+    Case(
+        "a 1 cm lidar range",
+        (*RUN, "c.yaml"),
+        r"c.yaml: lidar.max_range: 0.01 is below the minimum 1",
+        config_plus("c.yaml", "lidar:\n  max_range: 0.01\n"),
+    ),
+    Case(
+        "a detector profile and a flat miss rate",
+        (*RUN, "c.yaml"),
+        r"c.yaml: sim.detector.profile replaces sim.miss_rate: set the profile or the flat rate, not both",
+        config_plus("c.yaml", "sim:\n  miss_rate: 0.1\n  detector:\n    profile: default-real\n"),
+    ),
+    Case(
+        "a detector profile that is not there",
+        (*RUN, "c.yaml"),
+        r"c.yaml: sim.detector.profile: .*nothere.json: no such detector profile",
+        config_plus("c.yaml", "sim:\n  detector:\n    profile: nothere.json\n"),
     ),
 ]

@@ -17,7 +17,17 @@ import pytest
 
 from tests.hostile.cases_misc import ROSBRIDGE, TRACEBACKS, WORK
 from tests.hostile.cases_outputs import SACRED, UNWRITABLE
-from tests.hostile.cases_parsing import BAGS, DEVICES, LOGS, MAPS, SUMMARIES, YAML
+from tests.hostile.cases_parsing import (
+    BAGS,
+    CONFIGS,
+    DATASETS,
+    DEVICES,
+    LOGS,
+    MAPS,
+    MODELS,
+    SUMMARIES,
+    YAML,
+)
 from tests.hostile.harness import Case, ForkServer, prepare, run_script, snapshot, verify
 from tests.hostile.workspace import build
 from tests.initcli.ros.rosbridge_server import PlainWebsocketServer
@@ -26,7 +36,10 @@ CASES: list[Case] = [
     *SACRED,
     *UNWRITABLE,
     *YAML,
+    *CONFIGS,
     *MAPS,
+    *MODELS,
+    *DATASETS,
     *LOGS,
     *DEVICES,
     *BAGS,

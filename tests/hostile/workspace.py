@@ -233,6 +233,33 @@ def nan_depth(messages: list[BagMessage]) -> None:
             m.value["data"] = np.full(m.value["height"] * m.value["width"], np.nan, "<f4").view(np.uint8)
 
 
+def depthless_log(name: str):
+    """``good.jsonl`` with every detection's depth null, as ``name``."""
+
+    def setup(folder: Path) -> None:
+        records = [json.loads(line) for line in (folder / "good.jsonl").read_text().splitlines()]
+        for record in records:
+            for obj in record.get("objects", []) if record["type"] == "detections" else []:
+                obj["depth"] = None
+        (folder / name).write_text("".join(json.dumps(r) + "\n" for r in records))
+
+    return setup
+
+
+def storey_elevation(name: str, elevation: float):
+    """``model.ifc`` with its storey's elevation set to ``elevation``, as ``name``."""
+
+    def setup(folder: Path) -> None:
+        import ifcopenshell
+
+        model = ifcopenshell.open(str(folder / "model.ifc"))
+        for storey in model.by_type("IfcBuildingStorey"):
+            storey.Elevation = elevation
+        model.write(str(folder / name))
+
+    return setup
+
+
 def thin_image(name: str, width: int, height: int):
     def setup(folder: Path) -> None:
         cv2.imwrite(str(folder / name), np.full((height, width, 3), 128, np.uint8))

@@ -309,6 +309,7 @@ def train(opts: TrainOptions, on_event: Callback | None = None) -> dict:
     ds: Dataset = load_dataset(opts.data)
     if not ds.train:
         raise InputError(f"{opts.data}: the train split has no images")
+    _check_instances(ds, opts.data)
     if opts.imgsz % 32:
         raise InputError(f"--imgsz: must be a multiple of 32, got {opts.imgsz}")
     random.seed(opts.seed)
@@ -359,6 +360,20 @@ def train(opts: TrainOptions, on_event: Callback | None = None) -> dict:
         if schedule.done(step):
             break
     return ckpt or load_checkpoint(opts.out)
+
+
+def _check_instances(ds: Dataset, where: Path | str) -> None:
+    """Refuse a train split without one labelled box, saying how many label rows were left out and why."""
+    if sum(ds.instance_counts("train")) > 0:
+        return
+    dropped = ds.dropped["train"]
+    why = (
+        f"{sum(dropped.values())} label(s) were dropped: "
+        + ", ".join(f"{n} {reason}" for reason, n in dropped.most_common())
+        if dropped
+        else "no image has a label"
+    )
+    raise InputError(f"{where}: the train split's {len(ds.train)} image(s) hold 0 usable boxes ({why})")
 
 
 def _build_net(opts: TrainOptions, ds: Dataset, device: torch.device) -> tuple[Arch, dict | None, Detector]:

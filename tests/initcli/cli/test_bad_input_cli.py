@@ -473,9 +473,9 @@ DETECTOR = [
     ("synth --images 0", lambda w: ["synth", "--site", "x", "--out", "ds", "--images", "0"], "--images"),
     ("synth --size huge", lambda w: ["synth", "--site", "x", "--out", "ds", "--size", "100000x10"], "--size"),
     (
-        "synth --val-fraction 1",
-        lambda w: ["synth", "--site", "x", "--out", "ds", "--val-fraction", "1"],
-        "--val-fraction",
+        "synth --val-fraction 1.5",  # 1 is a test set (docs/detector.md renders one)
+        lambda w: ["synth", "--site", "x", "--out", "ds", "--val-fraction", "1.5"],
+        "--val-fraction: 1.5 is above the maximum 1",
     ),
     ("synth --out a file", lambda w: ["synth", "--site", "x", "--out", "afile"], "is a file"),
     ("train --lr nan", lambda w: ["train", "--data", "x.yaml", "--lr", "nan"], "--lr"),

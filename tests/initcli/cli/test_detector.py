@@ -41,3 +41,63 @@ def test_cli_corrupt_model_one_line(tmp_path):
     assert result.returncode == 2
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "model.onnx" in lines[0] and "Traceback" not in result.stderr
+
+
+def test_calibrate_cli_writes_a_profile_and_refuses_bad_input_in_one_line(tmp_path):
+    import json
+
+    from typer.testing import CliRunner
+
+    from initcli.cli.detector import detector_app
+    from initcli.detector.profile import read_profile
+    from tests.initcli.detector.test_calibrate import _dataset
+
+    data = _dataset(tmp_path / "ds", n=3)
+    out = tmp_path / "p.json"
+    ok = CliRunner().invoke(detector_app, ["calibrate", "default", "--data", str(data), "-o", str(out)])
+    assert ok.exit_code == 0, ok.output
+    assert read_profile(out).images == 3 and "recall door" in ok.output
+    assert json.loads(out.read_text())["dataset"]["boxes"] == {"door": 3, "lift": 1}
+    for args, message in [
+        (["--data", str(tmp_path / "none.yaml"), "-o", str(tmp_path / "q.json")], "none.yaml: no such file"),
+        (["--data", str(data), "-o", str(tmp_path / "q.txt")], "-o/--out"),
+        (
+            ["--data", str(data), "-o", str(tmp_path / "q.json"), "--split", "test"],
+            "--split: expected val or train",
+        ),
+        (["--data", str(data), "-o", str(tmp_path / "q.json"), "--iou", "0"], "--iou"),
+        (["--data", str(data), "-o", str(data)], "data.yaml"),
+    ]:
+        bad = CliRunner().invoke(detector_app, ["calibrate", "default", *args])
+        lines = bad.output.strip().splitlines()
+        assert bad.exit_code == 2 and len(lines) == 1 and message in lines[0], bad.output
+        assert not (tmp_path / "q.json").exists()
+
+
+def test_train_refuses_a_dataset_without_a_usable_box_naming_what_was_dropped(tmp_path):
+    import cv2
+    import pytest
+    from typer.testing import CliRunner
+
+    from initcli.cli.detector import detector_app
+
+    pytest.importorskip("torch")
+    root = tmp_path / "ds"
+    (root / "images" / "train").mkdir(parents=True)
+    (root / "labels" / "train").mkdir(parents=True)
+    for name in ("a", "b"):
+        cv2.imwrite(str(root / "images" / "train" / f"{name}.png"), np.full((48, 64, 3), 90, np.uint8))
+    (root / "labels" / "train" / "a.txt").write_text("0 1.5 0.5 0.2 0.2\n0 0.5 1.3 0.2 0.2\n")
+    (root / "labels" / "train" / "b.txt").write_text("1 0.5 0.5 0.0 0.2\n")
+    (root / "data.yaml").write_text("path: .\ntrain: images/train\nnames: [door, lift, stairs]\n")
+    out = tmp_path / "model.pt"
+    result = CliRunner().invoke(detector_app, ["train", "--data", str(root / "data.yaml"), "--out", str(out)])
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert result.exit_code == 2, result.output
+    assert len(lines) == 1 and "Traceback" not in result.output, result.stderr
+    assert (
+        "the train split's 2 image(s) hold 0 usable boxes (3 label(s) were dropped: 2 outside the image"
+        in lines[0]
+    )
+    assert "1 of width or height 0" in lines[0]
+    assert not out.exists() and not out.with_suffix(".csv").exists()

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from bimkit.errors import InputError
-from initcli.detector.datasets import label_path, load_dataset
+from initcli.detector.datasets import DROPPED_FLAT, DROPPED_OUTSIDE, label_path, load_dataset
 
 
 def _image(path: Path, w: int = 64, h: int = 48) -> None:
@@ -181,3 +181,17 @@ def test_coco_bad_input(tmp_path):
     )
     with pytest.raises(InputError, match="unknown category_id"):
         load_dataset(bad)
+
+
+def test_labels_without_area_in_the_image_are_dropped_and_counted_by_reason(tmp_path):
+    root = tmp_path / "ds"
+    _image(root / "images" / "train" / "a.jpg")
+    (root / "labels" / "train").mkdir(parents=True)
+    rows = ["0 1.5 0.5 0.2 0.2", "0 0.5 -0.4 0.2 0.2", "1 0.5 0.5 0 0.3", "2 0.95 0.5 0.2 0.2"]
+    (root / "labels" / "train" / "a.txt").write_text("\n".join(rows) + "\n")
+    (root / "data.yaml").write_text("path: .\ntrain: images/train\nnames: [door, lift, stairs]\n")
+    ds = load_dataset(root / "data.yaml")
+    assert ds.train[0].classes.tolist() == [2]  # clipped to the image, kept
+    assert np.allclose(ds.train[0].boxes[0], [0.85, 0.4, 1.0, 0.6])
+    assert dict(ds.dropped["train"]) == {DROPPED_OUTSIDE: 2, DROPPED_FLAT: 1}
+    assert not ds.dropped["val"]

@@ -37,3 +37,19 @@ def test_odometry_drift_scales_every_alpha():
 def test_bad_sweeps_are_input_errors(text):
     with pytest.raises(InputError):
         parse_sweep(text)
+
+
+def test_swept_values_pass_the_config_checks_before_any_trial():
+    from initcli.eval.sweep import check_sweep
+
+    config = SessionConfig()
+    check_sweep(parse_sweep("matching.min_depth=0.2,1"), [config])
+    with pytest.raises(
+        InputError, match=r"--sweep matching.min_depth=20: matching.min_depth \(20 m\) must be below"
+    ):
+        check_sweep(parse_sweep("matching.min_depth=1,20"), [config])
+    config.sim.detector.profile = "default-real"
+    with pytest.raises(
+        InputError, match=r"--sweep miss_rate=0.2: sim.detector.profile replaces sim.miss_rate"
+    ):
+        check_sweep(parse_sweep("miss_rate=0.2"), [config])

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from initcli.core.geometry import Pose2D
+from initcli.detector.profile import DetectorProfile, RecallTable
 from initcli.sim.camera import CameraNoise, SimulatedDetector
 from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT, SimFeature
 from initcli.sim.world import SimWorld
@@ -81,3 +82,67 @@ def test_false_positive_rate_follows_the_per_minute_setting() -> None:
     assert det.params.false_positive_rate == pytest.approx(0.5)
     n = sum(len(det.detect(Pose2D(0, 0, 0), float(t))) for t in range(400))
     assert 150 < n < 250
+
+
+# --- with a measured profile (sim.detector.profile) -------------------------------------------------
+
+NEAR = SimFeature("near", "door", 4.0, 0.0, norm_x=-1.0)  # 3.8 m from the camera: ~340 px tall
+FAR = SimFeature("far", "door", 6.0, 0.0, norm_x=-1.0)  # 5.8 m: ~223 px tall
+FLAT = CameraNoise(miss_rate=0.5, false_positives_per_minute=0.0, confusion_rate=0.0, pixel_noise=0.0)
+
+
+def _profile(false: float = 0.0, confusion: dict | None = None) -> DetectorProfile:
+    """Recall 0.9 for boxes over 150 px of a 320x320 input (300 px of the 640x480 camera), 0.2 below."""
+    return DetectorProfile(
+        model="m.onnx",
+        sha256="0" * 64,
+        classes=("door", "lift"),
+        input_width=320,
+        input_height=320,
+        data="d",
+        split="val",
+        images=100,
+        conf=0.25,
+        iou=0.5,
+        recall={
+            "door": RecallTable((0.0, 150.0, 320.0), (50, 50), (10, 45)),
+            "all": RecallTable((0.0, 320.0), (1,), (1,)),
+        },
+        false_boxes={"door": false},
+        confusion=confusion or {"door": {"door": 1}},
+        true_scores=(0.4, 0.8),
+        false_scores=(0.25, 0.35),
+    )
+
+
+def _profiled(feature: SimFeature, profile: DetectorProfile, seed: int = 0) -> SimulatedDetector:
+    world = SimWorld(static=np.zeros((0, 4)))
+    rng = np.random.default_rng(seed)
+    return SimulatedDetector([feature], DEFAULT_CAMERA, DEFAULT_MOUNT, FLAT, 5.0, world, rng, profile)
+
+
+def _found_share(det: SimulatedDetector, images: int = 1500) -> float:
+    return sum(len(det.detect(Pose2D(0, 0, 0), float(t))) for t in range(images)) / images
+
+
+def test_a_profile_reproduces_its_recall_by_box_height() -> None:
+    near, far = _profiled(NEAR, _profile()), _profiled(FAR, _profile())
+    heights = [
+        (o.bbox[3] - o.bbox[1]) * near.scale
+        for f in (NEAR, FAR)
+        for o in _detector([f]).detect(Pose2D(0, 0, 0), 0)
+    ]
+    assert heights[0] > 150 > heights[1]  # px of the model's input: one in each bin
+    assert _found_share(near) == pytest.approx(0.9, abs=0.03)  # not the flat miss_rate 0.5
+    assert _found_share(far) == pytest.approx(0.2, abs=0.03)
+
+
+def test_a_profile_gives_false_boxes_per_image_classes_and_scores() -> None:
+    det = _profiled(SimFeature("x", "door", 20.0, 20.0), _profile(false=0.7), seed=2)  # never in view
+    counts = [len(det.detect(Pose2D(0, 0, 0), float(t))) for t in range(1500)]
+    assert np.mean(counts) == pytest.approx(0.7, abs=0.06)
+    assert max(counts) >= 3  # Poisson: several in one image, where the flat rate gives at most one
+    confused = _profiled(NEAR, _profile(confusion={"door": {"door": 1, "lift": 3}}), seed=3)
+    found = [o for t in range(1500) for o in confused.detect(Pose2D(0, 0, 0), float(t))]
+    assert sum(o.cls == "lift" for o in found) / len(found) == pytest.approx(0.75, abs=0.04)
+    assert all(0.4 <= o.score <= 0.8 for o in found)
