@@ -53,7 +53,7 @@ schemas: install
 DOORDETECT ?= ../shared/datasets/doordetect_train
 PROFILES := runs/profiles
 profiles: install
-	mkdir -p $(PROFILES)
+	rm -rf $(PROFILES) && mkdir -p $(PROFILES)
 	printf 'names: [door, lift, stairs]\nval:\n  - {path: %s, classes: {0: door}, holdout: 0.2, part: holdout}\n' \
 		"$(abspath $(DOORDETECT))" > $(PROFILES)/doordetect_holdout.yaml
 	$(BIN)/bim-extract sample_models/block_b.ifc -o $(PROFILES)/block_b_site
