@@ -37,7 +37,15 @@ from initcli.ros.messages import (
     intrinsics,
     stamp_seconds,
 )
-from initcli.ros.msgdefs import bbox_centre, detection_fields, register_missing, ros2_typestore
+from initcli.ros.msgdefs import (
+    VISION_MSGS_LAYOUTS,
+    bbox_centre,
+    detect_layout,
+    detection_fields,
+    register_missing,
+    ros2_typestore,
+    with_layout,
+)
 from initcli.ros.records import Bag2LogOptions, Bag2LogStats, BagTopics, Topic
 from initcli.ros.tf import TransformTree, frame_name, quaternion_yaw
 
@@ -61,6 +69,7 @@ DEPTH_SYNC_S = 0.05  # s: a depth image this close in time to a colour image is 
 ODOM_MARGIN_S = 0.2  # s: images this far outside the odometry's time span still get its end pose
 CLOCK_JUMP_S = 0.5  # s: a topic whose stamps go back by more than this has a broken clock
 DEPTH_BUFFER = 30  # depth images kept while waiting for their colour image
+PROBED = 50  # messages of a topic without definitions tried in each vision_msgs layout
 
 Progress = Callable[[int, int], None]  # (messages done, messages in all)
 
@@ -98,11 +107,42 @@ class BagSource:
             raise
         except Exception as exc:  # noqa: BLE001 - rosbags raises many types for a bad file
             raise InputError(f"{self.path}: not a readable ROS bag ({_first_line(exc)})") from None
-        register_missing(self.reader.typestore, {c.msgtype for c in self.reader.connections})
+        try:
+            register_missing(self.reader.typestore, {c.msgtype for c in self.reader.connections})
+            self.vision_layout = self._vision_layout()
+        except BaseException:
+            self.reader.close()
+            raise
         self.topics: dict[str, Topic] = {}
         for c in self.reader.connections:
             old = self.topics.get(c.topic)
             self.topics[c.topic] = Topic(c.topic, c.msgtype, (old.count if old else 0) + c.msgcount)
+
+    def _vision_layout(self) -> str | None:
+        """The ``vision_msgs`` layout of a ROS 2 bag that carries no definitions of them (a
+        ``.db3`` of Foxy or Humble): the one its messages parse in, put in the reader's typestore.
+        None: the bag's own definitions (or no vision_msgs)."""
+        from rosbags.interfaces import MessageDefinitionFormat
+
+        bundled = [
+            c
+            for c in self.reader.connections
+            if c.msgtype.startswith("vision_msgs/") and c.msgdef.format == MessageDefinitionFormat.NONE
+        ]
+        if not bundled or not self.reader.is2:
+            return None
+        for conn in bundled:
+            raws = (raw for _, (_, _, raw) in zip(range(PROBED), self.reader.messages(connections=[conn])))
+            layout = detect_layout(raws, conn.msgtype)
+            if layout is None:
+                raise InputError(
+                    f"{self.path}: {conn.topic}: the {conn.msgtype} messages carry no definition and parse "
+                    f"in no known vision_msgs layout ({', '.join(VISION_MSGS_LAYOUTS)})"
+                )
+            if layout != "humble":
+                self.reader.typestore = with_layout(self.reader.typestore, layout)
+                return layout
+        return "humble"
 
     def close(self) -> None:
         self.reader.close()
@@ -123,13 +163,16 @@ class BagSource:
         conns = [c for c in self.reader.connections if c.topic in wanted]
         if not conns:
             return
+        topic = ""
         try:
             for conn, stamp, raw in self.reader.messages(connections=conns):
+                topic = conn.topic
                 yield conn.topic, stamp, self.reader.deserialize(raw, conn.msgtype)
         except InputError:
             raise
         except Exception as exc:  # noqa: BLE001
-            raise InputError(f"{self.path}: cannot read a message ({_first_line(exc)})") from None
+            where = f"{topic}: " if topic else ""
+            raise InputError(f"{self.path}: {where}cannot read a message ({_first_line(exc)})") from None
 
     def first(self, topic: str) -> Any | None:
         for _, _, msg in self.messages([topic]):
