@@ -29,7 +29,9 @@ ImageTopic = Annotated[
 ]
 DetectionsTopic = Annotated[
     str | None,
-    typer.Option("--detections-topic", metavar="T", help="vision_msgs/Detection2DArray topic (robot's detector)."),
+    typer.Option(
+        "--detections-topic", metavar="T", help="vision_msgs/Detection2DArray topic (robot's detector)."
+    ),
 ]
 DepthTopic = Annotated[
     str | None, typer.Option("--depth-topic", metavar="T", help="Aligned depth Image (16UC1 mm or 32FC1 m).")
@@ -41,7 +43,9 @@ OdomTopic = Annotated[
     str | None,
     typer.Option("--odom-topic", metavar="T", help="nav_msgs/Odometry topic [default: /tf odom->base]."),
 ]
-ScanTopic = Annotated[str | None, typer.Option("--scan-topic", metavar="T", help="sensor_msgs/LaserScan topic.")]
+ScanTopic = Annotated[
+    str | None, typer.Option("--scan-topic", metavar="T", help="sensor_msgs/LaserScan topic.")
+]
 BaseFrame = Annotated[
     str | None,
     typer.Option("--base-frame", metavar="F", help="Robot base frame [default: the odometry's child]."),

@@ -132,7 +132,8 @@ class BagSource:
         if not bundled or not self.reader.is2:
             return None
         for conn in bundled:
-            raws = (raw for _, (_, _, raw) in zip(range(PROBED), self.reader.messages(connections=[conn])))
+            messages = self.reader.messages(connections=[conn])
+            raws = (raw for _, (_, _, raw) in zip(range(PROBED), messages, strict=False))
             layout = detect_layout(raws, conn.msgtype)
             if layout is None:
                 raise InputError(

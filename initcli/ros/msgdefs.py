@@ -48,7 +48,9 @@ __all__ = [
 VISION_MSGS_LAYOUTS = ("humble", "galactic", "foxy", "noetic")
 CDR_LAYOUTS = ("humble", "foxy")  # ROS 2 layouts with bytes of their own (galactic's are humble's)
 
-_ARRAY = {"vision_msgs/msg/Detection2DArray": "std_msgs/Header header\nvision_msgs/Detection2D[] detections\n"}
+_ARRAY = {
+    "vision_msgs/msg/Detection2DArray": "std_msgs/Header header\nvision_msgs/Detection2D[] detections\n"
+}
 _HYPOTHESIS = {
     "vision_msgs/msg/ObjectHypothesis": "string class_id\nfloat64 score\n",
     "vision_msgs/msg/ObjectHypothesisWithPose": (

@@ -265,8 +265,9 @@ def _bag_and_site(tmp_path: Path) -> tuple[Path, Path]:
 
 def test_a_bag_takes_bag2logs_options(tmp_path: Path) -> None:
     bag, site = _bag_and_site(tmp_path)
-    options = ["--class-names", "door,lift,stairs", "--detections-topic", "/detections", "--odom-topic", "/odom"]
-    result = invoke("match", bag, "--site", site, *options, "--base-frame", "base_link", "--rate", "5", "--json")
+    options = ["--class-names", "door,lift,stairs", "--detections-topic", "/detections"]
+    options += ["--odom-topic", "/odom", "--base-frame", "base_link", "--rate", "5"]
+    result = invoke("match", bag, "--site", site, *options, "--json")
     assert result.exit_code == 0, result.output
     doc = json.loads(result.stdout)
     assert doc["verdict"] == "unique match" and doc["hypotheses"][0]["matches"] == ["F0", "F1", "F2"]
