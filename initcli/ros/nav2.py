@@ -45,12 +45,14 @@ def covariance_6x6(cov: np.ndarray | list | None) -> tuple[float, ...]:
     return tuple(out)
 
 
-def stamp_dict(t: float) -> dict[str, int]:
+def stamp_dict(t: float, ros1: bool = False) -> dict[str, int]:
+    """A time as ROS 2 ``{sec, nanosec}`` or, ``ros1``, as ROS 1's ``{secs, nsecs}`` (what a ROS 1
+    rosbridge reads; each bridge ignores the other's names)."""
     sec = math.floor(t)
     nanosec = int(round((t - sec) * 1e9))
     if nanosec >= 1_000_000_000:
         sec, nanosec = sec + 1, nanosec - 1_000_000_000
-    return {"sec": int(sec), "nanosec": nanosec}
+    return {"secs": int(sec), "nsecs": nanosec} if ros1 else {"sec": int(sec), "nanosec": nanosec}
 
 
 def pose_dict(x: float, y: float, yaw: float) -> dict[str, Any]:
@@ -58,18 +60,20 @@ def pose_dict(x: float, y: float, yaw: float) -> dict[str, Any]:
     return {"position": {"x": x, "y": y, "z": 0.0}, "orientation": {"x": qx, "y": qy, "z": qz, "w": qw}}
 
 
-def initial_pose_message(pose: InitialPose) -> dict[str, Any]:
-    """``geometry_msgs/PoseWithCovarianceStamped`` as rosbridge JSON."""
+def initial_pose_message(pose: InitialPose, ros1: bool = False) -> dict[str, Any]:
+    """``geometry_msgs/PoseWithCovarianceStamped`` as rosbridge JSON (``ros1``: ROS 1 stamp names)."""
     return {
-        "header": {"stamp": stamp_dict(pose.stamp), "frame_id": pose.frame_id},
+        "header": {"stamp": stamp_dict(pose.stamp, ros1), "frame_id": pose.frame_id},
         "pose": {"pose": pose_dict(pose.x, pose.y, pose.yaw), "covariance": list(pose.covariance)},
     }
 
 
-def pose_array_message(t: float, poses: list[Pose2D], frame_id: str = "map") -> dict[str, Any]:
+def pose_array_message(
+    t: float, poses: list[Pose2D], frame_id: str = "map", ros1: bool = False
+) -> dict[str, Any]:
     """``geometry_msgs/PoseArray`` of the hypotheses (base poses in the BIM/map frame)."""
     return {
-        "header": {"stamp": stamp_dict(t), "frame_id": frame_id},
+        "header": {"stamp": stamp_dict(t, ros1), "frame_id": frame_id},
         "poses": [pose_dict(p.x, p.y, p.yaw) for p in poses],
     }
 

@@ -28,6 +28,7 @@ __all__ = [
 DEFAULT_PORT = 9090
 CONNECT_TIMEOUT_S = 5.0
 HANDSHAKE_SERVICE = "/bim_init/handshake"  # no robot offers it: rosbridge answers with a failure
+ROSAPI_PUBLISHERS = "/rosapi/publishers"  # rosapi (launched with rosbridge): a topic's publishers
 ADVERTISE_SETTLE_S = 0.5  # s: subscribers of a new publisher need a moment before the first message
 
 
@@ -66,14 +67,42 @@ class RosbridgeLink:
         """A websocket server is not yet a rosbridge: call a service no robot has and wait for the
         ``service_response`` every rosbridge (ROS 1 and 2) sends back, a failure naming the service.
         A plain websocket server (or one that echoes) never sends one: an error, not "sent"."""
-        answered = threading.Event()
-        probe = self._roslibpy.Service(self.ros, HANDSHAKE_SERVICE, "std_srvs/Trigger")
-        probe.call(self._roslibpy.ServiceRequest(), lambda _: answered.set(), lambda _: answered.set())
-        if not answered.wait(timeout):
+        if self.call_service(HANDSHAKE_SERVICE, "std_srvs/Trigger", {}, timeout) is None:
             raise InputError(
                 f"ws://{self.host}:{self.port} is a websocket server but does not speak rosbridge (no answer "
                 f"to a rosbridge service call in {timeout:g} s)"
             )
+
+    def call_service(
+        self, name: str, srvtype: str, request: dict[str, Any], timeout: float
+    ) -> tuple[bool, Any] | None:
+        """Call a service through rosbridge: (True, the response) when it answered, (False, the
+        error text) when rosbridge refused (no such service, a failure), None: no answer in time."""
+        answered = threading.Event()
+        answer: list[tuple[bool, Any]] = []
+
+        def done(ok: bool, value: Any) -> None:
+            answer.append((ok, value))
+            answered.set()
+
+        service = self._roslibpy.Service(self.ros, name, ros_type(srvtype))
+        service.call(
+            self._roslibpy.ServiceRequest(request), lambda v: done(True, dict(v)), lambda e: done(False, e)
+        )
+        return answer[0] if answered.wait(timeout) else None
+
+    def publisher_up(self, topic: str, timeout: float) -> bool | None:
+        """Whether rosbridge reports a publisher on ``topic`` (rosapi's ``publishers``); None: the
+        server offers no rosapi, so nobody can tell."""
+        answer = self.call_service(ROSAPI_PUBLISHERS, "rosapi/Publishers", {"topic": topic}, timeout)
+        if answer is None or not answer[0]:
+            return None
+        return bool(answer[1].get("publishers"))
+
+    def flush(self, timeout: float = CONNECT_TIMEOUT_S) -> bool:
+        """Wait until rosbridge has read everything sent so far: it handles one connection's frames
+        in order, so the answer to a service call sent last comes after all of them."""
+        return self.call_service(HANDSHAKE_SERVICE, "std_srvs/Trigger", {}, timeout) is not None
 
     @property
     def connected(self) -> bool:
