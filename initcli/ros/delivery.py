@@ -18,18 +18,34 @@ import math
 import threading
 import time
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
 from initcli.core.geometry import Pose2D
 from initcli.core.motion import Alphas, carry_covariance
-from initcli.ros.nav2 import covariance_6x6, initial_pose_message
-from initcli.ros.records import INITIALPOSE_TOPIC, POSE_WITH_COVARIANCE_STAMPED, InitialPose
-from initcli.ros.rosbridge import RosbridgeLink
+from initcli.ros.nav2 import covariance_6x6, initial_pose_message, state_message
+from initcli.ros.records import (
+    INITIALPOSE_TOPIC,
+    POSE_WITH_COVARIANCE_STAMPED,
+    STATE_TOPIC,
+    STRING,
+    InitialPose,
+)
+from initcli.ros.rosbridge import CONNECT_TIMEOUT_S, DEFAULT_PORT, RosbridgeLink
+from initcli.ros.rosbridge_driver import header_stamp
 from initcli.ros.tf import quaternion_yaw
 
-__all__ = ["ADVERTISE_WAIT_S", "SERVICE_TIMEOUT_S", "CarriedPose", "deliver_initial_pose", "pose_record"]
+__all__ = [
+    "ADVERTISE_WAIT_S",
+    "SERVICE_TIMEOUT_S",
+    "CarriedPose",
+    "FixedPose",
+    "PoseSource",
+    "deliver_initial_pose",
+    "pose_record",
+    "publish_initial_pose",
+]
 
 SERVICE_TIMEOUT_S = 2.0  # s: one rosapi / set_initial_pose call
 ADVERTISE_WAIT_S = 5.0  # s: rosapi asked at most this long whether /initialpose is up
@@ -98,11 +114,31 @@ class CarriedPose:
         return InitialPose(stamp, pose.x, pose.y, pose.yaw, covariance_6x6(cov))
 
 
-def _amcl_pose(msg: dict[str, Any], stamp: Callable[[dict[str, Any]], float]) -> tuple[float, Pose2D]:
+class PoseSource(Protocol):
+    """What :func:`deliver_initial_pose` sends: the pose to send now, and ours at a stamp."""
+
+    def message_pose(self) -> InitialPose: ...
+    def at(self, stamp: float) -> Pose2D | None: ...
+
+
+class FixedPose:
+    """A pose that is not carried (``bim-init publish-pose``: no odometry): the same each send."""
+
+    def __init__(self, pose: InitialPose) -> None:
+        self.pose = pose
+
+    def message_pose(self) -> InitialPose:
+        return self.pose
+
+    def at(self, stamp: float) -> Pose2D | None:
+        return Pose2D(self.pose.x, self.pose.y, self.pose.yaw)
+
+
+def _amcl_pose(msg: dict[str, Any]) -> tuple[float, Pose2D]:
     pose = msg["pose"]["pose"]
     p, q = pose["position"], pose["orientation"]
     yaw = quaternion_yaw(q.get("x", 0.0), q.get("y", 0.0), q.get("z", 0.0), q.get("w", 1.0))
-    return stamp(msg), Pose2D(float(p.get("x", 0.0)), float(p.get("y", 0.0)), yaw)
+    return header_stamp(msg), Pose2D(float(p.get("x", 0.0)), float(p.get("y", 0.0)), yaw)
 
 
 def _advertised(link: RosbridgeLink, delay: float) -> str:
@@ -122,9 +158,8 @@ def _advertised(link: RosbridgeLink, delay: float) -> str:
 
 def deliver_initial_pose(
     link: RosbridgeLink,
-    carried: CarriedPose,
+    carried: PoseSource,
     settings: Any,  # initcli.config.Nav2Section
-    stamp_of: Callable[[dict[str, Any]], float],
     ros1: bool = False,
 ) -> dict[str, Any]:
     """Send the carried pose to Nav2 until AMCL takes it (see the module docstring); the report."""
@@ -134,7 +169,7 @@ def deliver_initial_pose(
 
     def on_amcl(msg: dict[str, Any]) -> None:
         try:
-            amcl.append(_amcl_pose(msg, stamp_of))
+            amcl.append(_amcl_pose(msg))
         except (KeyError, TypeError, ValueError):
             return
         arrived.set()
@@ -185,7 +220,7 @@ def deliver_initial_pose(
 
 
 def _agreement(
-    amcl: list[tuple[float, Pose2D]], carried: CarriedPose, first_sent: float, confirm: Any
+    amcl: list[tuple[float, Pose2D]], carried: PoseSource, first_sent: float, confirm: Any
 ) -> dict[str, Any] | None:
     """The first AMCL pose, stamped since our first send, within the tolerance of ours at its stamp."""
     for stamp, theirs in list(amcl):
@@ -202,3 +237,26 @@ def _agreement(
                 "amcl_error_deg": round(err_deg, 3),
             }
     return None
+
+
+def publish_initial_pose(
+    pose: InitialPose,
+    host: str = "localhost",
+    port: int = DEFAULT_PORT,
+    settings: Any = None,  # initcli.config.Nav2Section; None: its defaults without confirmation
+    ros1: bool = False,
+    timeout: float = CONNECT_TIMEOUT_S,
+) -> dict[str, Any]:
+    """``bim-init publish-pose``: deliver ``pose`` as it is (and "initialised" on the state topic);
+    the delivery report, with the message sent as ``message``."""
+    if settings is None:
+        from initcli.config import Nav2Section
+
+        settings = Nav2Section()
+        settings.confirm.timeout = 0.0
+    with RosbridgeLink(host, port, timeout) as link:
+        link.advertise(STATE_TOPIC, STRING)
+        report = deliver_initial_pose(link, FixedPose(pose), settings, ros1)
+        link.publish(STATE_TOPIC, STRING, state_message("initialised"))
+        report["flushed"] = link.flush() and report["flushed"]
+    return report | {"message": initial_pose_message(pose, ros1)}

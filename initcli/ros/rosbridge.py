@@ -1,27 +1,22 @@
 """The live link to a ROS robot over rosbridge (protocol v2, JSON over websocket) with roslibpy.
 
-:class:`RosbridgeLink` advertises, publishes and subscribes; :func:`publish_initial_pose` sends a
-finished session's pose once to ``/initialpose`` (and the state to ``/bim_init/state``).
+:class:`RosbridgeLink` advertises, publishes, subscribes and calls services; it can ask rosapi
+whether a topic is up and wait until rosbridge has read what was sent (:meth:`RosbridgeLink.flush`).
 roslibpy is in the ``[ros]`` extra: ``pip install 'bim-init[ros]'``.
 """
 
 from __future__ import annotations
 
 import threading
-import time
 from collections.abc import Callable
 from typing import Any
 
 from bimkit.errors import InputError
-from initcli.ros.nav2 import initial_pose_message, state_message
-from initcli.ros.records import INITIALPOSE_TOPIC, STATE_TOPIC, InitialPose
 
 __all__ = [
-    "ADVERTISE_SETTLE_S",
     "CONNECT_TIMEOUT_S",
     "DEFAULT_PORT",
     "RosbridgeLink",
-    "publish_initial_pose",
     "ros_type",
 ]
 
@@ -29,7 +24,6 @@ DEFAULT_PORT = 9090
 CONNECT_TIMEOUT_S = 5.0
 HANDSHAKE_SERVICE = "/bim_init/handshake"  # no robot offers it: rosbridge answers with a failure
 ROSAPI_PUBLISHERS = "/rosapi/publishers"  # rosapi (launched with rosbridge): a topic's publishers
-ADVERTISE_SETTLE_S = 0.5  # s: subscribers of a new publisher need a moment before the first message
 
 
 def ros_type(msgtype: str) -> str:
@@ -148,22 +142,3 @@ class RosbridgeLink:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
-
-
-def publish_initial_pose(
-    pose: InitialPose,
-    host: str = "localhost",
-    port: int = DEFAULT_PORT,
-    settle: float = ADVERTISE_SETTLE_S,
-    timeout: float = CONNECT_TIMEOUT_S,
-) -> dict[str, Any]:
-    """Send ``pose`` once on ``/initialpose`` (and "initialised" on the state topic); returns the message."""
-    message = initial_pose_message(pose)
-    with RosbridgeLink(host, port, timeout) as link:
-        link.advertise(INITIALPOSE_TOPIC, "geometry_msgs/msg/PoseWithCovarianceStamped")
-        link.advertise(STATE_TOPIC, "std_msgs/msg/String")
-        time.sleep(settle)
-        link.publish(INITIALPOSE_TOPIC, "geometry_msgs/msg/PoseWithCovarianceStamped", message)
-        link.publish(STATE_TOPIC, "std_msgs/msg/String", state_message("initialised"))
-        time.sleep(min(settle, 0.2))  # let the frames leave before closing
-    return message

@@ -22,7 +22,7 @@ from initcli.core.geometry import Pose2D
 from initcli.core.particle_filter import FilterNoise
 from initcli.ros.delivery import CarriedPose, deliver_initial_pose, pose_record
 from initcli.ros.rosbridge import RosbridgeLink
-from initcli.ros.rosbridge_driver import RosbridgeDriver, header_stamp
+from initcli.ros.rosbridge_driver import RosbridgeDriver
 from initcli.session.outputs import summary_document, write_summary
 from initcli.session.result import MatchStep, SessionResult
 from initcli.session.runner import Observer, Session
@@ -55,7 +55,7 @@ def _deliver(config: SessionConfig, result: SessionResult, driver: RosbridgeDriv
     assert result.pose is not None and result.transform is not None
     claim_stamp = driver.frame_stamp  # the session ends on the frame of its claim
     carried = CarriedPose(result.transform, result.covariance, claim_stamp, driver.odometry, FilterNoise())
-    report = deliver_initial_pose(driver.link, carried, config.nav2, header_stamp, driver.ros1)
+    report = deliver_initial_pose(driver.link, carried, config.nav2, driver.ros1)
     stamp, pose, cov = carried.now()
     sent = report.get("sent_stamps", [stamp])[-1]
     last = carried.at(sent) or pose

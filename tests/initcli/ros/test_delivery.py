@@ -56,7 +56,7 @@ def _deliver(server: RosbridgeServer, robot: MovingRobot, settings: Nav2Section,
             claimed * frame.odom.inverse(), COV, claim_stamp, driver.odometry, FilterNoise()
         )
         time.sleep(drive_on)
-        report = deliver_initial_pose(link, carried, settings, header_stamp, driver.ros1)
+        report = deliver_initial_pose(link, carried, settings, driver.ros1)
         newest = robot.sent[-1]
         assert driver.ros1 == robot.ros1
     return report, claim_stamp, newest

@@ -176,3 +176,16 @@ def test_a_summary_off_its_schema_is_refused_before_anything_is_sent(
     path.write_text(json.dumps({**_summary(), **change}))
     with pytest.raises(InputError, match=expected):
         read_summary(path)
+
+
+def test_read_summary_checks_a_live_runs_published_pose(tmp_path: Path) -> None:
+    path = tmp_path / "summary.json"
+    published = {"stamp": 1_700_000_012.5, "x": 4.5, "y": 1.25, "yaw_deg": 95.0}
+    path.write_text(json.dumps(_summary(published=published, delivery={"confirmed": True, "sends": 2})))
+    assert read_summary(path)["published"]["stamp"] == 1_700_000_012.5
+    path.write_text(json.dumps(_summary(published={"x": 4.5, "y": 1.25, "yaw_deg": 95.0})))
+    with pytest.raises(InputError, match="published"):
+        read_summary(path)
+    path.write_text(json.dumps(_summary(delivery={"confirmed": "yes"})))
+    with pytest.raises(InputError, match="delivery.confirmed"):
+        read_summary(path)
