@@ -26,7 +26,8 @@ class RosbridgeServer:
     """``rosapi``: answers ``/rosapi/publishers`` (a topic advertised by a client has rosbridge's
     node as publisher); ``amcl``: an AMCL stand-in that answers each ``/initialpose`` after
     ``amcl_delay`` s with the same pose on ``/amcl_pose`` (the first ``amcl_ignores`` are ignored);
-    ``set_initial_pose``: offers AMCL's ``/set_initial_pose`` service."""
+    ``set_initial_pose``: offers AMCL's ``/set_initial_pose`` service; ``hooks``: the test's
+    callbacks for a client's operations (``("publish", "/cmd_vel")``)."""
 
     def __init__(
         self,
@@ -38,6 +39,7 @@ class RosbridgeServer:
     ) -> None:
         self.rosapi, self.amcl, self.amcl_delay = rosapi, amcl, amcl_delay
         self.amcl_ignores, self.set_initial_pose = amcl_ignores, set_initial_pose
+        self.hooks: dict[tuple[str, str], Any] = {}  # (op, topic) -> called with each such op
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         self.sock.bind(("127.0.0.1", 0))
@@ -136,6 +138,9 @@ class RosbridgeServer:
                 subs = self.subscriptions.get(op["topic"], [])
                 if conn in subs:
                     subs.remove(conn)
+            hook = self.hooks.get((str(op.get("op")), str(op.get("topic"))))
+        if hook is not None:  # outside the lock: a hook may send
+            hook(op)
 
     def _answer(self, op: dict[str, Any]) -> dict[str, Any]:
         """rosapi's publishers and AMCL's service where offered; else what rosbridge answers for a
