@@ -62,6 +62,21 @@ class RosbridgeSection:  # robot.driver: rosbridge (initcli/ros/rosbridge_driver
         "the depth image aligned with the colour image (16UC1 mm or 32FC1 m)",
     )
     cmd_vel_topic: str = setting("/cmd_vel", "geometry_msgs/Twist")
+    camera_info_topic: str = setting(
+        "/camera/color/camera_info", "sensor_msgs/CameraInfo: the intrinsics (camera: is the fallback)"
+    )
+    tf_static_topic: str = setting(
+        "/tf_static", "tf2_msgs/TFMessage: the camera mount (camera.pose is the fallback)"
+    )
+    base_frame: str = setting(
+        "", "the robot's base frame for the camera mount (empty: the odometry's child frame)"
+    )
+    camera_wait: float = setting(
+        3.0,
+        "s: how long to wait for CameraInfo and /tf_static before the site config's camera",
+        minimum=0,
+        maximum=60,
+    )
 
 
 @dataclass

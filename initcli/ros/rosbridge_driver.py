@@ -103,6 +103,7 @@ class RosbridgeDriver:
         self.wall_clock = False  # its odometry has no stamps: the robot's clock is taken as ours
         self.clock_origin: float | None = None  # robot-clock stamp of session time 0
         self.frame_stamp = 0.0  # robot-clock stamp of the last frame
+        self.base_frame = ""  # the odometry's child frame (the robot's base), once it arrived
         self._scan: LaserScan | None = None
         self._detections: deque[dict[str, Any]] = deque(maxlen=20)
         self._depths: deque[tuple[float, dict[str, Any]]] = deque(maxlen=10)
@@ -122,6 +123,7 @@ class RosbridgeDriver:
         pose = msg["pose"]["pose"]
         p, q = pose["position"], pose["orientation"]
         yaw = quaternion_yaw(q.get("x", 0.0), q.get("y", 0.0), q.get("z", 0.0), q.get("w", 1.0))
+        self.base_frame = self.base_frame or str(msg.get("child_frame_id") or "")
         stamp_fields = msg.get("header", {}).get("stamp", {})
         stamp = header_stamp(msg)
         if stamp <= 0.0:  # no stamp: the robot's clock is this machine's (rosbridge on the robot)
@@ -201,10 +203,15 @@ class RosbridgeDriver:
         # Session time is the robot's clock since the start: a frame's pose is its odometry's, at its stamp.
         return SensorFrame(stamp - (self.clock_origin or stamp), pose, scan, detections)
 
-    def start(self) -> SensorFrame:
-        deadline = time.monotonic() + self.odom_timeout + 1.0
+    def wait_odometry(self, timeout: float) -> bool:
+        """Wait up to ``timeout`` s for the first odometry; whether it came."""
+        deadline = time.monotonic() + timeout
         while self._odom is None and time.monotonic() < deadline:
             time.sleep(0.01)
+        return self._odom is not None
+
+    def start(self) -> SensorFrame:
+        self.wait_odometry(self.odom_timeout + 1.0)
         return self._frame()
 
     def step(self, v: float, w: float) -> SensorFrame:

@@ -10,6 +10,7 @@ zero Twist.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -21,6 +22,7 @@ from initcli.config import SessionConfig, camera_of, config_to_dict
 from initcli.core.geometry import Pose2D
 from initcli.core.particle_filter import FilterNoise
 from initcli.ros.delivery import CarriedPose, deliver_initial_pose, pose_record
+from initcli.ros.live_camera import live_camera
 from initcli.ros.rosbridge import RosbridgeLink
 from initcli.ros.rosbridge_driver import RosbridgeDriver
 from initcli.session.outputs import summary_document, write_summary
@@ -66,10 +68,18 @@ def _deliver(config: SessionConfig, result: SessionResult, driver: RosbridgeDriv
     }
 
 
-def run_live(config: SessionConfig, out: Path, seed: int, view: Observer | None = None) -> dict:
+def run_live(
+    config: SessionConfig,
+    out: Path,
+    seed: int,
+    view: Observer | None = None,
+    warn: Callable[[str], None] = lambda line: None,
+) -> dict:
     """``robot.driver: rosbridge``: the session on the real robot behind a rosbridge server (see the
-    module docstring); returns ``summary.json``'s document. An error once the session runs is
-    raised again after ``--out`` holds its log and summary."""
+        module docstring); returns ``summary.json``'s document. The camera comes from the robot's
+    CameraInfo and ``/tf_static`` where it sends them (``warn`` gets a line where the site config's
+    values are used instead or disagree). An error once the session runs is
+        raised again after ``--out`` holds its log and summary."""
     r = config.robot
     stopped: BaseException | None = None
     with staged_directory(out, RUN_MARKERS) as stage:
@@ -87,6 +97,13 @@ def run_live(config: SessionConfig, out: Path, seed: int, view: Observer | None 
             max_linear=r.max_linear,
             max_angular=r.max_angular,
         )
+        driver.wait_odometry(r.rosbridge.camera_wait)
+        seen = live_camera(
+            link, r.rosbridge, camera, mount, r.rosbridge.base_frame or driver.base_frame or "base_link"
+        )
+        driver.camera, driver.mount = seen.camera, seen.mount
+        for line in seen.warnings:
+            warn(line)
         last_state: list[str] = []
         published = [0]  # match steps whose hypotheses went out
         steps: list[MatchStep] = []  # the session's match steps (bound below)
@@ -131,7 +148,12 @@ def run_live(config: SessionConfig, out: Path, seed: int, view: Observer | None 
         doc = summary_document(
             result,
             simulated=False,
-            extra={"clock": _clock(driver), **extra, "config": config_to_dict(config)},
+            extra={
+                "clock": _clock(driver),
+                "camera": seen.record(),
+                **extra,
+                "config": config_to_dict(config),
+            },
         )
         write_summary(stage / "summary.json", doc)
         driver.close()

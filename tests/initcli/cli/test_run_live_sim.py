@@ -31,8 +31,10 @@ pytest.importorskip("roslibpy")
 START = Pose2D(10.0, 11.0, 0.0)  # block_a: initialises in ~45 s of robot time (seed 3)
 
 
-def _config(tmp_path: Path, port: int) -> Path:
+def _config(tmp_path: Path, port: int, camera: dict | None = None) -> Path:
+    """block_a's config for a live robot on ``port``; ``camera``: changes to its camera: section."""
     doc = yaml.safe_load((SAMPLES / "block_a.site.yaml").read_text())
+    doc["camera"].update(camera or {})
     doc["site"]["path"] = str(SAMPLES / "block_a.ifc")
     doc["robot"]["driver"] = "rosbridge"
     doc["robot"]["rosbridge"] = {
@@ -72,12 +74,14 @@ def _last_twist(server: RosbridgeServer) -> tuple[float, float] | None:
     return (twists[-1]["linear"]["x"], twists[-1]["angular"]["z"]) if twists else None
 
 
-def live_run(tmp_path: Path, site, ros1: bool = False, amcl_ignores: int = 1, **robot) -> dict:
+def live_run(
+    tmp_path: Path, site, ros1: bool = False, amcl_ignores: int = 1, camera: dict | None = None, **robot
+) -> dict:
     """One live run (the AMCL stand-in ignores the first ``amcl_ignores`` poses: re-sent, carried
     further); what was measured, for the last pose sent."""
     config, loaded = site
     with RosbridgeServer(rosapi=True, amcl=True, amcl_ignores=amcl_ignores, set_initial_pose=True) as server:
-        path = _config(tmp_path, server.port)
+        path = _config(tmp_path, server.port, camera)
         with SimRobot(server, config, loaded, 3, START, ros1=ros1, **robot) as bot:
             out = tmp_path / "out"
             result = CliRunner().invoke(app, ["run", "--config", str(path), "--out", str(out), "--quiet"])
@@ -93,6 +97,7 @@ def live_run(tmp_path: Path, site, ros1: bool = False, amcl_ignores: int = 1, **
         "sent": received,
     }
     measured["last_twist"] = last_twist
+    measured["stderr"] = result.stderr
     if received:
         robot_clock, msg = received[-1]
         stamp = header_stamp(msg)
@@ -137,3 +142,16 @@ def test_a_live_run_whose_odometry_stops_keeps_its_log(tmp_path, site, fast_driv
     assert m["last_twist"] == (0.0, 0.0)  # the robot's last command
     log = [json.loads(line) for line in (tmp_path / "out" / "session.jsonl").read_text().splitlines()]
     assert sum(r.get("type") == "odom" for r in log) >= 55  # every step it drove is kept
+
+
+def test_a_live_run_takes_the_camera_from_camera_info_and_tf_static(tmp_path, site, fast_driver) -> None:
+    wrong = {"fx": 380.0, "pose": {"x": 0.2, "y": 0.0, "z": 1.3, "roll": 0.0, "pitch": 0.0, "yaw": 0.1}}
+    m = live_run(tmp_path, site, camera=wrong, amcl_ignores=0)
+    assert m["exit_code"] == 0, m["output"]
+    s = m["summary"]
+    assert s["camera"]["intrinsics"] == "CameraInfo /camera/color/camera_info"
+    assert s["camera"]["mount"] == "/tf_static base_link -> camera_color_optical_frame"
+    warnings = [line for line in m["stderr"].splitlines() if "warning" in line]
+    assert len(warnings) == 2 and "fx 320" in warnings[0] and "fx 380" in warnings[0]
+    assert "z 1.000" in warnings[1] and "z 1.300" in warnings[1]
+    assert m["error_m"] < 0.15 and m["error_deg"] < 3.0  # matched with the robot's camera, not the YAML's

@@ -38,6 +38,7 @@ def test_a_live_session_drives_publishes_its_state_and_stops_the_robot(tmp_path:
                             "port": server.port,
                             "detections_topic": "/detections",
                             "depth_topic": "/camera/depth/image",
+                            "camera_wait": 0.3,  # the replay sends no CameraInfo: the YAML's camera
                         },
                     },
                 }
@@ -53,6 +54,7 @@ def test_a_live_session_drives_publishes_its_state_and_stops_the_robot(tmp_path:
         assert "no odometry" in result.output
         assert "Traceback" not in result.output
         assert f"what the run saw is in {out}" in result.output
+        assert "warning: no CameraInfo on /camera/color/camera_info in 0.3 s" in result.stderr
         summary = json.loads((out / "summary.json").read_text())
         assert summary["success"] is False and summary["reason"].startswith("stopped: rosbridge: no odometry")
         origin = summary["clock"]["origin_stamp"]  # the bag's clock (1.7e9 s) when the session started

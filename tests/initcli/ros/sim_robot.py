@@ -1,7 +1,8 @@
 """The simulated robot (initcli.sim) served over the loopback rosbridge test server, as a live
 robot behind rosbridge looks to ``bim-init run``: odometry on the robot's clock (``header.stamp``
 from 1.7e9 s, ROS 2 or ROS 1 stamps), ``/scan``, ``/detections`` (vision_msgs Humble layout,
-the robot's own detector), an aligned 16UC1 depth image, driven by ``/cmd_vel``.
+the robot's own detector), an aligned 16UC1 depth image, CameraInfo and the camera mount on
+``/tf_static`` (sent to each subscriber, as a latched topic is), driven by ``/cmd_vel``.
 
 It steps once per ``/cmd_vel`` message (lockstep: simulated time runs as fast as the session
 sends commands, 0.1 s a step; without a command for 0.2 s the odometry is sent again, the clock
@@ -26,6 +27,7 @@ from bimtools.site.load import Site
 from initcli.config import SessionConfig
 from initcli.core.geometry import Pose2D
 from initcli.drivers.base import SensorFrame
+from initcli.ros.bag_writer import OPTICAL_FRAME, camera_info, camera_tf
 from initcli.ros.nav2 import pose_dict, stamp_dict
 from initcli.sim.build import build_sim
 from initcli.site import choose_storey
@@ -63,6 +65,7 @@ class SimRobot:
         self._stop = threading.Event()
         server.hooks[("publish", "/cmd_vel")] = self._on_cmd_vel
         server.hooks[("advertise", "/initialpose")] = lambda _: self.creeping.set()
+        server.hooks[("subscribe", "/tf_static")] = lambda _: self._tf_static()  # latched
         server.hooks[("publish", "/initialpose")] = lambda op: self.received.append(
             (self.truths[-1][0], op["msg"])
         )
@@ -137,11 +140,21 @@ class SimRobot:
                     "ranges": [float(r) for r in s.ranges],
                 },
             )
+        camera_head = {"stamp": stamp_dict(stamp, self.ros1), "frame_id": OPTICAL_FRAME}
+        self.server.send(
+            "/camera/color/camera_info", {**camera_info(stamp, self.sim.camera), "header": camera_head}
+        )
         if image and frame.detections is not None:
             self._image(stamp, frame)
 
+    def _tf_static(self) -> None:
+        transforms = camera_tf(T0, self.sim.mount, base="base_link")
+        for tr in transforms:
+            tr["header"]["stamp"] = stamp_dict(T0, self.ros1)
+        self.server.send("/tf_static", {"transforms": transforms})
+
     def _image(self, stamp: float, frame: SensorFrame) -> None:
-        head = {"stamp": stamp_dict(stamp, self.ros1), "frame_id": "camera_color_optical_frame"}
+        head = {"stamp": stamp_dict(stamp, self.ros1), "frame_id": OPTICAL_FRAME}
         cam = self.sim.camera
         objects = [o for o in frame.detections or [] if o.depth is not None]
         # A full-size depth image only when there is a box to read (each box's window at its depth).
