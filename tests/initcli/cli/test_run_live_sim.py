@@ -155,3 +155,23 @@ def test_a_live_run_takes_the_camera_from_camera_info_and_tf_static(tmp_path, si
     assert len(warnings) == 2 and "fx 320" in warnings[0] and "fx 380" in warnings[0]
     assert "z 1.000" in warnings[1] and "z 1.300" in warnings[1]
     assert m["error_m"] < 0.15 and m["error_deg"] < 3.0  # matched with the robot's camera, not the YAML's
+
+
+def test_an_interrupted_live_run_keeps_its_log_and_stops_the_robot(tmp_path, site, monkeypatch) -> None:
+    import initcli.session.live as live
+
+    class Interrupted(live.RosbridgeDriver):  # Ctrl-C at the 40th step
+        def step(self, v: float, w: float):
+            self.steps = getattr(self, "steps", 0) + 1
+            if self.steps == 40:
+                raise KeyboardInterrupt
+            return super().step(v, w)
+
+    monkeypatch.setattr(live, "RosbridgeDriver", functools.partial(Interrupted, period=0.03))
+    m = live_run(tmp_path, site)
+    assert m["exit_code"] != 0 and not m["sent"]
+    s = m["summary"]
+    assert s["success"] is False and s["reason"] == "stopped: interrupted (Ctrl-C or SIGTERM)"
+    log = [json.loads(line) for line in (tmp_path / "out" / "session.jsonl").read_text().splitlines()]
+    assert sum(r.get("type") == "odom" for r in log) >= 39
+    assert m["last_twist"] == (0.0, 0.0)
