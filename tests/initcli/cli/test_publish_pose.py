@@ -37,6 +37,15 @@ def test_publish_pose_failed_session_exits_2(tmp_path: Path, capsys: pytest.Capt
     assert err.count("\n") == 1 and "distance limit" in err
 
 
+def _publish(summary: Path, port: int, confirm: str):
+    from typer.testing import CliRunner
+
+    from initcli.cli.main import app
+
+    args = ["publish-pose", str(summary), "--host", "127.0.0.1", "--port", str(port), "--confirm", confirm]
+    return CliRunner().invoke(app, args)
+
+
 def _live_summary(tmp_path: Path, stamps: str) -> Path:
     summary = tmp_path / "summary.json"
     doc = {"success": True, "pose": {"x": 2.0, "y": 3.0, "yaw_deg": 180.0}, "duration_s": 7.5}
@@ -51,24 +60,11 @@ def test_publish_pose_sends_what_the_live_run_published_in_its_robots_stamps(
     tmp_path: Path, stamps: str
 ) -> None:
     pytest.importorskip("roslibpy")
-    from typer.testing import CliRunner
-
-    from initcli.cli.main import app
     from tests.initcli.ros.rosbridge_server import RosbridgeServer
 
     summary = _live_summary(tmp_path, stamps)
     with RosbridgeServer(rosapi=True, amcl=True) as server:
-        args = [
-            "publish-pose",
-            str(summary),
-            "--host",
-            "127.0.0.1",
-            "--port",
-            str(server.port),
-            "--confirm",
-            "3",
-        ]
-        result = CliRunner().invoke(app, args)
+        result = _publish(summary, server.port, "3")
         assert result.exit_code == 0, result.output
         assert "confirmed by AMCL" in result.output
         (msg,) = server.published("/initialpose")
@@ -88,22 +84,9 @@ def test_publish_pose_sends_what_the_live_run_published_in_its_robots_stamps(
 
 def test_publish_pose_unconfirmed_exits_1(tmp_path: Path) -> None:
     pytest.importorskip("roslibpy")
-    from typer.testing import CliRunner
-
-    from initcli.cli.main import app
     from tests.initcli.ros.rosbridge_server import RosbridgeServer
 
     summary = _live_summary(tmp_path, "ros2 (sec, nanosec)")
     with RosbridgeServer(rosapi=True) as server:  # no AMCL
-        args = [
-            "publish-pose",
-            str(summary),
-            "--host",
-            "127.0.0.1",
-            "--port",
-            str(server.port),
-            "--confirm",
-            "0.5",
-        ]
-        result = CliRunner().invoke(app, args)
+        result = _publish(summary, server.port, "0.5")
     assert result.exit_code == 1 and "not confirmed by AMCL" in result.output

@@ -75,14 +75,21 @@ def _last_twist(server: RosbridgeServer) -> tuple[float, float] | None:
 
 
 def live_run(
-    tmp_path: Path, site, ros1: bool = False, amcl_ignores: int = 1, camera: dict | None = None, **robot
+    tmp_path: Path,
+    site,
+    ros1: bool = False,
+    amcl_ignores: int = 1,
+    camera: dict | None = None,
+    seed: int = 3,
+    start: Pose2D = START,
+    **robot,
 ) -> dict:
     """One live run (the AMCL stand-in ignores the first ``amcl_ignores`` poses: re-sent, carried
     further); what was measured, for the last pose sent."""
     config, loaded = site
     with RosbridgeServer(rosapi=True, amcl=True, amcl_ignores=amcl_ignores, set_initial_pose=True) as server:
         path = _config(tmp_path, server.port, camera)
-        with SimRobot(server, config, loaded, 3, START, ros1=ros1, **robot) as bot:
+        with SimRobot(server, config, loaded, seed, start, ros1=ros1, **robot) as bot:
             out = tmp_path / "out"
             result = CliRunner().invoke(app, ["run", "--config", str(path), "--out", str(out), "--quiet"])
             received = list(bot.received)
