@@ -85,6 +85,7 @@ class CarriedPose:
         self.claim_stamp = claim_stamp
         self.odometry = odometry
         self.noise = noise
+        self.sent: tuple[float, Pose2D, np.ndarray | None] | None = None
 
     def _since_claim(self) -> list[tuple[float, Pose2D]]:
         history = list(self.odometry())
@@ -110,7 +111,9 @@ class CarriedPose:
         return self.map_from_odom * near[1] if abs(near[0] - stamp) <= 0.2 else None
 
     def message_pose(self) -> InitialPose:
+        """The pose to send now (kept as :attr:`sent`: the last one asked for)."""
         stamp, pose, cov = self.now()
+        self.sent = (stamp, pose, cov)
         return InitialPose(stamp, pose.x, pose.y, pose.yaw, covariance_6x6(cov))
 
 

@@ -58,12 +58,10 @@ def _deliver(config: SessionConfig, result: SessionResult, driver: RosbridgeDriv
     claim_stamp = driver.frame_stamp  # the session ends on the frame of its claim
     carried = CarriedPose(result.transform, result.covariance, claim_stamp, driver.odometry, FilterNoise())
     report = deliver_initial_pose(driver.link, carried, config.nav2, driver.ros1)
-    stamp, pose, cov = carried.now()
-    sent = report.get("sent_stamps", [stamp])[-1]
-    last = carried.at(sent) or pose
+    stamp, pose, cov = carried.sent or carried.now()  # the last pose sent
     return {
         "claim": pose_record(claim_stamp, result.pose, result.covariance),
-        "published": pose_record(sent, last, cov),
+        "published": pose_record(stamp, pose, cov),
         "delivery": report,
     }
 

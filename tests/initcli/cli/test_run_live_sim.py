@@ -131,6 +131,8 @@ def test_a_live_run_delivers_the_carried_pose_on_the_robots_clock(tmp_path, site
     assert m["error_m"] < 0.15 and m["error_deg"] < 3.0
     claim, published = s["claim"], s["published"]
     assert published["stamp"] > claim["stamp"]  # the robot drove on: carried forward
+    assert published["stamp"] == pytest.approx(m["stamp"], abs=1e-6)  # the summary's is the last one sent
+    assert published["x"] == pytest.approx(m["sent"][-1][1]["pose"]["pose"]["position"]["x"], abs=1e-4)
     moved = math.hypot(published["x"] - claim["x"], published["y"] - claim["y"])
     assert moved > 0.05
     assert published["covariance"][0][0] > s["covariance"][0][0]  # grown by the odometry noise
