@@ -197,7 +197,7 @@ def deliver_initial_pose(
     sends: list[float] = []
     start = time.monotonic()
     confirmed: dict[str, Any] | None = None
-    pose = first
+    pose = carried.message_pose()  # carried again: the service call may have taken a while
     while True:
         link.publish(INITIALPOSE_TOPIC, POSE_WITH_COVARIANCE_STAMPED, initial_pose_message(pose, ros1))
         sends.append(pose.stamp)
