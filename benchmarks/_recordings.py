@@ -60,24 +60,29 @@ def local_pose(t: float) -> Pose2D:
 
 
 def detections_value(t: float, boxes: list[tuple[str, float, tuple]], layout: str, numeric: bool) -> dict:
+    """A Detection2DArray dict in a vision_msgs layout (:data:`initcli.ros.msgdefs.VISION_MSGS_LAYOUTS`;
+    Noetic's ``int64`` ids are numeric whatever ``numeric`` says)."""
     names = {"door": "0", "lift": "1", "stairs": "2"}
     dets = []
     for cls, score, (u1, v1, u2, v2) in boxes:
-        cid = names[cls] if numeric else cls
+        cid = names[cls] if numeric or layout == "noetic" else cls
         cu, cv = (u1 + u2) / 2, (v1 + v2) / 2
-        if layout == "humble":
-            result = {"hypothesis": {"class_id": cid, "score": score}}
-            centre = {"position": {"x": cu, "y": cv}, "theta": 0.0}
+        if layout in ("humble", "galactic"):
+            result: dict = {"hypothesis": {"class_id": cid, "score": score}}
         else:
-            result = {"id": cid, "score": score}
+            result = {"id": int(cid) if layout == "noetic" else cid, "score": score}
+        if layout == "humble":
+            centre: dict = {"position": {"x": cu, "y": cv}, "theta": 0.0}
+        else:
             centre = {"x": cu, "y": cv, "theta": 0.0}
-        dets.append(
-            {
-                "header": header(t, "cam_optical"),
-                "results": [result],
-                "bbox": {"center": centre, "size_x": u2 - u1, "size_y": v2 - v1},
-            }
-        )
+        det: dict = {
+            "header": header(t, "cam_optical"),
+            "results": [result],
+            "bbox": {"center": centre, "size_x": u2 - u1, "size_y": v2 - v1},
+        }
+        if layout == "foxy":
+            det |= {"is_tracking": True, "tracking_id": f"track-{cls}"}
+        dets.append(det)
     return {"header": header(t, "cam_optical"), "detections": dets}
 
 

@@ -21,6 +21,7 @@ from initcli.settings_sim import SimSection
 __all__ = [
     "CameraPose",
     "CameraSection",
+    "ConfirmSection",
     "DetectorSection",
     "ExplorationSection",
     "FineTuningSection",
@@ -29,6 +30,7 @@ __all__ = [
     "LimitsSection",
     "LoopSettings",
     "MatchingSection",
+    "Nav2Section",
     "RivalSettings",
     "RobotSection",
     "RosbridgeSection",
@@ -60,6 +62,21 @@ class RosbridgeSection:  # robot.driver: rosbridge (initcli/ros/rosbridge_driver
         "the depth image aligned with the colour image (16UC1 mm or 32FC1 m)",
     )
     cmd_vel_topic: str = setting("/cmd_vel", "geometry_msgs/Twist")
+    camera_info_topic: str = setting(
+        "/camera/color/camera_info", "sensor_msgs/CameraInfo: the intrinsics (camera: is the fallback)"
+    )
+    tf_static_topic: str = setting(
+        "/tf_static", "tf2_msgs/TFMessage: the camera mount (camera.pose is the fallback)"
+    )
+    base_frame: str = setting(
+        "", "the robot's base frame for the camera mount (empty: the odometry's child frame)"
+    )
+    camera_wait: float = setting(
+        3.0,
+        "s: how long to wait for CameraInfo and /tf_static before the site config's camera",
+        minimum=0,
+        maximum=60,
+    )
 
 
 @dataclass
@@ -436,6 +453,38 @@ class FineTuningSection:
 
 
 @dataclass
+class ConfirmSection:  # nav2.confirm (initcli/ros/delivery.py)
+    timeout: float = setting(
+        10.0,
+        "s: how long to wait for AMCL's pose to agree with ours (0: do not wait)",
+        minimum=0,
+        maximum=600,
+    )
+    tolerance_m: float = setting(
+        0.3, "m: AMCL's pose within this of ours counts as taken", above=0, maximum=10
+    )
+    tolerance_deg: float = setting(5.0, "degrees: AMCL's heading within this of ours", above=0, maximum=180)
+    amcl_topic: str = setting("/amcl_pose", "geometry_msgs/PoseWithCovarianceStamped: AMCL's estimate")
+    republish_period: float = setting(
+        2.0, "s: /initialpose is sent again this often until confirmed", above=0, maximum=600
+    )
+
+
+@dataclass
+class Nav2Section:  # robot.driver rosbridge: how the pose reaches Nav2 (initcli/ros/delivery.py)
+    advertise_delay: float = setting(
+        0.5,
+        "s: wait after advertising /initialpose when rosbridge cannot say (rosapi) that the topic is up",
+        minimum=0,
+        maximum=60,
+    )
+    set_initial_pose_service: str = setting(
+        "/set_initial_pose", "nav2_msgs/SetInitialPose: AMCL's service, called when rosbridge offers it"
+    )
+    confirm: ConfirmSection = section(ConfirmSection, "confirmation on AMCL's pose topic")
+
+
+@dataclass
 class LimitsSection:
     max_distance: float = setting(
         150.0, "m driven without a unique match -> failure (paper \u00a74.3)", above=0, maximum=100000
@@ -519,6 +568,7 @@ class SessionConfig:
     exploration: ExplorationSection = section(ExplorationSection)
     fine_tuning: FineTuningSection = section(FineTuningSection)
     limits: LimitsSection = section(LimitsSection)
+    nav2: Nav2Section = section(Nav2Section, "robot.driver rosbridge: delivering the pose to Nav2")
     sim: SimSection = section(SimSection)
     verification: VerificationSection = section(
         VerificationSection,

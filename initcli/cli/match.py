@@ -23,6 +23,19 @@ from bimkit.cli import error_line
 from bimkit.errors import InputError
 from bimkit.outputs import OutputFile, check_outputs
 from initcli.cli import PROG
+from initcli.cli.bag_options import (
+    BaseFrame,
+    CameraInfoTopic,
+    ClassNames,
+    DepthTopic,
+    DetectionsTopic,
+    ImageTopic,
+    Model,
+    OdomTopic,
+    Rate,
+    ScanTopic,
+    bag_options,
+)
 from initcli.cli.progress import message_progress
 from initcli.core.geometry import Pose2D
 from initcli.core.verification import TRACK_HYPOTHESES, Verification
@@ -157,9 +170,20 @@ def match(
     plot: Annotated[
         Path | None, typer.Option("--plot", metavar="FILE.png", help="Draw the hypotheses on the floor plan.")
     ] = None,
+    image_topic: ImageTopic = None,
+    detections_topic: DetectionsTopic = None,
+    depth_topic: DepthTopic = None,
+    camera_info_topic: CameraInfoTopic = None,
+    odom_topic: OdomTopic = None,
+    scan_topic: ScanTopic = None,
+    base_frame: BaseFrame = None,
+    model: Model = "default",
+    rate: Rate = None,
+    class_names: ClassNames = None,
     **settings: Any,
 ) -> None:
-    """Offline feature matching: confirmed features, ranked pose hypotheses and a verdict.
+    """Offline feature matching: confirmed features, ranked pose hypotheses and a verdict. LOG may
+    be a ROS bag, read as ``bim-init bag2log`` reads it (its options are the bag's).
 
     Exit codes: 0 unique match, 3 several hypotheses, 4 no consistent match, 2 bad input.
     """
@@ -168,11 +192,24 @@ def match(
     checks = None
     verify = site.is_dir()  # the checks need the site's maps; a bare features.csv has none
     try:
+        bag = bag_options(
+            image_topic,
+            detections_topic,
+            depth_topic,
+            camera_info_topic,
+            odom_topic,
+            scan_topic,
+            base_frame,
+            model,
+            rate,
+            class_names,
+        )
+        inputs = [log, site, None if model == "default" else Path(model)]
         if plot is not None:
             from initcli.cli.plot_hypotheses import PLOT_SUFFIXES
 
-            check_outputs([log, site], [OutputFile(plot, "--plot", PLOT_SUFFIXES)])
-        with message_progress() as progress, log_or_bag(log, progress=progress) as log_path:
+            check_outputs(inputs, [OutputFile(plot, "--plot", PLOT_SUFFIXES)])
+        with message_progress() as progress, log_or_bag(log, bag, progress) as log_path:
             options.validate()
             listed = replace(options, top=max(top, TRACK_HYPOTHESES)) if verify else options
             report = run_match(log_path, site, listed, source=log)

@@ -1,8 +1,12 @@
-"""``bim-init publish-pose SUMMARY.json``: send a finished session's pose to Nav2 once, over rosbridge.
+"""``bim-init publish-pose SUMMARY.json``: send a finished session's pose to Nav2 over rosbridge.
 
-``geometry_msgs/PoseWithCovarianceStamped`` on ``/initialpose``, frame ``map``, stamped at the
-last image of the session (its ``session.jsonl`` beside the summary), the base frame's pose, the
-covariance from fine tuning (AMCL reads cov[0], cov[7], cov[35]). Exit codes: 0 sent, 2 bad input
+``geometry_msgs/PoseWithCovarianceStamped`` on ``/initialpose``, frame ``map``: a live run's
+``published`` pose (on the robot's clock, carried to its newest odometry), else the session's
+final pose stamped at its newest odometry; the covariance (AMCL reads cov[0], cov[7], cov[35]).
+Advertised first (rosapi or a delay), AMCL's ``set_initial_pose`` called where rosbridge offers
+it, flushed before the link closes; ``--confirm S``: re-sent until AMCL's ``/amcl_pose`` agrees
+or S seconds pass. ROS 1 stamps (``secs``/``nsecs``) with ``--ros1`` or when the live run's robot
+stamped so. Exit codes: 0 sent (and confirmed, with ``--confirm``), 1 not confirmed, 2 bad input
 or no rosbridge.
 """
 
@@ -34,25 +38,45 @@ def publish_pose(
             callback=number_option("bim-init", minimum=1, maximum=65535),
         ),
     ] = 9090,
+    ros1: Annotated[
+        bool,
+        typer.Option("--ros1", help="ROS 1 rosbridge: stamps as secs/nsecs [default: as the run's robot]."),
+    ] = False,
+    confirm: Annotated[
+        float,
+        typer.Option(
+            "--confirm",
+            metavar="S",
+            help="Wait up to S s for /amcl_pose to agree (nav2.confirm defaults), re-sending; 0: no wait.",
+            callback=number_option("bim-init", minimum=0, maximum=600),
+        ),
+    ] = 0.0,
     dry_run: Annotated[
         bool, typer.Option("--dry-run", help="Print the message as JSON instead of sending it.")
     ] = False,
 ) -> None:
-    """Send the session's pose once to /initialpose (Nav2/AMCL) over rosbridge."""
+    """Send the session's pose to /initialpose (Nav2/AMCL) over rosbridge."""
     from initcli.ros.nav2 import initial_pose_message, read_summary, session_initial_pose
 
     try:
         doc = read_summary(summary)
         pose = session_initial_pose(doc, summary.parent / "session.jsonl")
+        old_style = ros1 or str((doc.get("clock") or {}).get("stamps", "")).startswith("ros1")
         if dry_run:
-            typer.echo(json.dumps(initial_pose_message(pose), indent=2))
+            typer.echo(json.dumps(initial_pose_message(pose, old_style), indent=2))
             return
-        from initcli.ros.rosbridge import publish_initial_pose
+        from initcli.config import Nav2Section
+        from initcli.ros.delivery import publish_initial_pose
 
-        publish_initial_pose(pose, host, port)
+        settings = Nav2Section()
+        settings.confirm.timeout = confirm
+        report = publish_initial_pose(pose, host, port, settings, old_style)
     except InputError as exc:
         fail(PROG, exc)
+    verdict = {None: "", True: ", confirmed by AMCL", False: ", not confirmed by AMCL"}[report["confirmed"]]
     typer.echo(
-        f"sent /initialpose to ws://{host}:{port}: x {pose.x:.3f} y {pose.y:.3f} "
-        f"yaw {math.degrees(pose.yaw):.2f} deg at t {pose.stamp:.3f} s"
+        f"sent /initialpose to ws://{host}:{port} ({report['sends']}x{verdict}): "
+        f"x {pose.x:.3f} y {pose.y:.3f} yaw {math.degrees(pose.yaw):.2f} deg at t {pose.stamp:.3f} s"
     )
+    if report["confirmed"] is False:
+        raise typer.Exit(1)

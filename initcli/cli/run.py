@@ -156,7 +156,13 @@ def run(
                 raise InputError("--start: only for the simulated robot (robot.driver: sim)")
             from initcli.session.live import run_live  # the ROS side only when asked for
 
-            doc = run_live(cfg, target, the_seed, None if quiet or as_json else LiveView(console))
+            doc = run_live(
+                cfg,
+                target,
+                the_seed,
+                None if quiet or as_json else LiveView(console),
+                warn=lambda line: typer.echo(f"{PROG}: warning: {line}", err=True),
+            )
         else:
             view = None if quiet or as_json else LiveView(console)
             doc = run_simulated(

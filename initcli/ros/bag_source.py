@@ -10,10 +10,18 @@ from typing import Any
 from bimkit.documents import check_regular
 from bimkit.errors import InputError
 from bimkit.limits import MAX_BAG_BYTES
-from initcli.ros.msgdefs import register_missing, ros2_typestore
+from initcli.ros.msgdefs import (
+    VISION_MSGS_LAYOUTS,
+    detect_layout,
+    register_missing,
+    ros2_typestore,
+    with_layout,
+)
 from initcli.ros.records import Topic
 
-__all__ = ["BagSource", "bag_paths"]
+__all__ = ["BagSource", "PROBED", "bag_paths"]
+
+PROBED = 50  # messages of a topic without definitions tried in each vision_msgs layout
 
 
 def bag_paths(path: Path) -> list[Path]:
@@ -46,11 +54,43 @@ class BagSource:
             raise
         except Exception as exc:  # noqa: BLE001 - rosbags raises many types for a bad file
             raise InputError(f"{self.path}: not a readable ROS bag ({_first_line(exc)})") from None
-        register_missing(self.reader.typestore, {c.msgtype for c in self.reader.connections})
+        try:
+            register_missing(self.reader.typestore, {c.msgtype for c in self.reader.connections})
+            self.vision_layout = self._vision_layout()
+        except BaseException:
+            self.reader.close()
+            raise
         self.topics: dict[str, Topic] = {}
         for c in self.reader.connections:
             old = self.topics.get(c.topic)
             self.topics[c.topic] = Topic(c.topic, c.msgtype, (old.count if old else 0) + c.msgcount)
+
+    def _vision_layout(self) -> str | None:
+        """The ``vision_msgs`` layout of a ROS 2 bag that carries no definitions of them (a
+        ``.db3`` of Foxy or Humble): the one its messages parse in, put in the reader's typestore.
+        None: the bag's own definitions (or no vision_msgs)."""
+        from rosbags.interfaces import MessageDefinitionFormat
+
+        bundled = [
+            c
+            for c in self.reader.connections
+            if c.msgtype.startswith("vision_msgs/") and c.msgdef.format == MessageDefinitionFormat.NONE
+        ]
+        if not bundled or not self.reader.is2:
+            return None
+        for conn in bundled:
+            messages = self.reader.messages(connections=[conn])
+            raws = (raw for _, (_, _, raw) in zip(range(PROBED), messages, strict=False))
+            layout = detect_layout(raws, conn.msgtype)
+            if layout is None:
+                raise InputError(
+                    f"{self.path}: {conn.topic}: the {conn.msgtype} messages carry no definition and parse "
+                    f"in no known vision_msgs layout ({', '.join(VISION_MSGS_LAYOUTS)})"
+                )
+            if layout != "humble":
+                self.reader.typestore = with_layout(self.reader.typestore, layout)
+                return layout
+        return "humble"
 
     def close(self) -> None:
         self.reader.close()
@@ -71,13 +111,16 @@ class BagSource:
         conns = [c for c in self.reader.connections if c.topic in wanted]
         if not conns:
             return
+        topic = ""
         try:
             for conn, stamp, raw in self.reader.messages(connections=conns):
+                topic = conn.topic
                 yield conn.topic, stamp, self.reader.deserialize(raw, conn.msgtype)
         except InputError:
             raise
         except Exception as exc:  # noqa: BLE001
-            raise InputError(f"{self.path}: cannot read a message ({_first_line(exc)})") from None
+            where = f"{topic}: " if topic else ""
+            raise InputError(f"{self.path}: {where}cannot read a message ({_first_line(exc)})") from None
 
     def first(self, topic: str) -> Any | None:
         for _, _, msg in self.messages([topic]):

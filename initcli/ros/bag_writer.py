@@ -4,9 +4,12 @@ a simulated session (its ``session.jsonl``, ``summary.json`` and site) as a ROS 
 The session bag holds what a real robot would have recorded plus the result: the detections
 (``vision_msgs/Detection2DArray``, Humble layout), an aligned 32FC1 depth image (each box centre's
 window at the log's depth, so ``bag2log`` gives back the log's depths), ``camera_info``, ``/scan``,
-``/odom``, ``/tf`` (odom -> base_link), ``/tf_static`` (base_link -> camera_link ->
-camera_color_optical_frame, and map -> odom from the result), the BIM map as
-``nav_msgs/OccupancyGrid`` on ``/map``, ``/initialpose``, the hypotheses and the states.
+``/odom``, ``/tf`` (odom -> base_link, and map -> odom from the claim on: the result's
+transform), ``/tf_static`` (base_link -> camera_link -> camera_color_optical_frame), the BIM map as
+``nav_msgs/OccupancyGrid`` on ``/map``, ``/initialpose``, the hypotheses and the states. A live
+session's bag is on the robot's clock (``summary.json``'s ``clock.origin_stamp``) and its
+``/initialpose`` is the pose that was sent (``published``). Every ROS 2 topic carries its QoS
+profile: ``/tf_static`` and ``/map`` transient local (latched under ``ros2 bag play``).
 """
 
 from __future__ import annotations
@@ -54,6 +57,7 @@ from initcli.ros.records import (
     STATE_TOPIC,
     STRING,
     TF_MESSAGE,
+    InitialPose,
 )
 from initcli.ros.tf import matrix_quaternion, yaw_quaternion
 
@@ -102,6 +106,28 @@ def ns(t: float) -> int:
     return max(0, int(round(t * 1e9)))
 
 
+def _qos(durability: str) -> Any:
+    """A reliable keep-last-10 QoS profile (depth 1 for ``transient_local``), as rosbag2 stores it."""
+    from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
+
+    latched = durability == "transient_local"
+    never = QosTime(0, 0)  # rosbag2 writes "unset" (infinite) deadlines and lifespans as 0
+    return Qos(
+        QosHistory.KEEP_LAST,
+        1 if latched else 10,
+        QosReliability.RELIABLE,
+        QosDurability.TRANSIENT_LOCAL if latched else QosDurability.VOLATILE,
+        never,
+        never,
+        QosLiveliness.AUTOMATIC,
+        never,
+        False,
+    )
+
+
+LATCHED_TOPICS = ("/tf_static", MAP_TOPIC)  # transient local: a late subscriber still gets them
+
+
 class BagWriter:
     """Write :class:`BagMessage` dicts: ``.bag`` -> ROS 1, ``.mcap`` -> one ROS 2 MCAP file, otherwise a
     ROS 2 sqlite3 bag folder. Written beside the target and moved there when complete."""
@@ -133,7 +159,21 @@ class BagWriter:
     def write(self, message: BagMessage) -> None:
         conn = self.connections.get(message.topic)
         if conn is None:
-            conn = self.writer.add_connection(message.topic, message.msgtype, typestore=self.store)
+            if self.ros1:
+                conn = self.writer.add_connection(
+                    message.topic,
+                    message.msgtype,
+                    typestore=self.store,
+                    latching=1 if message.topic in LATCHED_TOPICS else None,
+                )
+            else:
+                durability = "transient_local" if message.topic in LATCHED_TOPICS else "volatile"
+                conn = self.writer.add_connection(
+                    message.topic,
+                    message.msgtype,
+                    typestore=self.store,
+                    offered_qos_profiles=[_qos(durability)],
+                )
             self.connections[message.topic] = conn
         msg = from_dict(self.store, message.msgtype, message.value)
         data = (
@@ -338,68 +378,79 @@ def _object_depths(cam: CameraIntrinsics, detections: Detections, window: int) -
     return depth
 
 
+def _claim_time(log: DetectionLog, summary: dict[str, Any]) -> float:
+    """Session time of the claim: the live summary's ``claim`` stamp, else the first state after
+    the unique match (``fine``, or ``done`` without fine tuning), else the session's end."""
+    claim = summary.get("claim")
+    origin = (summary.get("clock") or {}).get("origin_stamp")
+    if isinstance(claim, dict) and origin is not None:
+        return float(claim["stamp"]) - float(origin)
+    for rec in log.records:
+        if isinstance(rec, State) and rec.t is not None and rec.data.get("state") in ("fine", "done"):
+            return float(rec.t)
+    return float(summary.get("duration_s", 0.0))
+
+
+def _sent_pose(summary: dict[str, Any], log: DetectionLog, origin: float) -> InitialPose:
+    """What went to ``/initialpose`` (a live session's ``published`` pose), else the session's pose
+    at its newest odometry, on the robot's clock."""
+    pose = session_initial_pose(summary, log.path)
+    if isinstance(summary.get("published"), dict):
+        return pose
+    return InitialPose(pose.stamp + origin, pose.x, pose.y, pose.yaw, pose.covariance)
+
+
+def _tf(t: float, parent: str, child: str, pose: Pose2D) -> dict[str, Any]:
+    return {
+        "transforms": [transform_stamped(t, parent, child, (pose.x, pose.y, 0.0), yaw_quaternion(pose.yaw))]
+    }
+
+
 def session_messages(
     log: DetectionLog, summary: dict[str, Any] | None, grid: OccupancyGrid | None
 ) -> Iterator[BagMessage]:
-    """The messages of a simulated session's bag, from its log (and result and map when given)."""
+    """The messages of a session's bag, from its log (and result and map when given); a live
+    session's on the robot's clock."""
     meta = log.meta
     window = meta.depth_window if meta.depth_window is not None else 2
-    t0 = log.records[0].t if log.records and log.records[0].t is not None else 0.0  # type: ignore[union-attr]
+    origin = float(((summary or {}).get("clock") or {}).get("origin_stamp") or 0.0)
+    first = log.records[0].t if log.records and log.records[0].t is not None else 0.0  # type: ignore[union-attr]
+    t0 = origin + first
     yield BagMessage("/tf_static", TF_MESSAGE, t0, {"transforms": camera_tf(t0, meta.camera_pose)})
     if grid is not None:
         yield BagMessage(MAP_TOPIC, OCCUPANCY_GRID, t0, occupancy_grid(t0, grid))
+    success = summary is not None and bool(summary.get("success"))
+    map_from_odom: Pose2D | None = None
+    claim_t = math.inf
+    if success and summary is not None and log.odom:
+        p = summary["pose"]
+        final = Pose2D(float(p["x"]), float(p["y"]), math.radians(float(p["yaw_deg"])))
+        map_from_odom = final * log.odom[-1].pose.inverse()  # the session ends on its claim
+        claim_t = _claim_time(log, summary)
     for rec in log.records:
+        t = origin + (getattr(rec, "t", None) or 0.0)
         if isinstance(rec, Odom):
             pose = rec.pose
-            yield BagMessage("/odom", ODOMETRY, rec.t, odometry(rec.t, pose))
-            yield BagMessage(
-                "/tf",
-                TF_MESSAGE,
-                rec.t,
-                {
-                    "transforms": [
-                        transform_stamped(
-                            rec.t, "odom", BASE_FRAME, (pose.x, pose.y, 0.0), yaw_quaternion(pose.yaw)
-                        )
-                    ]
-                },
-            )
+            yield BagMessage("/odom", ODOMETRY, t, odometry(t, pose))
+            yield BagMessage("/tf", TF_MESSAGE, t, _tf(t, "odom", BASE_FRAME, pose))
+            if map_from_odom is not None and rec.t >= claim_t - 1e-6:
+                yield BagMessage("/tf", TF_MESSAGE, t, _tf(t, "map", "odom", map_from_odom))
         elif isinstance(rec, Detections):
             objs = [(o.cls, o.score, o.bbox) for o in rec.objects]
-            yield BagMessage(CAMERA_INFO_TOPIC, CAMERA_INFO, rec.t, camera_info(rec.t, meta.camera))
-            yield BagMessage(DETECTIONS_TOPIC, DETECTION_2D_ARRAY, rec.t, detection_array(rec.t, objs))
-            yield BagMessage(
-                DEPTH_TOPIC, IMAGE, rec.t, depth_image(rec.t, _object_depths(meta.camera, rec, window))
-            )
+            yield BagMessage(CAMERA_INFO_TOPIC, CAMERA_INFO, t, camera_info(t, meta.camera))
+            yield BagMessage(DETECTIONS_TOPIC, DETECTION_2D_ARRAY, t, detection_array(t, objs))
+            yield BagMessage(DEPTH_TOPIC, IMAGE, t, depth_image(t, _object_depths(meta.camera, rec, window)))
         elif isinstance(rec, Scan):
-            yield BagMessage("/scan", LASER_SCAN, rec.t, laser_scan(rec.t, rec))
+            yield BagMessage("/scan", LASER_SCAN, t, laser_scan(t, rec))
         elif isinstance(rec, State) and rec.t is not None:
-            yield BagMessage(STATE_TOPIC, STRING, rec.t, state_message(str(rec.data.get("state", ""))))
+            yield BagMessage(STATE_TOPIC, STRING, t, state_message(str(rec.data.get("state", ""))))
         elif isinstance(rec, HypothesesRecord) and rec.t is not None:
-            yield BagMessage(
-                HYPOTHESES_TOPIC, POSE_ARRAY, rec.t, pose_array_message(rec.t, hypothesis_poses(rec))
-            )
-    if summary is not None and summary.get("success"):
-        result = session_initial_pose(summary, log.path)
+            yield BagMessage(HYPOTHESES_TOPIC, POSE_ARRAY, t, pose_array_message(t, hypothesis_poses(rec)))
+    if success and summary is not None:
+        sent = _sent_pose(summary, log, origin)
         yield BagMessage(
-            INITIALPOSE_TOPIC, POSE_WITH_COVARIANCE_STAMPED, result.stamp, initial_pose_message(result)
+            INITIALPOSE_TOPIC, POSE_WITH_COVARIANCE_STAMPED, sent.stamp, initial_pose_message(sent)
         )
-        odom = log.odom
-        if odom:
-            last = odom[-1]
-            p = summary["pose"]
-            final = Pose2D(float(p["x"]), float(p["y"]), math.radians(float(p["yaw_deg"])))
-            m = final * last.pose.inverse()  # map <- odom
-            yield BagMessage(
-                "/tf_static",
-                TF_MESSAGE,
-                last.t,
-                {
-                    "transforms": [
-                        transform_stamped(last.t, "map", "odom", (m.x, m.y, 0.0), yaw_quaternion(m.yaw))
-                    ]
-                },
-            )
 
 
 def record_session(run_dir: Path, site_path: Path | None, bag: Path) -> Path:

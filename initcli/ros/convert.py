@@ -56,11 +56,15 @@ def is_bag(path: Path) -> bool:
 def log_or_bag(
     path: Path, options: Bag2LogOptions | None = None, progress: Progress | None = None
 ) -> Iterator[Path]:
-    """``path`` itself for a detection log; for a bag, the log converted into a temporary folder."""
+    """``path`` itself for a detection log; for a bag, the log converted into a temporary folder
+    (an error about that log names the bag, not the temporary file)."""
     if not is_bag(Path(path)):
         yield Path(path)
         return
     with tempfile.TemporaryDirectory(prefix="bim-init-bag2log-") as tmp:
         log = Path(tmp) / f"{Path(path).stem}.jsonl"
         convert_bag(Path(path), log, options or Bag2LogOptions(), progress)
-        yield log
+        try:
+            yield log
+        except InputError as exc:
+            raise InputError(str(exc).replace(str(log), f"{path} (as a detection log)")) from None

@@ -2,20 +2,27 @@
 
 The standard messages (``sensor_msgs``, ``nav_msgs``, ``geometry_msgs``, ``tf2_msgs``, ...) come
 with rosbags' ROS 2 Humble typestore. ``vision_msgs`` does not, so its ``.msg`` text is bundled
-here in both layouts a robot may record:
+here in each layout a robot may record (the released packages' definitions):
 
-- ``humble``: vision_msgs 4.x (ROS 2 Humble and later): ``ObjectHypothesisWithPose.hypothesis
-  .class_id`` and ``BoundingBox2D.center.position.x``.
-- ``foxy``: vision_msgs 2.x/3.x (ROS 2 Foxy and Galactic, also ROS 1 Noetic's field names):
-  ``ObjectHypothesisWithPose.id`` and ``BoundingBox2D.center.x`` (a ``geometry_msgs/Pose2D``).
+- ``humble``: vision_msgs 4.x (ROS 2 Humble, Iron, Jazzy): ``ObjectHypothesisWithPose.hypothesis
+  .class_id`` and ``BoundingBox2D.center.position.x`` (a ``vision_msgs/Pose2D``); Detection2D ends
+  with ``string id``.
+- ``galactic``: vision_msgs 3.x (ROS 2 Galactic): as ``humble`` but ``BoundingBox2D.center`` is a
+  ``geometry_msgs/Pose2D`` (``center.x``). The same bytes as ``humble``.
+- ``foxy``: vision_msgs 2.0.0 (ROS 2 Foxy): ``ObjectHypothesisWithPose.id`` (a string) and
+  ``score``; Detection2D ends with ``sensor_msgs/Image source_img``, ``bool is_tracking`` and
+  ``string tracking_id``. Other bytes than ``humble``.
+- ``noetic``: vision_msgs 0.0.x (ROS 1 Noetic): ``ObjectHypothesisWithPose.id`` is an ``int64``;
+  Detection2D ends with ``sensor_msgs/Image source_img``. (A ROS 1 bag carries its definitions.)
 
-Both layouts serialise to the same CDR bytes (the nesting differs, the fields do not), so a bag
-that carries no definitions is read with either; :func:`detection_fields` reads both.
+A ROS 2 bag without definitions (a Foxy or Humble ``.db3``) is read with the layout its bytes
+parse in (:func:`detect_layout`); :func:`detection_fields` and :func:`bbox_centre` read every one.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -23,9 +30,11 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
 __all__ = [
+    "CDR_LAYOUTS",
     "MSG_TEXT",
     "VISION_MSGS_LAYOUTS",
     "bbox_centre",
+    "detect_layout",
     "detection_fields",
     "from_dict",
     "register_missing",
@@ -33,38 +42,73 @@ __all__ = [
     "ros2_typestore",
     "to_dict",
     "vision_types",
+    "with_layout",
 ]
 
-VISION_MSGS_LAYOUTS = ("humble", "foxy")
+VISION_MSGS_LAYOUTS = ("humble", "galactic", "foxy", "noetic")
+CDR_LAYOUTS = ("humble", "foxy")  # ROS 2 layouts with bytes of their own (galactic's are humble's)
 
-_COMMON = {
-    "vision_msgs/msg/Detection2DArray": "std_msgs/Header header\nvision_msgs/Detection2D[] detections\n",
+_ARRAY = {
+    "vision_msgs/msg/Detection2DArray": "std_msgs/Header header\nvision_msgs/Detection2D[] detections\n"
+}
+_HYPOTHESIS = {
+    "vision_msgs/msg/ObjectHypothesis": "string class_id\nfloat64 score\n",
+    "vision_msgs/msg/ObjectHypothesisWithPose": (
+        "vision_msgs/ObjectHypothesis hypothesis\ngeometry_msgs/PoseWithCovariance pose\n"
+    ),
+}
+_DETECTION_WITH_ID = {
     "vision_msgs/msg/Detection2D": (
         "std_msgs/Header header\nvision_msgs/ObjectHypothesisWithPose[] results\n"
         "vision_msgs/BoundingBox2D bbox\nstring id\n"
     ),
 }
+_GEOMETRY_BOX = {
+    "vision_msgs/msg/BoundingBox2D": "geometry_msgs/Pose2D center\nfloat64 size_x\nfloat64 size_y\n"
+}
 
 _HUMBLE = {
-    **_COMMON,
-    "vision_msgs/msg/ObjectHypothesis": "string class_id\nfloat64 score\n",
-    "vision_msgs/msg/ObjectHypothesisWithPose": (
-        "vision_msgs/ObjectHypothesis hypothesis\ngeometry_msgs/PoseWithCovariance pose\n"
-    ),
+    **_ARRAY,
+    **_DETECTION_WITH_ID,
+    **_HYPOTHESIS,
     "vision_msgs/msg/Point2D": "float64 x\nfloat64 y\n",
     "vision_msgs/msg/Pose2D": "vision_msgs/Point2D position\nfloat64 theta\n",
     "vision_msgs/msg/BoundingBox2D": "vision_msgs/Pose2D center\nfloat64 size_x\nfloat64 size_y\n",
 }
 
+_GALACTIC = {**_ARRAY, **_DETECTION_WITH_ID, **_HYPOTHESIS, **_GEOMETRY_BOX}
+
 _FOXY = {
-    **_COMMON,
+    **_ARRAY,
+    "vision_msgs/msg/Detection2D": (
+        "std_msgs/Header header\nvision_msgs/ObjectHypothesisWithPose[] results\n"
+        "vision_msgs/BoundingBox2D bbox\nsensor_msgs/Image source_img\nbool is_tracking\n"
+        "string tracking_id\n"
+    ),
     "vision_msgs/msg/ObjectHypothesisWithPose": (
         "string id\nfloat64 score\ngeometry_msgs/PoseWithCovariance pose\n"
     ),
-    "vision_msgs/msg/BoundingBox2D": "geometry_msgs/Pose2D center\nfloat64 size_x\nfloat64 size_y\n",
+    **_GEOMETRY_BOX,
 }
 
-MSG_TEXT: dict[str, dict[str, str]] = {"humble": _HUMBLE, "foxy": _FOXY}
+_NOETIC = {
+    **_ARRAY,
+    "vision_msgs/msg/Detection2D": (
+        "std_msgs/Header header\nvision_msgs/ObjectHypothesisWithPose[] results\n"
+        "vision_msgs/BoundingBox2D bbox\nsensor_msgs/Image source_img\n"
+    ),
+    "vision_msgs/msg/ObjectHypothesisWithPose": (
+        "int64 id\nfloat64 score\ngeometry_msgs/PoseWithCovariance pose\n"
+    ),
+    **_GEOMETRY_BOX,
+}
+
+MSG_TEXT: dict[str, dict[str, str]] = {
+    "humble": _HUMBLE,
+    "galactic": _GALACTIC,
+    "foxy": _FOXY,
+    "noetic": _NOETIC,
+}
 _TF_MESSAGE = "geometry_msgs/TransformStamped[] transforms\n"
 
 
@@ -85,7 +129,7 @@ def ros2_typestore(layout: str = "humble") -> Typestore:
     return store
 
 
-def ros1_typestore(layout: str = "foxy") -> Typestore:
+def ros1_typestore(layout: str = "noetic") -> Typestore:
     """rosbags' ROS 1 Noetic typestore plus ``vision_msgs`` (for writing ROS 1 test bags)."""
     store = get_typestore(Stores.ROS1_NOETIC)
     store.register(vision_types(layout))
@@ -94,11 +138,42 @@ def ros1_typestore(layout: str = "foxy") -> Typestore:
     return store
 
 
+def with_layout(store: Typestore, layout: str) -> Typestore:
+    """A copy of ``store`` whose ``vision_msgs`` are those of ``layout`` (the other types kept, the
+    standard types a layout needs taken from the Humble typestore where ``store`` lacks them)."""
+    fielddefs = dict(get_typestore(Stores.ROS2_HUMBLE).fielddefs)
+    fielddefs.update({k: v for k, v in store.fielddefs.items() if not k.startswith("vision_msgs/")})
+    fielddefs.update(vision_types(layout))
+    out = get_typestore(Stores.EMPTY)
+    out.register(fielddefs)
+    return out
+
+
+def detect_layout(raws: Iterable[bytes], msgtype: str, layouts: Iterable[str] = CDR_LAYOUTS) -> str | None:
+    """The first of ``layouts`` in which every CDR message of ``raws`` (of a ``vision_msgs`` type)
+    parses, to its last byte; None when none does. Messages without a detection parse in all."""
+    stores = {layout: ros2_typestore(layout) for layout in layouts}
+    alive = list(stores)
+    for raw in raws:
+        alive = [layout for layout in alive if _parses(stores[layout], raw, msgtype)]
+        if not alive:
+            return None
+    return alive[0]
+
+
+def _parses(store: Typestore, raw: bytes, msgtype: str) -> bool:
+    try:
+        store.deserialize_cdr(raw, msgtype)
+    except Exception:  # noqa: BLE001 - rosbags raises SerdeError, struct and decoding errors
+        return False
+    return True
+
+
 def register_missing(store: Typestore, msgtypes: set[str]) -> list[str]:
     """Register the bundled definitions of the types in ``msgtypes`` that ``store`` lacks.
 
-    Standard types come from the Humble typestore, ``vision_msgs`` from the Humble layout (the
-    bytes are the same in both layouts). Returns the names registered.
+    Standard types come from the Humble typestore, ``vision_msgs`` from the Humble layout (a bag
+    whose bytes are in another layout gets it from :func:`with_layout`). Returns the names registered.
     """
     missing = {t for t in msgtypes if t not in store.fielddefs}
     if not missing:
@@ -132,7 +207,8 @@ def _referenced(kind: Any, detail: Any) -> list[str]:
 
 
 def detection_fields(detection: Any) -> list[tuple[str, float]]:
-    """(class id, score) of each hypothesis of a ``vision_msgs/Detection2D``, in either layout."""
+    """(class id, score) of each hypothesis of a ``vision_msgs/Detection2D``, in every layout (a
+    Noetic ``int64`` id as its digits)."""
     out = []
     for result in detection.results:
         hyp = getattr(result, "hypothesis", None)
@@ -144,7 +220,7 @@ def detection_fields(detection: Any) -> list[tuple[str, float]]:
 
 
 def bbox_centre(bbox: Any) -> tuple[float, float]:
-    """Centre (u, v) of a ``vision_msgs/BoundingBox2D`` in either layout."""
+    """Centre (u, v) of a ``vision_msgs/BoundingBox2D`` in every layout."""
     centre = bbox.center
     position = getattr(centre, "position", None)
     if position is not None:
@@ -165,13 +241,17 @@ def _base_value(name: str, value: Any) -> Any:
     return 0 if value is None else int(value)
 
 
+_DEFAULTS = {"geometry_msgs/msg/Quaternion": {"w": 1.0}}  # the .msg defaults that are not zero
+
+
 def from_dict(store: Typestore, msgtype: str, value: dict[str, Any] | None) -> Any:
-    """A message object of ``store`` from a nested dict (rosbridge JSON); missing fields default.
+    """A message object of ``store`` from a nested dict (rosbridge JSON); missing fields default
+    (zero, or the definition's default: a quaternion left out is the identity, w = 1).
 
     Keys are matched case-insensitively, so one dict serves ROS 2 (``k``) and ROS 1 (``K``) spellings.
     """
     value = value or {}
-    lower = {str(k).lower(): v for k, v in value.items()}
+    lower = {**_DEFAULTS.get(msgtype, {}), **{str(k).lower(): v for k, v in value.items()}}
     cls = store.types[msgtype]
     kwargs: dict[str, Any] = {}
     for fname, (kind, detail) in store.fielddefs[msgtype][1]:

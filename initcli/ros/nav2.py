@@ -14,7 +14,7 @@ from bimkit.checks import check_number, read_json
 from bimkit.errors import InputError
 from bimkit.schemas import schema_path
 from initcli.core.geometry import Pose2D
-from initcli.io.detection_log import Detections, HypothesesRecord, Odom, read_log
+from initcli.io.detection_log import HypothesesRecord, read_log
 from initcli.ros.records import InitialPose
 from initcli.ros.tf import yaw_quaternion
 
@@ -45,12 +45,14 @@ def covariance_6x6(cov: np.ndarray | list | None) -> tuple[float, ...]:
     return tuple(out)
 
 
-def stamp_dict(t: float) -> dict[str, int]:
+def stamp_dict(t: float, ros1: bool = False) -> dict[str, int]:
+    """A time as ROS 2 ``{sec, nanosec}`` or, ``ros1``, as ROS 1's ``{secs, nsecs}`` (what a ROS 1
+    rosbridge reads; each bridge ignores the other's names)."""
     sec = math.floor(t)
     nanosec = int(round((t - sec) * 1e9))
     if nanosec >= 1_000_000_000:
         sec, nanosec = sec + 1, nanosec - 1_000_000_000
-    return {"sec": int(sec), "nanosec": nanosec}
+    return {"secs": int(sec), "nsecs": nanosec} if ros1 else {"sec": int(sec), "nanosec": nanosec}
 
 
 def pose_dict(x: float, y: float, yaw: float) -> dict[str, Any]:
@@ -58,18 +60,20 @@ def pose_dict(x: float, y: float, yaw: float) -> dict[str, Any]:
     return {"position": {"x": x, "y": y, "z": 0.0}, "orientation": {"x": qx, "y": qy, "z": qz, "w": qw}}
 
 
-def initial_pose_message(pose: InitialPose) -> dict[str, Any]:
-    """``geometry_msgs/PoseWithCovarianceStamped`` as rosbridge JSON."""
+def initial_pose_message(pose: InitialPose, ros1: bool = False) -> dict[str, Any]:
+    """``geometry_msgs/PoseWithCovarianceStamped`` as rosbridge JSON (``ros1``: ROS 1 stamp names)."""
     return {
-        "header": {"stamp": stamp_dict(pose.stamp), "frame_id": pose.frame_id},
+        "header": {"stamp": stamp_dict(pose.stamp, ros1), "frame_id": pose.frame_id},
         "pose": {"pose": pose_dict(pose.x, pose.y, pose.yaw), "covariance": list(pose.covariance)},
     }
 
 
-def pose_array_message(t: float, poses: list[Pose2D], frame_id: str = "map") -> dict[str, Any]:
+def pose_array_message(
+    t: float, poses: list[Pose2D], frame_id: str = "map", ros1: bool = False
+) -> dict[str, Any]:
     """``geometry_msgs/PoseArray`` of the hypotheses (base poses in the BIM/map frame)."""
     return {
-        "header": {"stamp": stamp_dict(t), "frame_id": frame_id},
+        "header": {"stamp": stamp_dict(t, ros1), "frame_id": frame_id},
         "poses": [pose_dict(p.x, p.y, p.yaw) for p in poses],
     }
 
@@ -88,45 +92,39 @@ def hypothesis_poses(record: HypothesesRecord) -> list[Pose2D]:
     return out
 
 
-def _odom_at(odom: list[Odom], t: float) -> Pose2D:
-    ts = np.array([o.t for o in odom])
-    i = int(np.clip(np.searchsorted(ts, t), 0, len(odom) - 1))
-    if i > 0 and abs(ts[i - 1] - t) <= abs(ts[i] - t):
-        i -= 1
-    return odom[i].pose
+def _pose_of(doc: dict[str, Any], where: str) -> Pose2D:
+    try:
+        pose = Pose2D(float(doc["x"]), float(doc["y"]), math.radians(float(doc["yaw_deg"])))
+    except (KeyError, TypeError, ValueError):
+        raise InputError(f"summary.json: '{where}' needs x, y and yaw_deg") from None
+    for name, value, bound in (("x", pose.x, 1e6), ("y", pose.y, 1e6), ("yaw_deg", doc["yaw_deg"], 3600.0)):
+        check_number(float(value), f"summary.json: {where}.{name}", minimum=-bound, maximum=bound)
+    return pose
 
 
 def session_initial_pose(summary: dict[str, Any], log_path: Path | None) -> InitialPose:
-    """The pose to send for a finished session, at the time of its last image.
-
-    ``summary["pose"]`` is the base pose at the end of the session; with the session log the
-    map<-odom transform it implies carries the pose back to the last image's odom pose.
+    """The pose to send for a finished session: a live session's ``published`` pose (the claim
+    carried by odometry to the newest odometry, stamped on the robot's clock, its covariance
+    grown); else ``summary["pose"]``, the pose at the session's end, stamped with the newest
+    odometry of its log (session time; ``duration_s`` without a log).
     """
     if not summary.get("success") or not isinstance(summary.get("pose"), dict):
         reason = summary.get("reason", "no pose")
         raise InputError(f"the session did not initialise ({reason}): no pose to send")
-    p = summary["pose"]
+    sent = summary.get("published")
+    where, doc = ("published", sent) if isinstance(sent, dict) else ("pose", summary["pose"])
+    pose = _pose_of(doc, where)
     try:
-        final = Pose2D(float(p["x"]), float(p["y"]), math.radians(float(p["yaw_deg"])))
+        cov = covariance_6x6(doc.get("covariance") if where == "published" else summary.get("covariance"))
+        t = float(doc["stamp"]) if where == "published" else float(summary.get("duration_s", 0.0))
     except (KeyError, TypeError, ValueError):
-        raise InputError("summary.json: 'pose' needs x, y and yaw_deg") from None
-    for name, value, bound in (("x", final.x, 1e6), ("y", final.y, 1e6), ("yaw_deg", p["yaw_deg"], 3600.0)):
-        check_number(float(value), f"summary.json: pose.{name}", minimum=-bound, maximum=bound)
-    try:
-        cov = covariance_6x6(summary.get("covariance"))
-        duration = float(summary.get("duration_s", 0.0))
-    except (TypeError, ValueError):
-        raise InputError("summary.json: 'covariance' must be 3x3 numbers and 'duration_s' a number") from None
-    t, pose = duration, final
-    if log_path is not None and log_path.exists():
-        log = read_log(log_path)
-        odom = log.odom
-        images = [d for d in log.detections if odom and d.t <= odom[-1].t + 1e-9]
-        if odom and images:
-            image: Detections = images[-1]
-            map_from_odom = final * odom[-1].pose.inverse()
-            pose = map_from_odom * _odom_at(odom, image.t)
-            t = image.t
+        raise InputError(
+            f"summary.json: '{where}': covariance must be 3x3 numbers and the stamp a number"
+        ) from None
+    if where == "pose" and log_path is not None and log_path.exists():
+        odom = read_log(log_path).odom
+        if odom:
+            t = odom[-1].t
     return InitialPose(t, pose.x, pose.y, pose.yaw, cov)
 
 

@@ -1,34 +1,29 @@
 """The live link to a ROS robot over rosbridge (protocol v2, JSON over websocket) with roslibpy.
 
-:class:`RosbridgeLink` advertises, publishes and subscribes; :func:`publish_initial_pose` sends a
-finished session's pose once to ``/initialpose`` (and the state to ``/bim_init/state``).
+:class:`RosbridgeLink` advertises, publishes, subscribes and calls services; it can ask rosapi
+whether a topic is up and wait until rosbridge has read what was sent (:meth:`RosbridgeLink.flush`).
 roslibpy is in the ``[ros]`` extra: ``pip install 'bim-init[ros]'``.
 """
 
 from __future__ import annotations
 
 import threading
-import time
 from collections.abc import Callable
 from typing import Any
 
 from bimkit.errors import InputError
-from initcli.ros.nav2 import initial_pose_message, state_message
-from initcli.ros.records import INITIALPOSE_TOPIC, STATE_TOPIC, InitialPose
 
 __all__ = [
-    "ADVERTISE_SETTLE_S",
     "CONNECT_TIMEOUT_S",
     "DEFAULT_PORT",
     "RosbridgeLink",
-    "publish_initial_pose",
     "ros_type",
 ]
 
 DEFAULT_PORT = 9090
 CONNECT_TIMEOUT_S = 5.0
 HANDSHAKE_SERVICE = "/bim_init/handshake"  # no robot offers it: rosbridge answers with a failure
-ADVERTISE_SETTLE_S = 0.5  # s: subscribers of a new publisher need a moment before the first message
+ROSAPI_PUBLISHERS = "/rosapi/publishers"  # rosapi (launched with rosbridge): a topic's publishers
 
 
 def ros_type(msgtype: str) -> str:
@@ -66,14 +61,42 @@ class RosbridgeLink:
         """A websocket server is not yet a rosbridge: call a service no robot has and wait for the
         ``service_response`` every rosbridge (ROS 1 and 2) sends back, a failure naming the service.
         A plain websocket server (or one that echoes) never sends one: an error, not "sent"."""
-        answered = threading.Event()
-        probe = self._roslibpy.Service(self.ros, HANDSHAKE_SERVICE, "std_srvs/Trigger")
-        probe.call(self._roslibpy.ServiceRequest(), lambda _: answered.set(), lambda _: answered.set())
-        if not answered.wait(timeout):
+        if self.call_service(HANDSHAKE_SERVICE, "std_srvs/Trigger", {}, timeout) is None:
             raise InputError(
                 f"ws://{self.host}:{self.port} is a websocket server but does not speak rosbridge (no answer "
                 f"to a rosbridge service call in {timeout:g} s)"
             )
+
+    def call_service(
+        self, name: str, srvtype: str, request: dict[str, Any], timeout: float
+    ) -> tuple[bool, Any] | None:
+        """Call a service through rosbridge: (True, the response) when it answered, (False, the
+        error text) when rosbridge refused (no such service, a failure), None: no answer in time."""
+        answered = threading.Event()
+        answer: list[tuple[bool, Any]] = []
+
+        def done(ok: bool, value: Any) -> None:
+            answer.append((ok, value))
+            answered.set()
+
+        service = self._roslibpy.Service(self.ros, name, ros_type(srvtype))
+        service.call(
+            self._roslibpy.ServiceRequest(request), lambda v: done(True, dict(v)), lambda e: done(False, e)
+        )
+        return answer[0] if answered.wait(timeout) else None
+
+    def publisher_up(self, topic: str, timeout: float) -> bool | None:
+        """Whether rosbridge reports a publisher on ``topic`` (rosapi's ``publishers``); None: the
+        server offers no rosapi, so nobody can tell."""
+        answer = self.call_service(ROSAPI_PUBLISHERS, "rosapi/Publishers", {"topic": topic}, timeout)
+        if answer is None or not answer[0]:
+            return None
+        return bool(answer[1].get("publishers"))
+
+    def flush(self, timeout: float = CONNECT_TIMEOUT_S) -> bool:
+        """Wait until rosbridge has read everything sent so far: it handles one connection's frames
+        in order, so the answer to a service call sent last comes after all of them."""
+        return self.call_service(HANDSHAKE_SERVICE, "std_srvs/Trigger", {}, timeout) is not None
 
     @property
     def connected(self) -> bool:
@@ -119,22 +142,3 @@ class RosbridgeLink:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
-
-
-def publish_initial_pose(
-    pose: InitialPose,
-    host: str = "localhost",
-    port: int = DEFAULT_PORT,
-    settle: float = ADVERTISE_SETTLE_S,
-    timeout: float = CONNECT_TIMEOUT_S,
-) -> dict[str, Any]:
-    """Send ``pose`` once on ``/initialpose`` (and "initialised" on the state topic); returns the message."""
-    message = initial_pose_message(pose)
-    with RosbridgeLink(host, port, timeout) as link:
-        link.advertise(INITIALPOSE_TOPIC, "geometry_msgs/msg/PoseWithCovarianceStamped")
-        link.advertise(STATE_TOPIC, "std_msgs/msg/String")
-        time.sleep(settle)
-        link.publish(INITIALPOSE_TOPIC, "geometry_msgs/msg/PoseWithCovarianceStamped", message)
-        link.publish(STATE_TOPIC, "std_msgs/msg/String", state_message("initialised"))
-        time.sleep(min(settle, 0.2))  # let the frames leave before closing
-    return message

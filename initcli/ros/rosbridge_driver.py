@@ -6,8 +6,12 @@ the robot's own detector) and aligned depth image; each :meth:`step` sends the c
 ``geometry_msgs/Twist`` on ``cmd_vel`` (``robot.drive: false``: nothing is sent, a person drives),
 waits one control period and reports what arrived. The robot is stopped (a zero Twist) on any
 error, on Ctrl-C and when the driver is closed. The session publishes its hypotheses
-(``/bim_init/hypotheses``), its state (``/bim_init/state``) and the result (``/initialpose``)
-through :meth:`publish_hypotheses`, :meth:`publish_state` and :meth:`publish_initial_pose`.
+(``/bim_init/hypotheses``) and its state (``/bim_init/state``) through :meth:`publish_hypotheses`
+and :meth:`publish_state`; the result goes out through :mod:`initcli.ros.delivery`.
+
+Time: a frame's session time is the robot's clock (its odometry's ``header.stamp``) since the
+first frame (:attr:`clock_origin`), so a logged pose is the odometry at its stamp; what is sent
+is stamped on the robot's clock, ROS 1 style (``secs``/``nsecs``) when the robot stamps so.
 """
 
 from __future__ import annotations
@@ -31,21 +35,16 @@ from initcli.io.detection_log import DetectedObject
 from initcli.ros.bag_reader import DEPTH_SYNC_S
 from initcli.ros.messages import decode_depth
 from initcli.ros.msgdefs import bbox_centre, detection_fields
-from initcli.ros.nav2 import initial_pose_message, pose_array_message, state_message
-from initcli.ros.records import (
-    HYPOTHESES_TOPIC,
-    INITIALPOSE_TOPIC,
-    STATE_TOPIC,
-    TWIST,
-    InitialPose,
-)
+from initcli.ros.nav2 import pose_array_message, state_message
+from initcli.ros.records import HYPOTHESES_TOPIC, POSE_ARRAY, STATE_TOPIC, STRING, TWIST
 from initcli.ros.rosbridge import RosbridgeLink
 from initcli.ros.tf import quaternion_yaw
 
-__all__ = ["CONTROL_RATE", "ODOM_TIMEOUT_S", "RosbridgeDriver", "json_depth"]
+__all__ = ["CONTROL_RATE", "ODOM_HISTORY", "ODOM_TIMEOUT_S", "RosbridgeDriver", "header_stamp", "json_depth"]
 
 CONTROL_RATE = 10.0  # Hz
 ODOM_TIMEOUT_S = 1.0  # s without odometry: the robot is stopped and the session ends
+ODOM_HISTORY = 20000  # odometry messages kept (robot-clock stamp, pose): minutes at 50 Hz
 
 
 def _ns(value: Any) -> Any:
@@ -57,7 +56,8 @@ def _ns(value: Any) -> Any:
     return value
 
 
-def _stamp(msg: dict[str, Any]) -> float:
+def header_stamp(msg: dict[str, Any]) -> float:
+    """A message's ``header.stamp`` in seconds, ROS 2 ``{sec, nanosec}`` or ROS 1 ``{secs, nsecs}``."""
     st = msg.get("header", {}).get("stamp", {})
     return float(st.get("sec", st.get("secs", 0))) + float(st.get("nanosec", st.get("nsecs", 0))) * 1e-9
 
@@ -97,14 +97,19 @@ class RosbridgeDriver:
         self.period = 1.0 / CONTROL_RATE if period is None else period
         self._lock = threading.Lock()
         self._odom: tuple[float, Pose2D] | None = None  # (arrival, pose in the robot's odom frame)
-        self._odom_t = 0.0
+        self._odom_t = 0.0  # the newest odometry's stamp on the robot's clock
+        self._history: deque[tuple[float, Pose2D]] = deque(maxlen=ODOM_HISTORY)
+        self.ros1 = False  # the robot stamps ROS 1 style (secs, nsecs): so does what is sent
+        self.wall_clock = False  # its odometry has no stamps: the robot's clock is taken as ours
+        self.clock_origin: float | None = None  # robot-clock stamp of session time 0
+        self.frame_stamp = 0.0  # robot-clock stamp of the last frame
+        self.base_frame = ""  # the odometry's child frame (the robot's base), once it arrived
         self._scan: LaserScan | None = None
         self._detections: deque[dict[str, Any]] = deque(maxlen=20)
         self._depths: deque[tuple[float, dict[str, Any]]] = deque(maxlen=10)
         self._origin: Pose2D | None = None
         self._last: Pose2D | None = None
         self._distance = 0.0
-        self._t0: float | None = None
         link.subscribe(topics.odom_topic, "nav_msgs/msg/Odometry", self._on_odom)
         link.subscribe(topics.scan_topic, "sensor_msgs/msg/LaserScan", self._on_scan)
         link.subscribe(topics.detections_topic, "vision_msgs/msg/Detection2DArray", self._on_detections)
@@ -118,9 +123,17 @@ class RosbridgeDriver:
         pose = msg["pose"]["pose"]
         p, q = pose["position"], pose["orientation"]
         yaw = quaternion_yaw(q.get("x", 0.0), q.get("y", 0.0), q.get("z", 0.0), q.get("w", 1.0))
+        self.base_frame = self.base_frame or str(msg.get("child_frame_id") or "")
+        stamp_fields = msg.get("header", {}).get("stamp", {})
+        stamp = header_stamp(msg)
+        if stamp <= 0.0:  # no stamp: the robot's clock is this machine's (rosbridge on the robot)
+            stamp, self.wall_clock = time.time(), True
+        pose2 = Pose2D(float(p.get("x", 0.0)), float(p.get("y", 0.0)), yaw)
         with self._lock:
-            self._odom = (time.monotonic(), Pose2D(float(p.get("x", 0.0)), float(p.get("y", 0.0)), yaw))
-            self._odom_t = _stamp(msg)
+            self.ros1 = self.ros1 or "secs" in stamp_fields
+            self._odom = (time.monotonic(), pose2)
+            self._odom_t = stamp
+            self._history.append((stamp, pose2))
 
     def _on_scan(self, msg: dict[str, Any]) -> None:
         ranges = np.array([math.inf if r is None else float(r) for r in msg.get("ranges", [])])
@@ -135,7 +148,7 @@ class RosbridgeDriver:
 
     def _on_depth(self, msg: dict[str, Any]) -> None:
         with self._lock:
-            self._depths.append((_stamp(msg), msg))
+            self._depths.append((header_stamp(msg), msg))
 
     # -- RobotDriver --------------------------------------------------------------------------------
 
@@ -144,7 +157,7 @@ class RosbridgeDriver:
         return self._distance
 
     def _objects(self, msg: dict[str, Any]) -> list[DetectedObject] | None:
-        t = _stamp(msg)
+        t = header_stamp(msg)
         with self._lock:
             best = min(self._depths, key=lambda d: abs(d[0] - t), default=None)
         if best is None or abs(best[0] - t) > DEPTH_SYNC_S:
@@ -165,6 +178,7 @@ class RosbridgeDriver:
     def _frame(self) -> SensorFrame:
         with self._lock:
             odom = self._odom
+            stamp = self._odom_t
             scan = self._scan
             pending = list(self._detections)
             self._detections.clear()
@@ -175,8 +189,9 @@ class RosbridgeDriver:
             )
         if self._origin is None:
             self._origin = odom[1].inverse()  # the odom frame starts at the current pose (§3.3.1)
-            self._t0 = time.monotonic()
+            self.clock_origin = stamp
         pose = self._origin * odom[1]
+        self.frame_stamp = stamp
         if self._last is not None:
             self._distance += pose.distance_to(self._last)
         self._last = pose
@@ -185,12 +200,18 @@ class RosbridgeDriver:
             objects = self._objects(msg)
             if objects is not None:
                 detections = (detections or []) + objects
-        return SensorFrame(time.monotonic() - (self._t0 or 0.0), pose, scan, detections)
+        # Session time is the robot's clock since the start: a frame's pose is its odometry's, at its stamp.
+        return SensorFrame(stamp - (self.clock_origin or stamp), pose, scan, detections)
 
-    def start(self) -> SensorFrame:
-        deadline = time.monotonic() + self.odom_timeout + 1.0
+    def wait_odometry(self, timeout: float) -> bool:
+        """Wait up to ``timeout`` s for the first odometry; whether it came."""
+        deadline = time.monotonic() + timeout
         while self._odom is None and time.monotonic() < deadline:
             time.sleep(0.01)
+        return self._odom is not None
+
+    def start(self) -> SensorFrame:
+        self.wait_odometry(self.odom_timeout + 1.0)
         return self._frame()
 
     def step(self, v: float, w: float) -> SensorFrame:
@@ -225,15 +246,23 @@ class RosbridgeDriver:
     # -- what the session publishes -----------------------------------------------------------------
 
     def publish_state(self, state: str) -> None:
-        self.link.publish(STATE_TOPIC, "std_msgs/msg/String", state_message(state))
+        self.link.publish(STATE_TOPIC, STRING, state_message(state))
+
+    def robot_stamp(self, t: float) -> float:
+        """Session time ``t`` on the robot's clock."""
+        return (self.clock_origin or 0.0) + t
+
+    def odometry(self) -> list[tuple[float, Pose2D]]:
+        """The odometry that arrived (robot-clock stamp, pose in the session's odom frame), oldest first."""
+        with self._lock:
+            history = list(self._history)
+        origin = self._origin or Pose2D.identity()
+        return [(t, origin * p) for t, p in history]
 
     def publish_hypotheses(self, t: float, poses: list[Pose2D]) -> None:
-        self.link.publish(HYPOTHESES_TOPIC, "geometry_msgs/msg/PoseArray", pose_array_message(t, poses))
-
-    def publish_initial_pose(self, pose: InitialPose) -> None:
-        self.link.publish(
-            INITIALPOSE_TOPIC, "geometry_msgs/msg/PoseWithCovarianceStamped", initial_pose_message(pose)
-        )
+        """The hypotheses of the match step at session time ``t``, stamped on the robot's clock."""
+        message = pose_array_message(self.robot_stamp(t), poses, ros1=self.ros1)
+        self.link.publish(HYPOTHESES_TOPIC, POSE_ARRAY, message)
 
     def close(self) -> None:
         self.stop()

@@ -31,3 +31,37 @@ def test_schema_defaults_match_the_code():
                 assert sub.get("default") == values[key], f"{where}{key}"
 
     walk(schema, defaults, "")
+
+
+def test_nav2_settings_are_read_checked_and_in_the_generated_schema(tmp_path) -> None:
+    import json
+
+    import pytest
+    import yaml
+
+    from bimkit.errors import InputError
+    from bimkit.schemas import schema_path
+    from initcli.config import load_config
+
+    schema = json.loads(schema_path("site_config.schema.json").read_text())
+    confirm = schema["properties"]["nav2"]["properties"]["confirm"]["properties"]
+    assert set(confirm) == {"timeout", "tolerance_m", "tolerance_deg", "amcl_topic", "republish_period"}
+    assert confirm["timeout"]["default"] == 10.0
+    assert "advertise_delay" in schema["properties"]["nav2"]["properties"]
+    path = tmp_path / "site.yaml"
+    doc = {
+        "site": {"path": "x.ifc"},
+        "nav2": {"advertise_delay": 0.2, "confirm": {"timeout": 4, "amcl_topic": "/a"}},
+    }
+    path.write_text(yaml.safe_dump(doc))
+    cfg = load_config(path)
+    assert (
+        cfg.nav2.advertise_delay == 0.2
+        and cfg.nav2.confirm.timeout == 4
+        and cfg.nav2.confirm.amcl_topic == "/a"
+    )
+    assert cfg.nav2.confirm.tolerance_m == 0.3  # the default
+    doc["nav2"]["confirm"]["tolerance_m"] = -1
+    path.write_text(yaml.safe_dump(doc))
+    with pytest.raises(InputError, match="nav2.confirm.tolerance_m"):
+        load_config(path)

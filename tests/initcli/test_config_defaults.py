@@ -10,6 +10,7 @@ from typing import Any
 import pytest
 
 from bimkit.schemas import schema_path
+from initcli.cli.bag_options import bag_options
 from initcli.cli.match import match
 from initcli.config import SessionConfig, config_to_dict, match_options
 from initcli.match.pipeline import MatchOptions
@@ -37,7 +38,9 @@ SITE_KEYS = {
     "drift_window": ("matching", "drift_window"),  # the session's retry window (default 50 m, 0: off)
 }
 # Options of ``bim-init match`` that are about input/output, not matching.
-NOT_SETTINGS = {"log", "site", "top", "json_out", "plot", "skip_bad"}
+# How a BAG is read (bag2log's options, initcli/cli/bag_options.py): not match settings.
+BAG_READING = set(inspect.signature(bag_options).parameters)
+NOT_SETTINGS = {"log", "site", "top", "json_out", "plot", "skip_bad"} | BAG_READING
 SESSION_OWN = {"storey", "drift_window"}  # same name and unit, a session-specific default
 
 

@@ -246,3 +246,44 @@ def test_console_script_has_no_traceback(tmp_path: Path, table1: Path) -> None:
     done = subprocess.run([exe, "match", bad, "--site", table1], capture_output=True, text=True)
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert done.stderr.count("\n") == 1 and "bad.jsonl:1:" in done.stderr
+
+
+# --- a ROS bag as the log: bag2log's options, errors naming the bag ---------------------------------
+
+
+def _bag_and_site(tmp_path: Path) -> tuple[Path, Path]:
+    from benchmarks._recordings import POINTS, make_recording, write
+
+    bag = write(tmp_path, make_recording(numeric=True, layout="foxy"), "sqlite3", "foxy")
+    rows = "".join(
+        f"F{i},{CATEGORY[c]},{x + 10},{y + 5},0,1,1,2\n" for i, (c, (x, y, _)) in enumerate(POINTS.items())
+    )
+    site = tmp_path / "three.csv"
+    site.write_text("ID,Category,X,Y,Norm_X,Norm_Y,Width,Height\n" + rows, encoding="utf-8")
+    return bag, site
+
+
+def test_a_bag_takes_bag2logs_options(tmp_path: Path) -> None:
+    bag, site = _bag_and_site(tmp_path)
+    options = ["--class-names", "door,lift,stairs", "--detections-topic", "/detections"]
+    options += ["--odom-topic", "/odom", "--base-frame", "base_link", "--rate", "5"]
+    result = invoke("match", bag, "--site", site, *options, "--json")
+    assert result.exit_code == 0, result.output
+    doc = json.loads(result.stdout)
+    assert doc["verdict"] == "unique match" and doc["hypotheses"][0]["matches"] == ["F0", "F1", "F2"]
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        ([], "(as a detection log): unknown class name(s) '0', '1', '2'"),  # numeric ids left unnamed
+        (["--odom-topic", "/nope"], "no topic /nope (--odom-topic)"),
+        (["--class-names", "door,1=lift"], "--class-names"),
+    ],
+)
+def test_bag_errors_name_the_bag(tmp_path: Path, args: list[str], fragment: str) -> None:
+    bag, site = _bag_and_site(tmp_path)
+    result = invoke("match", bag, "--site", site, *args)
+    assert_bad_input(result, fragment)
+    if args != ["--class-names", "door,1=lift"]:
+        assert str(bag) in result.stderr and "bim-init-bag2log-" not in result.stderr

@@ -23,7 +23,23 @@ _GUID = "258EAFA5-E914-47DA-95CA-C5AB0DC85B11"
 
 
 class RosbridgeServer:
-    def __init__(self) -> None:
+    """``rosapi``: answers ``/rosapi/publishers`` (a topic advertised by a client has rosbridge's
+    node as publisher); ``amcl``: an AMCL stand-in that answers each ``/initialpose`` after
+    ``amcl_delay`` s with the same pose on ``/amcl_pose`` (the first ``amcl_ignores`` are ignored);
+    ``set_initial_pose``: offers AMCL's ``/set_initial_pose`` service; ``hooks``: the test's
+    callbacks for a client's operations (``("publish", "/cmd_vel")``)."""
+
+    def __init__(
+        self,
+        rosapi: bool = False,
+        amcl: bool = False,
+        amcl_delay: float = 0.1,
+        amcl_ignores: int = 0,
+        set_initial_pose: bool = False,
+    ) -> None:
+        self.rosapi, self.amcl, self.amcl_delay = rosapi, amcl, amcl_delay
+        self.amcl_ignores, self.set_initial_pose = amcl_ignores, set_initial_pose
+        self.hooks: dict[tuple[str, str], Any] = {}  # (op, topic) -> called with each such op
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         self.sock.bind(("127.0.0.1", 0))
@@ -107,21 +123,37 @@ class RosbridgeServer:
     def _handle(self, conn: socket.socket, op: dict[str, Any]) -> None:
         with self._lock:
             self.ops.append(op)
-            if op.get("op") == "call_service":  # as rosbridge does for a service nobody offers
-                answer = {
-                    "op": "service_response",
-                    "id": op.get("id"),
-                    "service": op.get("service"),
-                    "values": f"Service {op.get('service')} does not exist",
-                    "result": False,
-                }
-                conn.sendall(_frame(json.dumps(answer).encode(), 1))
+            if op.get("op") == "call_service":
+                conn.sendall(_frame(json.dumps(self._answer(op)).encode(), 1))
+            elif op.get("op") == "publish" and op.get("topic") == "/initialpose" and self.amcl:
+                if self.amcl_ignores > 0:
+                    self.amcl_ignores -= 1
+                else:
+                    timer = threading.Timer(self.amcl_delay, self.send, ("/amcl_pose", op["msg"]))
+                    timer.daemon = True
+                    timer.start()
             elif op.get("op") == "subscribe":
                 self.subscriptions.setdefault(op["topic"], []).append(conn)
             elif op.get("op") == "unsubscribe":
                 subs = self.subscriptions.get(op["topic"], [])
                 if conn in subs:
                     subs.remove(conn)
+            hook = self.hooks.get((str(op.get("op")), str(op.get("topic"))))
+        if hook is not None:  # outside the lock: a hook may send
+            hook(op)
+
+    def _answer(self, op: dict[str, Any]) -> dict[str, Any]:
+        """rosapi's publishers and AMCL's service where offered; else what rosbridge answers for a
+        service nobody offers."""
+        answer: dict[str, Any] = {"op": "service_response", "id": op.get("id"), "service": op.get("service")}
+        service = op.get("service")
+        if service == "/rosapi/publishers" and self.rosapi:
+            topic = (op.get("args") or {}).get("topic")
+            up = any(o.get("op") == "advertise" and o.get("topic") == topic for o in self.ops)
+            return answer | {"values": {"publishers": ["/rosbridge_websocket"] if up else []}, "result": True}
+        if service == "/set_initial_pose" and self.set_initial_pose:
+            return answer | {"values": {}, "result": True}
+        return answer | {"values": f"Service {service} does not exist", "result": False}
 
     # -- the test's side ------------------------------------------------------------------------------
 

@@ -13,7 +13,7 @@ from bimkit.errors import InputError
 from initcli.core.projection import detections_to_odom
 from initcli.detector.runtime import Detector
 from initcli.io.detection_log import Detections, Meta, Odom, Scan
-from initcli.ros.bag_reader import bag_to_records, parse_class_names
+from initcli.ros.bag_reader import BagSource, bag_to_records, parse_class_names
 from initcli.ros.bag_writer import BagMessage, depth_image
 from initcli.ros.records import IMAGE, Bag2LogOptions
 
@@ -59,11 +59,21 @@ def _check_geometry(records, rec):
     assert seen >= len(dets)
 
 
-@pytest.mark.parametrize("fmt", ["ros1", "sqlite3", "mcap"])
-@pytest.mark.parametrize("layout", ["humble", "foxy"])
+NAMES = parse_class_names("door,lift,stairs")
+
+
+@pytest.mark.parametrize(
+    ("fmt", "layout"),
+    [
+        *((fmt, layout) for fmt in ("sqlite3", "mcap") for layout in ("humble", "galactic", "foxy")),
+        ("ros1", "noetic"),
+    ],
+)
 def test_detections_in_every_format_and_layout(tmp_path, fmt, layout):
+    """Bags written with rosbags from each release's vision_msgs definitions (Noetic's ids are int64)."""
     rec = make_recording(layout=layout)
-    records, stats = bag_to_records(write(tmp_path, rec, fmt, layout))
+    bag = write(tmp_path, rec, fmt, layout)
+    records, stats = bag_to_records(bag, Bag2LogOptions(class_names=NAMES if layout == "noetic" else None))
     _check_geometry(records, rec)
     assert stats.images == len(rec.image_times) and stats.without_depth == 0
     assert any(isinstance(r, Scan) for r in records)
@@ -89,17 +99,37 @@ def test_numeric_class_ids_are_named(tmp_path):
     _check_geometry(records, rec)
 
 
-def test_sqlite_bag_without_vision_definitions(tmp_path):
-    rec = make_recording(layout="foxy")
-    bag = write(tmp_path, rec, "sqlite3", "foxy")
+def _drop_definitions(bag, like: str = "%") -> int:
+    """Delete the message definitions of a ROS 2 sqlite3 bag, as a Foxy or Humble db3 has none."""
     db = next(bag.glob("*.db3"))
     with sqlite3.connect(db) as con:
-        deleted = con.execute(
-            "DELETE FROM message_definitions WHERE topic_type LIKE 'vision_msgs/%'"
-        ).rowcount
-    assert deleted == 1
-    records, _ = bag_to_records(bag)  # the bundled definitions are registered
+        return con.execute("DELETE FROM message_definitions WHERE topic_type LIKE ?", (like,)).rowcount
+
+
+@pytest.mark.parametrize("layout", ["humble", "galactic", "foxy"])
+@pytest.mark.parametrize("like", ["vision_msgs/%", "%"])
+def test_sqlite_bag_without_definitions_is_read_in_its_layout(tmp_path, layout, like):
+    """A Foxy db3 carries no definitions: its bytes are not Humble's (Detection2D ends with
+    source_img, is_tracking, tracking_id), and it is read in the layout its messages parse in."""
+    rec = make_recording(layout=layout)
+    bag = write(tmp_path, rec, "sqlite3", layout)
+    assert _drop_definitions(bag, like) >= 1
+    records, _ = bag_to_records(bag)
     _check_geometry(records, rec)
+    with BagSource(bag) as source:
+        assert source.vision_layout == ("foxy" if layout == "foxy" else "humble")
+
+
+def test_vision_bytes_of_no_known_layout_name_the_bag_and_topic(tmp_path):
+    """Messages that parse in no layout (here: a count of 5 detections and nothing after it)."""
+    bag = write(tmp_path, make_recording(duration=1.0), "sqlite3")
+    _drop_definitions(bag)
+    db = next(bag.glob("*.db3"))
+    with sqlite3.connect(db) as con:
+        (topic_id,) = con.execute("SELECT id FROM topics WHERE name = '/detections'").fetchone()
+        con.execute("UPDATE messages SET data = X'000100000500' WHERE topic_id = ?", (topic_id,))
+    with pytest.raises(InputError, match=r"rec: /detections: the vision_msgs/msg/Detection2DArray messages"):
+        bag_to_records(bag)
 
 
 @pytest.mark.parametrize("perception", ["image", "compressed"])

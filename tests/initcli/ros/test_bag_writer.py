@@ -96,19 +96,44 @@ def test_session_bag_topics_and_initialpose(session):
     want = summary["covariance"]
     assert (cov[0], cov[7], cov[35]) == pytest.approx((want[0][0], want[1][1], want[2][2]))
     assert cov[1] == pytest.approx(want[0][1]) and cov[5] == pytest.approx(want[0][2])
-    # stamped at the last image; the pose is the final one carried back along the odometry to it
+    # the final pose (the session ends on its claim) stamped at the newest odometry, not the last image
     log = read_log(session / "out" / "session.jsonl")
-    last_image = log.detections[-1].t
     stamp = pose.header.stamp.sec + pose.header.stamp.nanosec * 1e-9
-    assert stamp == pytest.approx(last_image, abs=1e-6)
-    odom_then = min(log.odom, key=lambda o: abs(o.t - last_image)).pose
-    odom_end = log.odom[-1].pose
+    assert stamp == pytest.approx(log.odom[-1].t, abs=1e-6) and stamp > log.detections[-1].t
     p, q = pose.pose.pose.position, pose.pose.pose.orientation
     final = summary["pose"]
-    moved = math.hypot(p.x - final["x"], p.y - final["y"])
-    assert moved == pytest.approx(odom_then.distance_to(odom_end), abs=2e-3)
-    turned = math.degrees(quaternion_yaw(q.x, q.y, q.z, q.w) - math.radians(final["yaw_deg"]))
-    odom_turn = math.degrees(odom_then.yaw - odom_end.yaw)
-    assert (turned + 180) % 360 - 180 == pytest.approx((odom_turn + 180) % 360 - 180, abs=0.05)
+    assert (p.x, p.y) == pytest.approx((final["x"], final["y"]), abs=1e-4)
+    assert math.degrees(quaternion_yaw(q.x, q.y, q.z, q.w)) == pytest.approx(final["yaw_deg"], abs=1e-3)
     assert grid.info.width > 0 and len(grid.data) == grid.info.width * grid.info.height
     assert set(grid.data.tolist()) <= {-1, 0, 100} and 100 in set(grid.data.tolist())
+
+
+def _norm(q) -> float:
+    return math.sqrt(q.x**2 + q.y**2 + q.z**2 + q.w**2)
+
+
+def test_session_bag_qos_quaternions_and_map_to_odom_from_the_claim_on(session):
+    log = read_log(session / "out" / "session.jsonl")
+    claim_t = next(r.t for r in log.records if getattr(r, "data", {}).get("state") in ("fine", "done"))
+    with BagSource(session / "session.mcap") as bag:
+        qos = {c.topic: c.ext.offered_qos_profiles for c in bag.reader.connections}
+        map_odom = [
+            (tr.header.stamp.sec + tr.header.stamp.nanosec * 1e-9, tr)
+            for _, _, m in bag.messages(["/tf"])
+            for tr in m.transforms
+            if tr.header.frame_id == "map"
+        ]
+        detections = [m for _, _, m in bag.messages(["/camera/detections"])]
+        static = [tr for _, _, m in bag.messages(["/tf_static"]) for tr in m.transforms]
+    for topic in ("/tf_static", "/map"):  # latched under ros2 bag play
+        (profile,) = qos[topic]
+        assert profile.durability.name == "TRANSIENT_LOCAL" and profile.depth == 1
+    assert qos["/odom"][0].durability.name == "VOLATILE" and qos["/odom"][0].reliability.name == "RELIABLE"
+    assert all(len(qos[t]) == 1 for t in qos)
+    assert map_odom and min(t for t, _ in map_odom) == pytest.approx(claim_t, abs=0.06)
+    assert max(t for t, _ in map_odom) == pytest.approx(log.odom[-1].t, abs=1e-6)
+    assert all(tr.child_frame_id == "odom" for _, tr in map_odom)
+    assert not [tr for tr in static if tr.header.frame_id == "map"]  # map -> odom is not static
+    quaternions = [r.pose.pose.orientation for m in detections for d in m.detections for r in d.results]
+    quaternions += [tr.transform.rotation for _, tr in map_odom] + [tr.transform.rotation for tr in static]
+    assert quaternions and all(_norm(q) == pytest.approx(1.0) for q in quaternions)

@@ -47,6 +47,18 @@ def test_stamp_dict_splits_seconds_and_carries_rounding() -> None:
     assert stamp_dict(3.9999999999) == {"sec": 4, "nanosec": 0}
 
 
+def test_stamps_ros1_and_ros2_on_the_robots_clock() -> None:
+    t = 1_700_000_123.25
+    assert stamp_dict(t) == {"sec": 1_700_000_123, "nanosec": 250_000_000}
+    assert stamp_dict(t, ros1=True) == {"secs": 1_700_000_123, "nsecs": 250_000_000}
+    pose = InitialPose(t, 1.0, 2.0, 0.5, (0.0,) * 36)
+    assert initial_pose_message(pose, ros1=True)["header"]["stamp"] == {
+        "secs": 1_700_000_123,
+        "nsecs": 250_000_000,
+    }
+    assert set(pose_array_message(t, [], ros1=True)["header"]["stamp"]) == {"secs", "nsecs"}
+
+
 def test_initial_pose_message_quaternion_and_covariance() -> None:
     cov = covariance_6x6(np.diag([0.04, 0.09, 0.01]))
     msg = initial_pose_message(InitialPose(5.5, 1.0, -2.0, math.pi / 2, cov))
@@ -91,17 +103,28 @@ def test_session_initial_pose_without_log_is_final_pose_at_duration() -> None:
     assert (pose.covariance[0], pose.covariance[7], pose.covariance[35]) == (0.1, 0.2, 0.3)
 
 
-def test_session_initial_pose_carries_pose_back_to_last_image(tmp_path: Path) -> None:
+def test_session_initial_pose_is_the_final_pose_at_the_newest_odometry_not_the_last_image(
+    tmp_path: Path,
+) -> None:
     meta = Meta(CameraIntrinsics(500, 500, 320, 240, 640, 480), CameraMount(0, 0, 1, 0, 0, 0))
     odom = [Odom(float(t), float(t), 0.0, 0.0) for t in range(5)]  # 1 m/s along odom x
     image = Detections(2.0, Pose2D(2.0, 0.0, 0.0))
     log = tmp_path / "session.jsonl"
     write_log(log, [meta, *odom[:3], image, *odom[3:]])
     pose = session_initial_pose(_summary(), log)  # final (t=4): (4, 1) facing +y
-    assert pose.stamp == 2.0
-    # map<-odom maps odom (4,0,0) to (4,1,90 deg); odom (2,0,0) lies 2 m behind along the heading.
-    assert pose.x == pytest.approx(4.0) and pose.y == pytest.approx(-1.0)
-    assert pose.yaw == pytest.approx(math.pi / 2)
+    assert pose.stamp == 4.0  # not the last image's 2.0: the robot had moved on 2 m
+    assert (pose.x, pose.y) == (4.0, 1.0) and pose.yaw == pytest.approx(math.pi / 2)
+
+
+def test_session_initial_pose_of_a_live_run_is_what_was_published() -> None:
+    published = {"stamp": 1_700_000_012.5, "x": 4.5, "y": 1.25, "yaw_deg": 95.0}
+    published["covariance"] = np.diag([0.02, 0.03, 0.004]).tolist()
+    pose = session_initial_pose(_summary(published=published, covariance=np.eye(3).tolist()), None)
+    assert pose.stamp == 1_700_000_012.5 and (pose.x, pose.y) == (4.5, 1.25)
+    assert pose.yaw == pytest.approx(math.radians(95.0))
+    assert (pose.covariance[0], pose.covariance[7], pose.covariance[35]) == (0.02, 0.03, 0.004)
+    with pytest.raises(InputError, match="published"):
+        session_initial_pose(_summary(published={"x": 1.0}), None)
 
 
 @pytest.mark.parametrize(
@@ -152,4 +175,17 @@ def test_a_summary_off_its_schema_is_refused_before_anything_is_sent(
     path = tmp_path / "summary.json"
     path.write_text(json.dumps({**_summary(), **change}))
     with pytest.raises(InputError, match=expected):
+        read_summary(path)
+
+
+def test_read_summary_checks_a_live_runs_published_pose(tmp_path: Path) -> None:
+    path = tmp_path / "summary.json"
+    published = {"stamp": 1_700_000_012.5, "x": 4.5, "y": 1.25, "yaw_deg": 95.0}
+    path.write_text(json.dumps(_summary(published=published, delivery={"confirmed": True, "sends": 2})))
+    assert read_summary(path)["published"]["stamp"] == 1_700_000_012.5
+    path.write_text(json.dumps(_summary(published={"x": 4.5, "y": 1.25, "yaw_deg": 95.0})))
+    with pytest.raises(InputError, match="published"):
+        read_summary(path)
+    path.write_text(json.dumps(_summary(delivery={"confirmed": "yes"})))
+    with pytest.raises(InputError, match="delivery.confirmed"):
         read_summary(path)

@@ -12,14 +12,15 @@ from tests.initcli.ros.rosbridge_server import PlainWebsocketServer, RosbridgeSe
 
 pytest.importorskip("roslibpy")
 
-from initcli.ros.rosbridge import RosbridgeLink, publish_initial_pose  # noqa: E402
+from initcli.ros.delivery import publish_initial_pose  # noqa: E402
+from initcli.ros.rosbridge import RosbridgeLink  # noqa: E402
 
 
 def test_initial_pose_fields():
     cov = tuple(float(i) for i in range(36))
     pose = InitialPose(12.25, 3.0, -4.5, math.radians(100.0), cov)
     with RosbridgeServer() as server:
-        publish_initial_pose(pose, "127.0.0.1", server.port, settle=0.05)
+        publish_initial_pose(pose, "127.0.0.1", server.port)
         assert server.wait_for(lambda: server.published("/initialpose"), 5)
         adverts = {o["topic"]: o["type"] for o in server.of("advertise")}
         assert adverts["/initialpose"] == "geometry_msgs/PoseWithCovarianceStamped"
@@ -58,5 +59,5 @@ def test_a_websocket_server_that_is_no_rosbridge_is_an_error_and_nothing_is_publ
     pose = InitialPose(1.0, 2.0, 3.0, 0.0, tuple([0.0] * 36))
     with PlainWebsocketServer(echo=echo) as server:
         with pytest.raises(InputError, match=r"is a websocket server but does not speak rosbridge"):
-            publish_initial_pose(pose, "127.0.0.1", server.port, settle=0.05, timeout=1.0)
+            publish_initial_pose(pose, "127.0.0.1", server.port, timeout=1.0)
         assert [o["op"] for o in server.ops] == ["call_service"]  # the handshake, and nothing after
