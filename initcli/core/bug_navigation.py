@@ -4,7 +4,10 @@ Turn toward the target (Eq. 15-16) and drive straight; when an obstacle blocks t
 its wall on the side that keeps the target closest; leave the wall when the target is in line of
 sight and closer than where the wall was met. Following the wall the wrong way round (the
 target falling behind by more than ``give_up_margin``) turns back to follow it on the other side;
-if that side leads away too, the robot heads straight for the target again.
+if that side leads away too, the robot heads straight for the target again. When the straight way
+is blocked but a way as wide as the robot leads within ``GAP_SEARCH`` of it as far as the target (a
+doorway, a gap between stacks; beyond the paper), the robot steers through that gap instead: a wall
+follower cannot enter a doorway barely wider than itself.
 """
 
 from __future__ import annotations
@@ -23,13 +26,24 @@ __all__ = [
     "CROSSING_EXTRA_S",
     "CROSSING_SLACK",
     "FloorCrossing",
+    "GAP_MARGIN",
+    "GAP_REACH",
+    "GAP_SEARCH",
+    "GAP_SPEED",
+    "GAP_STEP",
     "RouteNavigator",
     "around_side",
     "cross_floor",
+    "gap_bearing",
 ]
 
 CROSSING_SLACK = 1.5  # a crossing may take this many times its drive at cruise speed ...
 CROSSING_EXTRA_S = 5.0  # s ... plus this (turning toward it); then wall following resumes there
+GAP_SEARCH = math.radians(35.0)  # a gap is looked for this far either side of the target's bearing ...
+GAP_STEP = math.radians(2.0)  # ... at this step ...
+GAP_REACH = 3.0  # m: ... leading as far as the target, or this far when it is farther
+GAP_MARGIN = 0.05  # m beyond the robot's radius either side of the way through a gap
+GAP_SPEED = 0.2  # m/s through a gap
 
 
 @dataclass(frozen=True)
@@ -79,6 +93,11 @@ class BugNavigator:
             else:
                 v, w = wall_follow(scan, self.side, fp)
                 return v, w, False
+        gap = gap_bearing(scan, d_yaw, distance, fp.radius + GAP_MARGIN)
+        if gap is not None:
+            if abs(gap) > p.yaw_tolerance:
+                return 0.0, math.copysign(fp.max_turn * min(1.0, abs(gap) / 0.6 + 0.3), gap), False
+            return min(GAP_SPEED, fp.speed), float(np.clip(p.k_yaw * gap, -fp.max_turn, fp.max_turn)), False
         if scan.front() < fp.front_stop + 0.1 and abs(d_yaw) < math.pi / 2 and scan.front() < distance:
             self.mode = "follow"
             self.side = around_side(scan, d_yaw)
@@ -120,6 +139,22 @@ class RouteNavigator:
             self.waypoints.pop(0)
             self.current = None
         return 0.0, 0.0, True
+
+
+def gap_bearing(scan: ScanView, d_yaw: float, distance: float, half_width: float) -> float | None:
+    """The bearing (rad, robot frame) of a way ``half_width`` m either side clear as far as the target
+    (``distance`` m at bearing ``d_yaw``; at most GAP_REACH) when the straight way is not; the one
+    nearest the target's bearing within GAP_SEARCH. None when the straight way is clear (the bug
+    navigator drives it) or no such way leads on."""
+    need = min(distance, GAP_REACH)
+    if scan.clear_along(d_yaw, half_width) >= need:
+        return None
+    for k in range(1, int(GAP_SEARCH / GAP_STEP) + 1):
+        for sign in (1.0, -1.0):
+            bearing = float(wrap_angle(d_yaw + sign * k * GAP_STEP))
+            if scan.clear_along(bearing, half_width) >= need:
+                return bearing
+    return None
 
 
 def around_side(scan: ScanView, d_yaw: float, margin: float = 0.3) -> int:

@@ -4,12 +4,15 @@ Wall following circles an island of clutter or an open hall with no wall in reac
 shuttles over the same few metres for minutes (a dead end behind a material stack, targets that
 keep failing). Out of a loop the robot drives to the nearest unexplored opening the lidar has
 seen (a frontier of :class:`~initcli.core.frontier.LocalMap`), else along the most open direction;
-when shuttling it follows the other wall. A crossing drives across an open floor to a wall the
-lidar sees (:func:`~initcli.core.bug_navigation.cross_floor`). While one of them is under way it
-steers instead of the wall follower.
+when shuttling it follows the other wall. A *lap* (:class:`~initcli.core.laps.LapWatch`: back where
+it was after its path turned once round a room, a hall or a closed corridor section) that brought no
+new feature sends it to an opening of the local map it can pass; with none left it is *shut in*,
+and the session stops (:class:`~initcli.session.result.ShutIn`). A crossing drives across an open
+floor to a wall the lidar sees (:func:`~initcli.core.bug_navigation.cross_floor`). While one of
+them is under way it steers instead of the wall follower.
 
-The settings are ``exploration.loops``, ``exploration.shuttles`` and ``exploration.frontier`` of
-the session config.
+The settings are ``exploration.loops``, ``exploration.shuttles``, ``exploration.frontier`` and
+``exploration.laps`` of the session config.
 """
 
 from __future__ import annotations
@@ -21,10 +24,11 @@ import numpy as np
 from initcli.core.bug_navigation import BugNavigator, BugParams, FloorCrossing, RouteNavigator, cross_floor
 from initcli.core.confinement import ConfinementWatch
 from initcli.core.frontier import LocalMap
+from initcli.core.laps import LapWatch
 from initcli.core.wall_following import ScanView, WallFollowParams
 from initcli.drivers.base import SensorFrame
-from initcli.session.result import SessionResult
-from initcli.settings_session import FrontierSettings, LoopSettings, ShuttleSettings
+from initcli.session.result import SessionResult, ShutIn
+from initcli.settings_session import FrontierSettings, LapSettings, LoopSettings, ShuttleSettings
 
 __all__ = ["Escapes", "open_point"]
 
@@ -50,8 +54,10 @@ class Escapes:
         frontier: FrontierSettings,
         follow: WallFollowParams,
         result: SessionResult,
+        laps: LapSettings | None = None,
     ) -> None:
         self.settings = loops
+        self.lap_settings = laps or LapSettings()
         self.frontier = frontier
         self.follow = follow
         self.result = result
@@ -60,6 +66,9 @@ class Escapes:
         self.local_map = LocalMap()  # what the lidar has seen, for frontier-guided loop escapes
         self.navigator: BugNavigator | RouteNavigator | None = None  # the escape or crossing
         self.until = -1.0  # s: when it ends
+        lap = self.lap_settings
+        self.laps = LapWatch(min_lap=lap.length, radius=lap.radius, turn=math.radians(lap.turn))
+        self.lap_target: np.ndarray | None = None  # the opening the last lap sent the robot to
 
     def see(self, frame: SensorFrame, step: int) -> None:
         """Write every ``frontier.scan_every``-th scan into the local map (every ``beam_step``-th beam)."""
@@ -116,6 +125,32 @@ class Escapes:
         if route:
             self.start(frame, RouteNavigator(route, BugParams(follow=self.follow)))
         return bool(route)
+
+    def lap(self, frame: SensorFrame, travel: float, features: int) -> str | ShutIn | None:
+        """Watch for a lap round the space the robot is in (``travel`` m of odometry so far,
+        ``features`` confirmed): a lap that brought no new feature sends the robot to the nearest
+        opening of its local map that it can pass (an opening an earlier lap sent it to and that it
+        came round from is not chosen again), and returns why, for the log; with no such opening left
+        it returns :class:`ShutIn` (``laps.shut_in`` false: None). None while no such lap closed."""
+        if not self.laps.add(travel, frame.odom.x, frame.odom.y, features) or self.under_way(frame):
+            return None
+        lap = self.laps.lap()
+        if lap is None or features > lap.seen:
+            return None
+        self.laps.restart()
+        if self.lap_target is not None:
+            self.local_map.give_up(self.lap_target)
+        # A doorway barely wider than the robot: the map's cells blur each jamb by up to a cell.
+        clearance = self.follow.radius - self.local_map.params.resolution / 4
+        route = self.local_map.plan(frame.odom, clearance)
+        if route:
+            self.lap_target = route[-1]
+            self.start(frame, RouteNavigator(route, BugParams(follow=self.follow)))
+            self.result.laps += 1
+            return f"a {lap.length:.0f} m lap without a new feature: heading for an unexplored opening"
+        if not self.lap_settings.shut_in:
+            return None
+        return ShutIn(round(self.local_map.free_area(), 1), features, round(lap.length, 1))
 
     def start(self, frame: SensorFrame, navigator: BugNavigator | RouteNavigator) -> None:
         """Follow ``navigator`` for ``loops.escape`` seconds instead of the wall (a loop escape)."""

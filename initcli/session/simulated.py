@@ -57,7 +57,7 @@ def sim_session(
     setup = build_sim(config, site, simulated, seed, start, world_site=world)
     rng = np.random.default_rng(seed + SESSION_RNG_OFFSET)
     session = Session(config, site, matched, setup.driver, log_path, rng, observer, meta_source)
-    if setup.enclosed:
+    if setup.enclosed and config.sim.refuse_enclosed:
         session.cannot_leave = (
             "cannot leave: the start is in a space closed off by doors, hoardings or material "
             "(no way wide enough for the robot to the corridors, where the features face)"

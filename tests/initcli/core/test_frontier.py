@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from bimtools.site.records import FREE, OCCUPIED
-from initcli.core.frontier import L_CLAMP, L_FREE, L_OCC, FrontierParams, LocalMap
+from initcli.core.frontier import L_CLAMP, L_FREE, L_OCC, OCC_ABOVE, FrontierParams, LocalMap
 from initcli.core.geometry import Pose2D
 from initcli.core.raycast import ray_segment_distances
 
@@ -86,11 +86,9 @@ def numpy_integrate(
     a, r = pose.yaw + angles[ok], ranges[ok]
     hit = r < min(range_max, p.integrate_range)
     reach = np.minimum(r, p.integrate_range)
+    lost = r >= range_max
     t = np.arange(0.0, p.integrate_range, p.resolution * 0.7)[None, :]
     along = t < reach[:, None]
-    free_xy = np.column_stack(
-        [(pose.x + t * np.cos(a)[:, None])[along], (pose.y + t * np.sin(a)[:, None])[along]]
-    )
     n = local.logodds.shape[0]
     flat = local.logodds.reshape(-1)
 
@@ -101,6 +99,14 @@ def numpy_integrate(
 
     ends = cells(np.column_stack([pose.x + r[hit] * np.cos(a[hit]), pose.y + r[hit] * np.sin(a[hit])]))
     flat[ends] = np.minimum(flat[ends] + L_OCC, L_CLAMP)
+    # a beam with no return stops at the first cell occupied after the end points were written
+    xs, ys = pose.x + t * np.cos(a)[:, None], pose.y + t * np.sin(a)[:, None]
+    rr, cc = local.cells_of(np.column_stack([xs.ravel(), ys.ravel()]))
+    rr, cc = rr.reshape(xs.shape), cc.reshape(xs.shape)
+    inside = (rr >= 0) & (rr < n) & (cc >= 0) & (cc < n)
+    blocked = inside & (flat[np.where(inside, rr * n + cc, 0)] > OCC_ABOVE) & lost[:, None]
+    along &= np.cumsum(blocked, axis=1) == 0
+    free_xy = np.column_stack([xs[along], ys[along]])
     free = np.setdiff1d(cells(free_xy), ends, assume_unique=True)
     flat[free] = np.maximum(flat[free] + L_FREE, -L_CLAMP)
 
