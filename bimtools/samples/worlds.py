@@ -38,6 +38,7 @@ __all__ = [
     "crane_hall",
     "house",
     "house_open",
+    "open_hall",
     "sample_as_built",
     "world",
     "write_plan",
@@ -104,6 +105,35 @@ def crane_hall() -> FloorPlan:
     )
 
 
+def open_hall() -> FloorPlan:
+    """A 48 x 16 m hall standing alone (no rooms round it): exit doors along both long sides and
+    gates standing open in both end façades. Its whole free
+    space reaches the outside; only the floor slab bounds it (bim-extract before slabs: no free
+    space at all)."""
+    cells = [Cell("Hall", "corridor", 0.0, 0.0, 48.0, 16.0, "Assembly hall")]
+    d = _DoorMaker(cells)
+    for k, at in enumerate((4.0, 13.5, 21.0, 33.0)):
+        d.exit("Hall", "S", at, f"South door {k + 1}")
+    for k, at in enumerate((6.0, 17.0, 26.5, 31.0, 42.5)):
+        d.exit("Hall", "N", at, f"North door {k + 1}")
+    west = d.exit("Hall", "W", 9.0, "West gate")
+    east = d.exit("Hall", "E", 10.0, "East gate")
+    d.doors = [
+        dataclasses.replace(x, width=5.0, height=4.5) if x.tag in (west, east) else x for x in d.doors
+    ]
+    doors, openings = _open(d, (west, east))
+    return FloorPlan(
+        name="open_hall",
+        title="Open hall",
+        building="Assembly hall",
+        cells=tuple(cells),
+        doors=doors,
+        openings=openings,
+        with_slab=True,
+        description="48 x 16 m hall alone, doors along both long sides, gates open in both ends",
+    )
+
+
 def _house_cells() -> list[Cell]:
     return [
         Cell("Hallway", "corridor", 5.0, 0.0, 7.0, 10.0, "Hallway"),
@@ -144,7 +174,7 @@ def house_open() -> FloorPlan:
     return house(bedroom_door=False)
 
 
-WORLDS = {"crane_hall": crane_hall, "house": house, "house_open": house_open}
+WORLDS = {"crane_hall": crane_hall, "open_hall": open_hall, "house": house, "house_open": house_open}
 
 
 def world(name: str) -> FloorPlan:
