@@ -118,9 +118,7 @@ def open_hall() -> FloorPlan:
         d.exit("Hall", "N", at, f"North door {k + 1}")
     west = d.exit("Hall", "W", 9.0, "West gate")
     east = d.exit("Hall", "E", 10.0, "East gate")
-    d.doors = [
-        dataclasses.replace(x, width=5.0, height=4.5) if x.tag in (west, east) else x for x in d.doors
-    ]
+    d.doors = [dataclasses.replace(x, width=5.0, height=4.5) if x.tag in (west, east) else x for x in d.doors]
     doors, openings = _open(d, (west, east))
     return FloorPlan(
         name="open_hall",

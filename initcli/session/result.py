@@ -15,7 +15,14 @@ from initcli.core.geometry import Pose2D, wrap_angle
 if TYPE_CHECKING:
     from initcli.match.pipeline import Hypothesis
 
-__all__ = ["CoarseClaim", "MatchStep", "SHUT_IN", "SHUT_IN_ADVICE", "SessionResult", "ShutIn"]
+__all__ = ["CANNOT_LEAVE", "CoarseClaim", "MatchStep", "SHUT_IN", "SHUT_IN_ADVICE", "SessionResult", "ShutIn"]
+
+# The reason of a simulated session refused at 0 m (sim.refuse_enclosed): the simulator knows its
+# start lies in a space closed off from where the features face.
+CANNOT_LEAVE = (
+    "cannot leave: the start is in a space closed off by doors, hoardings or material "
+    "(no way wide enough for the robot to the corridors, where the features face)"
+)
 
 SHUT_IN = "shut in"  # the reason of a session that stopped shut in (a stable word of summary.json)
 SHUT_IN_ADVICE = "open a door or move the robot"
