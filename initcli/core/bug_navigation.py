@@ -7,11 +7,14 @@ target falling behind by more than ``give_up_margin``) turns back to follow it o
 if that side leads away too, the robot heads straight for the target again. When the straight way
 is blocked but a way as wide as the robot leads within ``GAP_SEARCH`` of it as far as the target (a
 doorway, a gap between stacks; beyond the paper), the robot steers through that gap instead: a wall
-follower cannot enter a doorway barely wider than itself.
+follower cannot enter a doorway barely wider than itself. A route planned through a doorway on the
+robot's own map (``BugParams.squeeze``) is driven closely: the robot turns on the spot toward each
+near waypoint and drives while a way ``SQUEEZE_MARGIN`` wider than itself is clear that far.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -32,6 +35,7 @@ __all__ = [
     "GAP_SPEED",
     "GAP_STEP",
     "RouteNavigator",
+    "SQUEEZE_MARGIN",
     "around_side",
     "cross_floor",
     "gap_bearing",
@@ -44,6 +48,7 @@ GAP_STEP = math.radians(2.0)  # ... at this step ...
 GAP_REACH = 3.0  # m: ... leading as far as the target, or this far when it is farther
 GAP_MARGIN = 0.05  # m beyond the robot's radius either side of the way through a gap
 GAP_SPEED = 0.2  # m/s through a gap
+SQUEEZE_MARGIN = 0.03  # m beyond the robot's radius either side of a squeezed route's way
 
 
 @dataclass(frozen=True)
@@ -53,6 +58,7 @@ class BugParams:
     k_yaw: float = 1.5
     follow: WallFollowParams = field(default_factory=WallFollowParams)
     give_up_margin: float = 1.5  # m farther from the target than where the wall was met
+    squeeze: bool = False  # a route through a narrow way on the robot's own map: drive it closely
 
 
 @dataclass
@@ -77,6 +83,16 @@ class BugNavigator:
         yaw_d = math.atan2(dy, dx)  # Eq. 15
         d_yaw = float(wrap_angle(yaw_d - pose.yaw))  # Eq. 16
         fp = p.follow
+        if p.squeeze and self.mode == "go":
+            # Turning on the spot never hits anything; then drive while the narrow way is clear.
+            if abs(d_yaw) > p.yaw_tolerance:
+                return 0.0, math.copysign(fp.max_turn * min(1.0, abs(d_yaw) / 0.6 + 0.3), d_yaw), False
+            if scan.clear_along(d_yaw, fp.radius + SQUEEZE_MARGIN) >= min(distance, GAP_REACH):
+                return (
+                    min(GAP_SPEED, fp.speed),
+                    float(np.clip(p.k_yaw * d_yaw, -fp.max_turn, fp.max_turn)),
+                    False,
+                )
         if self.mode == "follow":
             clear = scan.sector_min(d_yaw - 0.15, d_yaw + 0.15, default=math.inf)
             if distance < self.hit_distance - 0.3 and clear > min(distance, 3.0):
@@ -131,7 +147,7 @@ class RouteNavigator:
                 arrive = self.params.arrive if last else self.pass_radius
                 self.current = BugNavigator(
                     self.waypoints[0],
-                    BugParams(arrive, self.params.yaw_tolerance, self.params.k_yaw, self.params.follow),
+                    dataclasses.replace(self.params, arrive=arrive),
                 )
             v, w, arrived = self.current.step(pose, scan)
             if not arrived:

@@ -145,10 +145,11 @@ class LocalMap:
             out.append(Frontier(centre, size))
         return out
 
-    def plan(self, pose: Pose2D, clearance: float | None = None) -> list[np.ndarray]:
-        """Waypoints (odom frame) to the best frontier: shortest path minus ``size_weight`` per cell,
-        not near a failed target, keeping ``clearance`` (default ``params.clearance``) from what is
-        not known free. Empty when no frontier is reachable (the place is explored)."""
+    def plan(self, pose: Pose2D, clearance: float | None = None, spacing: float = 1.5) -> list[np.ndarray]:
+        """Waypoints (odom frame, every ``spacing`` m) to the best frontier: shortest path minus
+        ``size_weight`` per cell, not near a failed target, keeping ``clearance`` (default
+        ``params.clearance``) from what is not known free. Empty when no frontier is reachable (the
+        place is explored)."""
         p = self.params
         frontiers = [
             f
@@ -179,7 +180,7 @@ class LocalMap:
                 best = (score, node)
         if best is None:
             return []
-        return planner.path(pred, start, best[1], spacing=1.5)
+        return planner.path(pred, start, best[1], spacing=spacing)
 
     def give_up(self, target: np.ndarray) -> None:
         """Remember a target that could not be reached (not chosen again)."""

@@ -21,7 +21,14 @@ import math
 
 import numpy as np
 
-from initcli.core.bug_navigation import BugNavigator, BugParams, FloorCrossing, RouteNavigator, cross_floor
+from initcli.core.bug_navigation import (
+    GAP_SPEED,
+    BugNavigator,
+    BugParams,
+    FloorCrossing,
+    RouteNavigator,
+    cross_floor,
+)
 from initcli.core.confinement import ConfinementWatch
 from initcli.core.frontier import LocalMap
 from initcli.core.laps import LapWatch
@@ -30,7 +37,14 @@ from initcli.drivers.base import SensorFrame
 from initcli.session.result import SessionResult, ShutIn
 from initcli.settings_session import FrontierSettings, LapSettings, LoopSettings, ShuttleSettings
 
-__all__ = ["Escapes", "open_point"]
+__all__ = ["Escapes", "LAP_ROUTE_PASS", "LAP_ROUTE_SPACING", "open_point"]
+
+# A route after a lap leads through a doorway barely wider than the robot: waypoints close together,
+# each passed closely, driven at GAP_SPEED with this slack plus this many seconds (turns on the spot).
+LAP_ROUTE_SPACING = 0.5  # m between waypoints
+LAP_ROUTE_PASS = 0.3  # m: an intermediate waypoint counts as passed this close
+LAP_ROUTE_SLACK = 1.5
+LAP_ROUTE_EXTRA_S = 20.0
 
 
 def open_point(frame: SensorFrame, scan: ScanView | None, loops: LoopSettings) -> np.ndarray:
@@ -142,20 +156,28 @@ class Escapes:
             self.local_map.give_up(self.lap_target)
         # A doorway barely wider than the robot: the map's cells blur each jamb by up to a cell.
         clearance = self.follow.radius - self.local_map.params.resolution / 4
-        route = self.local_map.plan(frame.odom, clearance)
+        route = self.local_map.plan(frame.odom, clearance, spacing=LAP_ROUTE_SPACING)
         if route:
             self.lap_target = route[-1]
-            self.start(frame, RouteNavigator(route, BugParams(follow=self.follow)))
+            squeeze = BugParams(follow=self.follow, squeeze=True)
+            length = float(
+                np.sum(np.hypot(*np.diff(np.vstack([[frame.odom.x, frame.odom.y], route]), axis=0).T))
+            )
+            seconds = max(self.settings.escape, LAP_ROUTE_SLACK * length / GAP_SPEED + LAP_ROUTE_EXTRA_S)
+            self.start(frame, RouteNavigator(route, squeeze, pass_radius=LAP_ROUTE_PASS), seconds)
             self.result.laps += 1
             return f"a {lap.length:.0f} m lap without a new feature: heading for an unexplored opening"
         if not self.lap_settings.shut_in:
             return None
         return ShutIn(round(self.local_map.free_area(), 1), features, round(lap.length, 1))
 
-    def start(self, frame: SensorFrame, navigator: BugNavigator | RouteNavigator) -> None:
-        """Follow ``navigator`` for ``loops.escape`` seconds instead of the wall (a loop escape)."""
+    def start(
+        self, frame: SensorFrame, navigator: BugNavigator | RouteNavigator, seconds: float | None = None
+    ) -> None:
+        """Follow ``navigator`` for ``seconds`` (default ``loops.escape``) instead of the wall (a loop
+        escape)."""
         self.navigator = navigator
-        self.until = frame.t + self.settings.escape
+        self.until = frame.t + (self.settings.escape if seconds is None else seconds)
         self.result.loop_escapes += 1
 
     def cross(self, frame: SensorFrame, scan: ScanView, side: int) -> FloorCrossing | None:

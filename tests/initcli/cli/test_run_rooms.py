@@ -6,13 +6,15 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import jsonschema
 import pytest
 import yaml
 from typer.testing import CliRunner
 
 from bimtools.samples.worlds import world, write_plan
 from initcli.cli.main import app
-from tests.helpers import SAMPLES
+from initcli.cli.run import EXIT_FAILED
+from tests.helpers import SAMPLES, SCHEMAS
 
 runner = CliRunner()
 
@@ -100,3 +102,46 @@ def test_eval_and_survey_on_an_open_hall(tmp_path):
     (storey,) = json.loads((tmp_path / "sv" / "survey.json").read_text())["storeys"]
     # the hall's floor at a 4 m spacing (at most 13 x 5 positions): before slabs bounded it, none
     assert 30 <= storey["positions"] <= 65
+
+
+BEDROOM = "9.5,3,30"  # the house's bedroom (x 7-12, y 0-6: 5 x 6 m), its door in the west wall
+
+
+def test_a_room_with_closed_doors_stops_shut_in_within_two_laps(tmp_path):
+    """A live robot has no oracle: from its own map (no opening it can pass, no new feature over a
+    lap) it stops, says so in one line and in summary.json, and does not drive its 150 m."""
+    config = world_config(tmp_path, "house", refuse_enclosed=False)
+    result, doc = run(tmp_path, config, "--seed", "2", "--start", BEDROOM)
+    assert result.exit_code == EXIT_FAILED and "Traceback" not in result.output
+    assert result.output.splitlines()[-1].startswith("shut in: explored ")  # the one line, on stderr
+    assert doc is not None and not doc["success"] and doc["reason"] == "shut in"
+    lap = 2 * (5.0 - 2 * 0.7) + 2 * (6.0 - 2 * 0.7)  # round the room at the wall distance, 16.4 m
+    assert doc["distance_total_m"] <= 2 * lap
+    shut = doc["shut_in"]
+    assert 15.0 <= shut["explored_m2"] <= 35.0  # the bedroom's floor, not the house behind its walls
+    assert (
+        shut["features_seen"] == doc["features_detected"]
+        and shut["advice"] == "open a door or move the robot"
+    )
+    assert shut["message"] == (
+        f"shut in: explored {shut['explored_m2']:.0f} m2, saw {shut['features_seen']} feature"
+        f"{'' if shut['features_seen'] == 1 else 's'}; open a door or move the robot"
+    )
+    schema = json.loads((SCHEMAS / "summary.schema.json").read_text())
+    jsonschema.validate(doc, schema)
+    # The simulator knows better and says so at 0 m (the default, sim.refuse_enclosed).
+    _, known = run(tmp_path, world_config(tmp_path, "house"), "--seed", "2", "--start", BEDROOM, out="known")
+    assert known is not None and known["reason"].startswith("cannot leave") and known["distance_total_m"] == 0
+
+
+@pytest.mark.parametrize("seed", [1, 4])
+def test_a_room_with_an_open_doorway_is_left(tmp_path, seed):
+    """The same room with its doorway open (0.9 m, no leaf): after a lap the robot drives out
+    through it on a route of its own map, and initialises in the hallway (these seeds once ended
+    shut in beside the doorway: the bug navigator turned back at the jamb)."""
+    config = world_config(tmp_path, "house_open", refuse_enclosed=False)
+    result, doc = run(tmp_path, config, "--seed", str(seed), "--start", BEDROOM)
+    assert result.exit_code == 0, result.output
+    assert doc is not None and doc["reason"] != "shut in" and "shut_in" not in doc
+    assert min(x for x, _ in truth_path(tmp_path / "out")) < 6.5  # out of the bedroom (x >= 7)
+    assert doc["success"] and doc["error_translation_m"]["fine"] <= 0.3
