@@ -35,6 +35,8 @@ __all__ = [
     "GAP_SPEED",
     "GAP_STEP",
     "RouteNavigator",
+    "SQUEEZE_LOOK",
+    "SQUEEZE_SEARCH",
     "SQUEEZE_MARGIN",
     "around_side",
     "cross_floor",
@@ -48,7 +50,9 @@ GAP_STEP = math.radians(2.0)  # ... at this step ...
 GAP_REACH = 3.0  # m: ... leading as far as the target, or this far when it is farther
 GAP_MARGIN = 0.05  # m beyond the robot's radius either side of the way through a gap
 GAP_SPEED = 0.2  # m/s through a gap
-SQUEEZE_MARGIN = 0.03  # m beyond the robot's radius either side of a squeezed route's way
+SQUEEZE_MARGIN = 0.03  # m beyond the robot's radius either side of a squeezed route's way ...
+SQUEEZE_LOOK = 0.4  # m ... clear at least this far ahead (or to the waypoint) ...
+SQUEEZE_SEARCH = math.radians(80.0)  # ... along a bearing this close to the waypoint's (odometry drifts)
 
 
 @dataclass(frozen=True)
@@ -87,10 +91,16 @@ class BugNavigator:
             # Turning on the spot never hits anything; then drive while the narrow way is clear.
             if abs(d_yaw) > p.yaw_tolerance:
                 return 0.0, math.copysign(fp.max_turn * min(1.0, abs(d_yaw) / 0.6 + 0.3), d_yaw), False
-            if scan.clear_along(d_yaw, fp.radius + SQUEEZE_MARGIN) >= min(distance, GAP_REACH):
+            # Blocked: the nearest bearing (within GAP_SEARCH) that is clear that far (a jamb in the way).
+            way = _clear_bearing(
+                scan, d_yaw, fp.radius + SQUEEZE_MARGIN, min(distance, SQUEEZE_LOOK), SQUEEZE_SEARCH
+            )
+            if way is not None:
+                if abs(way) > p.yaw_tolerance:
+                    return 0.0, math.copysign(fp.max_turn * min(1.0, abs(way) / 0.6 + 0.3), way), False
                 return (
                     min(GAP_SPEED, fp.speed),
-                    float(np.clip(p.k_yaw * d_yaw, -fp.max_turn, fp.max_turn)),
+                    float(np.clip(p.k_yaw * way, -fp.max_turn, fp.max_turn)),
                     False,
                 )
         if self.mode == "follow":
@@ -165,8 +175,16 @@ def gap_bearing(scan: ScanView, d_yaw: float, distance: float, half_width: float
     need = min(distance, GAP_REACH)
     if scan.clear_along(d_yaw, half_width) >= need:
         return None
-    for k in range(1, int(GAP_SEARCH / GAP_STEP) + 1):
-        for sign in (1.0, -1.0):
+    return _clear_bearing(scan, d_yaw, half_width, need)
+
+
+def _clear_bearing(
+    scan: ScanView, d_yaw: float, half_width: float, need: float, search: float = GAP_SEARCH
+) -> float | None:
+    """The bearing nearest ``d_yaw`` (``d_yaw`` itself first, then GAP_STEP either side, within
+    ``search``) along which a way ``half_width`` m either side is clear for ``need`` m; None: none is."""
+    for k in range(int(search / GAP_STEP) + 1):
+        for sign in (1.0, -1.0) if k else (1.0,):
             bearing = float(wrap_angle(d_yaw + sign * k * GAP_STEP))
             if scan.clear_along(bearing, half_width) >= need:
                 return bearing

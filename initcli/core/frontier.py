@@ -22,7 +22,16 @@ from initcli.core.geometry import Pose2D
 from initcli.core.grid_planner import PlanningGrid
 from initcli.core.jit import compiled
 
-__all__ = ["FREE_BELOW", "Frontier", "FrontierParams", "L_CLAMP", "L_FREE", "L_OCC", "LocalMap", "OCC_ABOVE"]
+__all__ = [
+    "FREE_BELOW",
+    "Frontier",
+    "FrontierParams",
+    "L_CLAMP",
+    "L_FREE",
+    "L_OCC",
+    "LocalMap",
+    "OCC_ABOVE",
+]
 
 L_FREE = -0.4  # log-odds added to a cell a beam passed through
 L_OCC = 0.85  # log-odds added at a beam's end point
@@ -145,11 +154,14 @@ class LocalMap:
             out.append(Frontier(centre, size))
         return out
 
-    def plan(self, pose: Pose2D, clearance: float | None = None, spacing: float = 1.5) -> list[np.ndarray]:
+    def plan(
+        self, pose: Pose2D, clearance: float | None = None, spacing: float = 1.5, prefer: float = 0.0
+    ) -> list[np.ndarray]:
         """Waypoints (odom frame, every ``spacing`` m) to the best frontier: shortest path minus
         ``size_weight`` per cell, not near a failed target, keeping ``clearance`` (default
-        ``params.clearance``) from what is not known free. Empty when no frontier is reachable (the
-        place is explored)."""
+        ``params.clearance``) from what is not known free; ``prefer`` > 0: steps closer than that to it
+        cost more (:meth:`PlanningGrid.of`: through the middle of a doorway, not across its jamb's
+        corner). Empty when no frontier is reachable (the place is explored)."""
         p = self.params
         frontiers = [
             f
@@ -160,7 +172,9 @@ class LocalMap:
             return []
         grid, _ = self.occupancy()
         # Unknown space is not free for the planner: paths run through what the lidar has seen.
-        planner = PlanningGrid.of(grid, p.clearance if clearance is None else clearance, cell=p.resolution)
+        planner = PlanningGrid.of(
+            grid, p.clearance if clearance is None else clearance, cell=p.resolution, prefer=prefer
+        )
         if len(planner.nodes) == 0:
             return []
         dist, pred, start = planner.distances_from(pose.x, pose.y)

@@ -42,7 +42,8 @@ __all__ = ["Escapes", "LAP_ROUTE_PASS", "LAP_ROUTE_SPACING", "open_point"]
 # A route after a lap leads through a doorway barely wider than the robot: waypoints close together,
 # each passed closely, driven at GAP_SPEED with this slack plus this many seconds (turns on the spot).
 LAP_ROUTE_SPACING = 0.5  # m between waypoints
-LAP_ROUTE_PASS = 0.3  # m: an intermediate waypoint counts as passed this close
+LAP_ROUTE_PASS = 0.2  # m: an intermediate waypoint counts as passed this close
+LAP_ROUTE_PREFER = 0.45  # m: closer than this to what is not known free costs more (mid-doorway)
 LAP_ROUTE_SLACK = 1.5
 LAP_ROUTE_EXTRA_S = 20.0
 
@@ -156,7 +157,7 @@ class Escapes:
             self.local_map.give_up(self.lap_target)
         # A doorway barely wider than the robot: the map's cells blur each jamb by up to a cell.
         clearance = self.follow.radius - self.local_map.params.resolution / 4
-        route = self.local_map.plan(frame.odom, clearance, spacing=LAP_ROUTE_SPACING)
+        route = self.local_map.plan(frame.odom, clearance, spacing=LAP_ROUTE_SPACING, prefer=LAP_ROUTE_PREFER)
         if route:
             self.lap_target = route[-1]
             squeeze = BugParams(follow=self.follow, squeeze=True)

@@ -126,3 +126,29 @@ def test_integrate_equals_the_vectorised_update_bit_for_bit() -> None:
         numpy_integrate(reference, pose, ANGLES, ranges, 20.0)
     np.testing.assert_array_equal(compiled.logodds, reference.logodds)
     assert (compiled.logodds > 0).any() and (compiled.logodds < 0).any()
+
+
+def test_a_route_that_prefers_clearance_passes_the_doorway_through_its_middle() -> None:
+    """From a corner of the room the shortest path cuts the doorway's jamb; preferring clearance,
+    the route crosses the doorway near its middle (y 5.0), on cells the lidar saw free."""
+    local = LocalMap(FrontierParams(half_size=40.0))
+    for x, y in ((5.0, 5.0), (8.0, 1.5), (8.5, 8.5)):
+        for yaw in (0.0, 2.0, 4.0):
+            p = Pose2D(x, y, yaw)
+            local.integrate(p, ANGLES, scan_at(p), 20.0)
+    pose = Pose2D(8.5, 8.5, 0.0)
+    plain = local.plan(pose, 0.25, spacing=0.5)
+    centred = local.plan(pose, 0.25, spacing=0.5, prefer=0.45)
+    assert plain and centred
+
+    def crossing(route: list[np.ndarray]) -> float:
+        """y where the route's segments cross the wall line x = 10."""
+        for a, b in zip(route[:-1], route[1:], strict=True):
+            if a[0] < 10.0 <= b[0]:
+                return float(a[1] + (b[1] - a[1]) * (10.0 - a[0]) / (b[0] - a[0]))
+        raise AssertionError("the route does not leave the room")
+
+    assert abs(crossing(centred) - 5.0) <= 0.25  # a cell (0.2 m) off the middle at most
+    assert abs(crossing(plain) - 5.0) > abs(crossing(centred) - 5.0)
+    grid, _ = local.occupancy()
+    assert all(grid.value_at(float(w[0]), float(w[1])) == FREE for w in centred)
