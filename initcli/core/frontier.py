@@ -200,6 +200,12 @@ class LocalMap:
         """Remember a target that could not be reached (not chosen again)."""
         self.failed.append(np.asarray(target, dtype=float))
 
+    def forget_failures(self) -> bool:
+        """Forget the targets given up (each may be tried again); True when there were any."""
+        had = bool(self.failed)
+        self.failed.clear()
+        return had
+
 
 @compiled
 def _integrate_scan(

@@ -145,8 +145,9 @@ class Escapes:
         """Watch for a lap round the space the robot is in (``travel`` m of odometry so far,
         ``features`` confirmed): a lap that brought no new feature sends the robot to the nearest
         opening of its local map that it can pass (an opening an earlier lap sent it to and that it
-        came round from is not chosen again), and returns why, for the log; with no such opening left
-        it returns :class:`ShutIn` (``laps.shut_in`` false: None). None while no such lap closed."""
+        came round from is not chosen again while others are left), and returns why, for the log;
+        with no opening it can pass on its map it returns :class:`ShutIn` (``laps.shut_in`` false:
+        None). None while no such lap closed."""
         if not self.laps.add(travel, frame.odom.x, frame.odom.y, features) or self.under_way(frame):
             return None
         lap = self.laps.lap()
@@ -158,6 +159,12 @@ class Escapes:
         # A doorway barely wider than the robot: the map's cells blur each jamb by up to a cell.
         clearance = self.follow.radius - self.local_map.params.resolution / 4
         route = self.local_map.plan(frame.odom, clearance, spacing=LAP_ROUTE_SPACING, prefer=LAP_ROUTE_PREFER)
+        if not route and self.local_map.forget_failures():
+            # Every opening it can pass was tried and it came round again: an opening it failed to
+            # get through is still a way out (not shut in), tried again from here.
+            route = self.local_map.plan(
+                frame.odom, clearance, spacing=LAP_ROUTE_SPACING, prefer=LAP_ROUTE_PREFER
+            )
         if route:
             self.lap_target = route[-1]
             squeeze = BugParams(follow=self.follow, squeeze=True)

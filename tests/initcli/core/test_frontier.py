@@ -75,6 +75,9 @@ def test_a_failed_target_is_not_chosen_again_and_a_closed_room_has_none() -> Non
     open_map.give_up(route[-1])
     again = open_map.plan(pose)
     assert not again or float(np.hypot(*(again[-1] - route[-1]))) >= 1.5
+    # forgotten, the doorway is a way out again (a lap that finds no other: not shut in)
+    assert open_map.forget_failures() and not open_map.forget_failures()
+    assert float(np.hypot(*(open_map.plan(pose)[-1] - route[-1]))) < 1.5
 
 
 def numpy_integrate(
