@@ -4,13 +4,15 @@
   lift along both long sides (their doors face the hall) and gates in its façade: one 5 m gate
   in the west end and one 6 m gate in the north façade stand open (openings no door fills), an
   exit door closes the east end. No IfcSpace; a floor slab under every cell bounds the building.
+- ``open_hall``: a 48 x 16 m hall standing alone, exit doors along both long sides, 5 m gates open
+  in both ends; only its floor slab bounds its free space.
 - ``house``: a Renga-like house, 12 x 10 m: a 2 m hallway between a living room and a 5 x 6 m
   bedroom, a kitchen and a staircase; every room behind a door; spaces per room.
 - ``house_open``: the same house with the bedroom's door left out (an open doorway).
 
 :func:`as_built_plan` writes a variant of any plan as built: doors removed (their opening left
-free), walled up (no opening at all) or shifted along their wall. ``python -m bimtools.samples
---world NAME`` writes one of them (and ``--as-built`` the samples' as-built variants).
+free), walled up (no opening at all) or shifted along their wall; :func:`sample_as_built` those of
+the three samples (:data:`AS_BUILT_CHANGES`), and :func:`write_plan` writes any plan as IFC.
 """
 
 from __future__ import annotations
@@ -107,9 +109,8 @@ def crane_hall() -> FloorPlan:
 
 def open_hall() -> FloorPlan:
     """A 48 x 16 m hall standing alone (no rooms round it): exit doors along both long sides and
-    gates standing open in both end façades. Its whole free
-    space reaches the outside; only the floor slab bounds it (bim-extract before slabs: no free
-    space at all)."""
+    gates standing open in both end façades. Its whole free space reaches the outside; only the
+    floor slab bounds it (bim-extract before slabs: no free space at all)."""
     cells = [Cell("Hall", "corridor", 0.0, 0.0, 48.0, 16.0, "Assembly hall")]
     d = _DoorMaker(cells)
     for k, at in enumerate((4.0, 13.5, 21.0, 33.0)):
