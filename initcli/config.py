@@ -315,6 +315,7 @@ def wall_follow_params(config: SessionConfig) -> WallFollowParams:
         speed=config.robot.max_linear,
         max_turn=config.robot.max_angular,
         front_stop=config.robot.radius + config.exploration.front_clearance,
+        radius=config.robot.radius,
     )
 
 

@@ -27,6 +27,7 @@ __all__ = [
     "FineTuningSection",
     "FrontierSettings",
     "LidarSection",
+    "LapSettings",
     "LimitsSection",
     "LoopSettings",
     "MatchingSection",
@@ -254,6 +255,25 @@ class FrontierSettings:
 
 
 @dataclass
+class LapSettings:
+    """A lap: back where the robot was after its path turned once round (a room, a hall, a corridor
+    section closed at both ends) with no new feature on the way: it heads for an opening of its
+    local map it can pass, and with none left it is shut in (beyond the paper)."""
+
+    length: float = setting(6.0, "m: a lap is at least this long ...", above=0, maximum=10000)
+    radius: float = setting(1.0, "m: ... back this close to where it began ...", above=0, maximum=100)
+    turn: float = setting(
+        315.0, "degrees: ... the path's direction turned by at least this much", above=0, maximum=3600
+    )
+    shut_in: bool = setting(
+        True,
+        "stop the session when a lap brought no new feature and the local map has no opening the robot can"
+        " pass (reason: shut in, with the area explored, the features seen and what to do); false: drive"
+        " on to limits.max_distance",
+    )
+
+
+@dataclass
 class TargetSettings:
     """Active exploration's targets (paper 3.3.4, exploration.active)."""
 
@@ -379,6 +399,7 @@ class ExplorationSection:
     frontier: FrontierSettings = section(
         FrontierSettings, "the local map of unexplored openings that loop escapes head for"
     )
+    laps: LapSettings = section(LapSettings, "laps round a room or hall without a new feature: shut in?")
     targets: TargetSettings = section(TargetSettings, "active exploration's targets (exploration.active)")
 
 

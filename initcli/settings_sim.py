@@ -179,6 +179,12 @@ class SimSection:
         " start outside the building or inside a wall is refused",
         schema=START_SCHEMA,
     )
+    refuse_enclosed: bool = setting(
+        True,
+        "a given start in a space closed off from where the features face (closed doors, hoardings, gaps"
+        " narrower than the robot) is refused at 0 m, as the simulator knows; false: the session runs from"
+        " there and finds out itself, as a live robot must (exploration.laps: shut in)",
+    )
     world: str = setting(
         "",
         "the building the simulated robot drives in, senses and detects features in (an IFC file or a"

@@ -47,6 +47,8 @@ __all__ = [
     "BODY_BAND",
     "CURTAIN_PART_CLASSES",
     "Candidates",
+    "FLOOR_BAND",
+    "FLOOR_CUT",
     "ElementStoreys",
     "ExtractedSite",
     "GLASS_BAND",
@@ -68,6 +70,10 @@ GLASS_BAND = (-0.1, 2.5)  # metres around a storey's elevation whose vertices gi
 BODY_BAND = (-0.2, 2.2)  # metres around a storey's elevation where a lift/stair is "on" it
 LIFT_MIN_SPAN = 1.8  # metres a lift body must reach above a storey's floor to serve it
 MERGE_DISTANCE = 0.3  # metres: features closer than this are one element exported twice
+# Floor slabs bound the building where its walls leave it open (gates standing open, a façade not
+# yet built): a slab whose top lies this close (metres) to a storey's elevation is its floor.
+FLOOR_BAND = (-0.6, 0.6)
+FLOOR_CUT = 0.02  # metres below a slab's top where its plan footprint is cut
 
 
 @dataclass
@@ -121,10 +127,19 @@ class Candidates:
     spaces: list[ifcopenshell.entity_instance]
     # door GlobalId -> the opening it fills, for doors without a body (placed from the opening)
     openings: dict[str, ifcopenshell.entity_instance] = field(default_factory=dict)
+    slabs: list[ifcopenshell.entity_instance] = field(default_factory=list)  # floors: the footprint
 
     def all(self) -> list[ifcopenshell.entity_instance]:
         unique: dict[int, ifcopenshell.entity_instance] = {}
-        for element in [*self.obstacles, *self.doors, *self.spaces, *self.bodies, *self.openings.values()]:
+        parts = [
+            *self.obstacles,
+            *self.doors,
+            *self.spaces,
+            *self.bodies,
+            *self.openings.values(),
+            *self.slabs,
+        ]
+        for element in parts:
             unique.setdefault(element.id(), element)
         return list(unique.values())
 
@@ -158,7 +173,13 @@ def collect_candidates(model: ifcopenshell.file, categories: CategorySet) -> Can
             for rel in getattr(door, "FillsVoids", None) or ():
                 openings[door.GlobalId] = rel.RelatingOpeningElement
     return Candidates(
-        obstacles, unique_doors, bodies, body_category, list(model.by_type("IfcSpace")), openings
+        obstacles,
+        unique_doors,
+        bodies,
+        body_category,
+        list(model.by_type("IfcSpace")),
+        openings,
+        list(model.by_type("IfcSlab")),
     )
 
 
@@ -349,7 +370,7 @@ def _extract_storey(
     warnings: list[str] = []
     obstacles = _obstacles_at(s, cut, candidates, meshes)
     space_names, space_areas, space_entities = _spaces_at(s, cut, candidates, meshes, where)
-    plan = build_floorplan(s.name, cut, obstacles, space_areas)
+    plan = build_floorplan(s.name, cut, obstacles, space_areas + _floors_at(s, candidates, meshes))
     grid, _ = rasterise(plan, resolution)
     ctx = StoreyContext(
         s.name, s.elevation, FreeRegions(grid), SpaceIndex(space_names, space_areas), categories
@@ -386,6 +407,23 @@ def _spaces_at(
         space_areas.append(area)
         space_entities.append(space)
     return space_names, space_areas, space_entities
+
+
+def _floors_at(s: Storey, candidates: Candidates, meshes: dict[str, Mesh]) -> list[BaseGeometry]:
+    """The plan footprints of the storey's floor slabs (their top within FLOOR_BAND of its
+    elevation), cut just below their top: with the spaces they bound the building where its walls
+    leave it open to the outside (a hall's gates, an unfinished façade)."""
+    floors: list[BaseGeometry] = []
+    lo, hi = s.elevation + FLOOR_BAND[0], s.elevation + FLOOR_BAND[1]
+    for slab in candidates.slabs:
+        mesh = meshes.get(slab.GlobalId)
+        if mesh is None or not (lo <= mesh.zmax <= hi):
+            continue
+        z = mesh.zmax - min(FLOOR_CUT, (mesh.zmax - mesh.zmin) / 2)
+        area = section_polygon(mesh.verts, mesh.faces, z)
+        if area is not None and area.area > 1e-6:
+            floors.append(area)
+    return floors
 
 
 def _doors_on(

@@ -3,7 +3,8 @@
 Spatial tree: IfcProject > IfcSite > IfcBuilding > IfcBuildingStorey "Level 1" (elevation 0.0,
 GrossHeight 3.0 in Qto_BuildingStoreyBaseQuantities). Walls, doors, lift cars and stairs are
 contained in the storey; spaces (block models only) are aggregated under it; stair flights are
-aggregated under their stair; openings void their host wall and are filled by their door.
+aggregated under their stair; openings void their host wall and are filled by their door (or by nothing:
+``FloorPlan.openings``); with ``FloorPlan.with_slab`` a floor slab (IfcSlab) lies under every cell.
 
 Placement conventions (all placements are IfcLocalPlacement with axis-aligned IfcAxis2Placement3D):
 
@@ -63,6 +64,7 @@ GUID_NAMESPACE = uuid.UUID("6f9d1c52-3b0e-4d8a-9a57-2c1e8b7f4a10")
 HEADER_TIMESTAMP = "2024-01-01T00:00:00"
 APPLICATION = "bimtools.samples"
 OPENING_EXTRA_DEPTH = 0.1  # openings stick out 5 cm on both wall faces
+SLAB_THICKNESS = 0.2  # m: a floor slab (FloorPlan.with_slab), its top at the storey's floor
 
 Entity = ifcopenshell.entity_instance
 
@@ -136,6 +138,8 @@ class _Writer:
             self.walls[piece] = self._create_wall(i, piece)
         for door in self.plan.doors:
             self.doors[door.tag] = self._create_door(door, self.walls[host_wall(self.plan, door, walls)])
+        for opening in self.plan.openings:
+            self._create_opening(opening, self.walls[host_wall(self.plan, opening, walls)])
         for lift in self.plan.lifts:
             self._create_lift(lift)
         for stair in self.plan.stairs:
@@ -143,6 +147,9 @@ class _Writer:
         if self.plan.with_spaces:
             for cell in self.plan.cells:
                 self._create_space(cell)
+        if self.plan.with_slab:
+            for cell in self.plan.cells:
+                self._create_slab(cell)
         self._sort_set_attributes()
         self._assign_global_ids()
         return WrittenModel(self.model, self.doors)
@@ -241,7 +248,8 @@ class _Writer:
         self._add_pset(wall, "Pset_WallCommon", {"IsExternal": piece.external, "LoadBearing": False})
         return wall
 
-    def _create_door(self, spec: DoorSpec, wall: Entity) -> Entity:
+    def _create_opening(self, spec: DoorSpec, wall: Entity) -> Entity:
+        """An opening of ``spec``'s width and height through ``wall`` (a door's, or one no door fills)."""
         api = ifcopenshell.api
         frame = Frame(spec.x, spec.y, 0.0, float(spec.along[0]), float(spec.along[1]))
         opening = api.root.create_entity(
@@ -251,6 +259,12 @@ class _Writer:
         self._place(opening, frame, wall)
         depth = _r(WALL_THICKNESS + OPENING_EXTRA_DEPTH)
         self._assign_body(opening, self._box(spec.width, depth, spec.height))
+        return opening
+
+    def _create_door(self, spec: DoorSpec, wall: Entity) -> Entity:
+        api = ifcopenshell.api
+        frame = Frame(spec.x, spec.y, 0.0, float(spec.along[0]), float(spec.along[1]))
+        opening = self._create_opening(spec, wall)
 
         door = api.root.create_entity(self.model, ifc_class="IfcDoor", name=spec.name, predefined_type="DOOR")
         door.Tag = spec.tag
@@ -311,6 +325,17 @@ class _Writer:
         width, depth = cell.size
         self._assign_body(space, self._box(width, depth, STOREY_HEIGHT))
         return space
+
+    def _create_slab(self, cell: Cell) -> Entity:
+        """A floor slab under ``cell`` (to its wall centre lines), its top at the storey's floor."""
+        slab = ifcopenshell.api.root.create_entity(
+            self.model, ifc_class="IfcSlab", name=f"Floor {cell.name}", predefined_type="FLOOR"
+        )
+        self._contain(slab)
+        self._place(slab, Frame(*cell.centre, -SLAB_THICKNESS), self.storey)
+        width, depth = cell.size
+        self._assign_body(slab, self._box(width, depth, SLAB_THICKNESS))
+        return slab
 
     # ---- geometry and placement helpers ---------------------------------------------------
 

@@ -226,6 +226,10 @@ class FloorPlan:
     stairs: tuple[StairSpec, ...] = ()
     with_spaces: bool = False
     description: str = ""
+    # Openings in walls that no door fills (gates standing open, a doorway without a leaf), as doors
+    # are placed (``normal`` to the circulation side); never features.
+    openings: tuple[DoorSpec, ...] = ()
+    with_slab: bool = False  # a floor slab (IfcSlab) under every cell, its top at the storey's floor
 
     def cell(self, name: str) -> Cell:
         return next(c for c in self.cells if c.name == name)
@@ -333,7 +337,7 @@ def check_plan(plan: FloorPlan) -> list[str]:
     if len({c.name for c in plan.cells}) != len(plan.cells):
         problems.append("duplicate cell names")
     walls = wall_pieces(plan)
-    for door in plan.doors:
+    for door in (*plan.doors, *plan.openings):
         problems += _door_problems(plan, door, walls)
     for lift in plan.lifts:
         if plan.cell(lift.shaft).kind != "lift_shaft":
@@ -444,7 +448,7 @@ def wall_points(plan: FloorPlan, clearance: float = 0.6) -> list[Vec]:
     """One point per wall piece in the middle of the wall thickness, away from openings."""
     walls = wall_pieces(plan)
     spans: dict[WallPiece, list[tuple[float, float]]] = {}
-    for door in plan.doors:
+    for door in (*plan.doors, *plan.openings):
         s = door.x if door.normal[0] == 0 else door.y
         spans.setdefault(host_wall(plan, door, walls), []).append((s - door.width / 2, s + door.width / 2))
     points: list[Vec] = []

@@ -27,3 +27,6 @@ class LocalisationOutcome:
     duration_s: float  # simulated seconds
     features: int = 0  # what the method detected: BIM features, markers decoded, 0 for AMCL
     wall_seconds: float = 0.0
+    # The simulator refused the start (a space closed off from the corridors, known at 0 m, or a
+    # storey with no free space to draw a start from): neither a success nor a failure of the method.
+    refused: bool = False

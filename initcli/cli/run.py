@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 import time
 from contextlib import nullcontext
 from datetime import datetime
@@ -80,7 +81,8 @@ def result_table(doc: dict) -> Table:
     table.add_column("")
     table.add_column("value")
     table.add_row("success", "[green]yes[/green]" if doc["success"] else "[red]no[/red]")
-    table.add_row("reason", doc["reason"])
+    shut = doc.get("shut_in")
+    table.add_row("reason", shut["message"] if shut else doc["reason"])
     table.add_row("storey", str(doc["storey"]))
     for key in ("coarse_pose", "rectified_pose", "pose"):
         p = doc.get(key)
@@ -178,6 +180,8 @@ def run(
         print(json.dumps(doc, indent=2))
     elif quiet:
         print(target / "summary.json")
+        if doc.get("shut_in"):
+            print(doc["shut_in"]["message"], file=sys.stderr)
     else:
         console.print(result_table(doc))
         console.print(f"wrote {target}/session.jsonl, summary.json, report.png")

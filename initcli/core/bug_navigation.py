@@ -4,11 +4,17 @@ Turn toward the target (Eq. 15-16) and drive straight; when an obstacle blocks t
 its wall on the side that keeps the target closest; leave the wall when the target is in line of
 sight and closer than where the wall was met. Following the wall the wrong way round (the
 target falling behind by more than ``give_up_margin``) turns back to follow it on the other side;
-if that side leads away too, the robot heads straight for the target again.
+if that side leads away too, the robot heads straight for the target again. When the straight way
+is blocked but a way as wide as the robot leads within ``GAP_SEARCH`` of it as far as the target (a
+doorway, a gap between stacks; beyond the paper), the robot steers through that gap instead: a wall
+follower cannot enter a doorway barely wider than itself. A route planned through a doorway on the
+robot's own map (``BugParams.squeeze``) is driven closely: the robot turns on the spot toward each
+near waypoint and drives while a way ``SQUEEZE_MARGIN`` wider than itself is clear that far.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -23,13 +29,30 @@ __all__ = [
     "CROSSING_EXTRA_S",
     "CROSSING_SLACK",
     "FloorCrossing",
+    "GAP_MARGIN",
+    "GAP_REACH",
+    "GAP_SEARCH",
+    "GAP_SPEED",
+    "GAP_STEP",
     "RouteNavigator",
+    "SQUEEZE_LOOK",
+    "SQUEEZE_SEARCH",
+    "SQUEEZE_MARGIN",
     "around_side",
     "cross_floor",
+    "gap_bearing",
 ]
 
 CROSSING_SLACK = 1.5  # a crossing may take this many times its drive at cruise speed ...
 CROSSING_EXTRA_S = 5.0  # s ... plus this (turning toward it); then wall following resumes there
+GAP_SEARCH = math.radians(35.0)  # a gap is looked for this far either side of the target's bearing ...
+GAP_STEP = math.radians(2.0)  # ... at this step ...
+GAP_REACH = 3.0  # m: ... leading as far as the target, or this far when it is farther
+GAP_MARGIN = 0.05  # m beyond the robot's radius either side of the way through a gap
+GAP_SPEED = 0.2  # m/s through a gap
+SQUEEZE_MARGIN = 0.03  # m beyond the robot's radius either side of a squeezed route's way ...
+SQUEEZE_LOOK = 0.4  # m ... clear at least this far ahead (or to the waypoint) ...
+SQUEEZE_SEARCH = math.radians(80.0)  # ... along a bearing this close to the waypoint's (odometry drifts)
 
 
 @dataclass(frozen=True)
@@ -39,6 +62,7 @@ class BugParams:
     k_yaw: float = 1.5
     follow: WallFollowParams = field(default_factory=WallFollowParams)
     give_up_margin: float = 1.5  # m farther from the target than where the wall was met
+    squeeze: bool = False  # a route through a narrow way on the robot's own map: drive it closely
 
 
 @dataclass
@@ -63,6 +87,22 @@ class BugNavigator:
         yaw_d = math.atan2(dy, dx)  # Eq. 15
         d_yaw = float(wrap_angle(yaw_d - pose.yaw))  # Eq. 16
         fp = p.follow
+        if p.squeeze and self.mode == "go":
+            # Turning on the spot never hits anything; then drive while the narrow way is clear.
+            if abs(d_yaw) > p.yaw_tolerance:
+                return 0.0, math.copysign(fp.max_turn * min(1.0, abs(d_yaw) / 0.6 + 0.3), d_yaw), False
+            # Blocked: the nearest bearing (within GAP_SEARCH) that is clear that far (a jamb in the way).
+            way = _clear_bearing(
+                scan, d_yaw, fp.radius + SQUEEZE_MARGIN, min(distance, SQUEEZE_LOOK), SQUEEZE_SEARCH
+            )
+            if way is not None:
+                if abs(way) > p.yaw_tolerance:
+                    return 0.0, math.copysign(fp.max_turn * min(1.0, abs(way) / 0.6 + 0.3), way), False
+                return (
+                    min(GAP_SPEED, fp.speed),
+                    float(np.clip(p.k_yaw * way, -fp.max_turn, fp.max_turn)),
+                    False,
+                )
         if self.mode == "follow":
             clear = scan.sector_min(d_yaw - 0.15, d_yaw + 0.15, default=math.inf)
             if distance < self.hit_distance - 0.3 and clear > min(distance, 3.0):
@@ -79,6 +119,11 @@ class BugNavigator:
             else:
                 v, w = wall_follow(scan, self.side, fp)
                 return v, w, False
+        gap = gap_bearing(scan, d_yaw, distance, fp.radius + GAP_MARGIN)
+        if gap is not None:
+            if abs(gap) > p.yaw_tolerance:
+                return 0.0, math.copysign(fp.max_turn * min(1.0, abs(gap) / 0.6 + 0.3), gap), False
+            return min(GAP_SPEED, fp.speed), float(np.clip(p.k_yaw * gap, -fp.max_turn, fp.max_turn)), False
         if scan.front() < fp.front_stop + 0.1 and abs(d_yaw) < math.pi / 2 and scan.front() < distance:
             self.mode = "follow"
             self.side = around_side(scan, d_yaw)
@@ -112,7 +157,7 @@ class RouteNavigator:
                 arrive = self.params.arrive if last else self.pass_radius
                 self.current = BugNavigator(
                     self.waypoints[0],
-                    BugParams(arrive, self.params.yaw_tolerance, self.params.k_yaw, self.params.follow),
+                    dataclasses.replace(self.params, arrive=arrive),
                 )
             v, w, arrived = self.current.step(pose, scan)
             if not arrived:
@@ -120,6 +165,30 @@ class RouteNavigator:
             self.waypoints.pop(0)
             self.current = None
         return 0.0, 0.0, True
+
+
+def gap_bearing(scan: ScanView, d_yaw: float, distance: float, half_width: float) -> float | None:
+    """The bearing (rad, robot frame) of a way ``half_width`` m either side clear as far as the target
+    (``distance`` m at bearing ``d_yaw``; at most GAP_REACH) when the straight way is not; the one
+    nearest the target's bearing within GAP_SEARCH. None when the straight way is clear (the bug
+    navigator drives it) or no such way leads on."""
+    need = min(distance, GAP_REACH)
+    if scan.clear_along(d_yaw, half_width) >= need:
+        return None
+    return _clear_bearing(scan, d_yaw, half_width, need)
+
+
+def _clear_bearing(
+    scan: ScanView, d_yaw: float, half_width: float, need: float, search: float = GAP_SEARCH
+) -> float | None:
+    """The bearing nearest ``d_yaw`` (``d_yaw`` itself first, then GAP_STEP either side, within
+    ``search``) along which a way ``half_width`` m either side is clear for ``need`` m; None: none is."""
+    for k in range(int(search / GAP_STEP) + 1):
+        for sign in (1.0, -1.0) if k else (1.0,):
+            bearing = float(wrap_angle(d_yaw + sign * k * GAP_STEP))
+            if scan.clear_along(bearing, half_width) >= need:
+                return bearing
+    return None
 
 
 def around_side(scan: ScanView, d_yaw: float, margin: float = 0.3) -> int:

@@ -22,7 +22,16 @@ from initcli.core.geometry import Pose2D
 from initcli.core.grid_planner import PlanningGrid
 from initcli.core.jit import compiled
 
-__all__ = ["FREE_BELOW", "Frontier", "FrontierParams", "L_CLAMP", "L_FREE", "L_OCC", "LocalMap", "OCC_ABOVE"]
+__all__ = [
+    "FREE_BELOW",
+    "Frontier",
+    "FrontierParams",
+    "L_CLAMP",
+    "L_FREE",
+    "L_OCC",
+    "LocalMap",
+    "OCC_ABOVE",
+]
 
 L_FREE = -0.4  # log-odds added to a cell a beam passed through
 L_OCC = 0.85  # log-odds added at a beam's end point
@@ -73,7 +82,9 @@ class LocalMap:
     def integrate(self, pose: Pose2D, angles: np.ndarray, ranges: np.ndarray, range_max: float) -> None:
         """Write one scan taken at ``pose`` (odom frame) into the grid: each cell a beam passed
         through (samples every 0.7 cells up to the beam's end or ``integrate_range``) gains
-        ``L_FREE`` once, each cell holding an end point ``L_OCC`` once (and no ``L_FREE``)."""
+        ``L_FREE`` once, each cell holding an end point ``L_OCC`` once (and no ``L_FREE``). A beam
+        with no return (at ``range_max``: a dropout, a black or glazed surface) clears nothing beyond
+        the first cell already known occupied: it did not see through that wall."""
         p = self.params
         ranges = np.asarray(ranges, dtype=float)
         ok = np.isfinite(ranges) & (ranges > 0.05)
@@ -85,7 +96,7 @@ class LocalMap:
         _integrate_scan(
             self.logodds.reshape(-1), self.logodds.shape[0], self._stamp, 2 * self._scans,
             float(pose.x), float(pose.y), np.cos(a), np.sin(a), r,
-            r < min(range_max, p.integrate_range), np.minimum(r, p.integrate_range),
+            r < min(range_max, p.integrate_range), r >= range_max, np.minimum(r, p.integrate_range),
             np.arange(0.0, p.integrate_range, p.resolution * 0.7),
             float(self.origin[0]), float(self.origin[1]), float(p.resolution),
         )  # fmt: skip
@@ -110,6 +121,10 @@ class LocalMap:
         res = self.params.resolution
         origin = (self.origin[0] + c0 * res, self.origin[1] + r0 * res, 0.0)
         return OccupancyGrid(np.flipud(cells).copy(), res, origin), (r0, c0)
+
+    def free_area(self) -> float:
+        """m² of the cells the lidar has seen free (the space the robot explored)."""
+        return float((self.logodds < FREE_BELOW).sum()) * self.params.resolution**2
 
     def frontiers(self) -> list[Frontier]:
         """Clusters of free cells that border unknown cells (4-neighbourhood)."""
@@ -139,9 +154,14 @@ class LocalMap:
             out.append(Frontier(centre, size))
         return out
 
-    def plan(self, pose: Pose2D) -> list[np.ndarray]:
-        """Waypoints (odom frame) to the best frontier: shortest path minus ``size_weight`` per cell,
-        not near a failed target. Empty when no frontier is reachable (the place is explored)."""
+    def plan(
+        self, pose: Pose2D, clearance: float | None = None, spacing: float = 1.5, prefer: float = 0.0
+    ) -> list[np.ndarray]:
+        """Waypoints (odom frame, every ``spacing`` m) to the best frontier: shortest path minus
+        ``size_weight`` per cell, not near a failed target, keeping ``clearance`` (default
+        ``params.clearance``) from what is not known free; ``prefer`` > 0: steps closer than that to it
+        cost more (:meth:`PlanningGrid.of`: through the middle of a doorway, not across its jamb's
+        corner). Empty when no frontier is reachable (the place is explored)."""
         p = self.params
         frontiers = [
             f
@@ -152,7 +172,9 @@ class LocalMap:
             return []
         grid, _ = self.occupancy()
         # Unknown space is not free for the planner: paths run through what the lidar has seen.
-        planner = PlanningGrid.of(grid, p.clearance, cell=p.resolution)
+        planner = PlanningGrid.of(
+            grid, p.clearance if clearance is None else clearance, cell=p.resolution, prefer=prefer
+        )
         if len(planner.nodes) == 0:
             return []
         dist, pred, start = planner.distances_from(pose.x, pose.y)
@@ -172,11 +194,17 @@ class LocalMap:
                 best = (score, node)
         if best is None:
             return []
-        return planner.path(pred, start, best[1], spacing=1.5)
+        return planner.path(pred, start, best[1], spacing=spacing)
 
     def give_up(self, target: np.ndarray) -> None:
         """Remember a target that could not be reached (not chosen again)."""
         self.failed.append(np.asarray(target, dtype=float))
+
+    def forget_failures(self) -> bool:
+        """Forget the targets given up (each may be tried again); True when there were any."""
+        had = bool(self.failed)
+        self.failed.clear()
+        return had
 
 
 @compiled
@@ -191,6 +219,7 @@ def _integrate_scan(
     sin: np.ndarray,
     ranges: np.ndarray,
     hit: np.ndarray,
+    lost: np.ndarray,
     reach: np.ndarray,
     steps: np.ndarray,
     x0: float,
@@ -200,7 +229,9 @@ def _integrate_scan(
     """:meth:`LocalMap.integrate`'s updates of the flat float32 log-odds (row-major, ``n`` x ``n``):
     the end points of the beams that ``hit`` first (``stamp`` = mark - 1), then the cells at
     ``steps`` along each beam short of its ``reach`` that hold no end point (``stamp`` = mark),
-    each cell once."""
+    each cell once. A ``lost`` beam (no return) stops at the first cell known occupied; the lost
+    beams pass before the others, so what they stop at is the map after the end points (they free
+    no occupied cell) and the result does not depend on the beams' order."""
     occ, free, clamp = np.float32(L_OCC), np.float32(L_FREE), np.float32(L_CLAMP)
     for i in range(len(ranges)):
         if hit[i]:
@@ -209,12 +240,17 @@ def _integrate_scan(
             if 0 <= r < n and 0 <= c < n and stamp[r * n + c] != mark - 1:
                 stamp[r * n + c] = mark - 1
                 flat[r * n + c] = min(flat[r * n + c] + occ, clamp)
-    for i in range(len(ranges)):
-        for j in range(len(steps)):
-            if not steps[j] < reach[i]:
-                break
-            c = int(math.floor((x + steps[j] * cos[i] - x0) / resolution))
-            r = int(math.floor((y + steps[j] * sin[i] - y0) / resolution))
-            if 0 <= r < n and 0 <= c < n and stamp[r * n + c] < mark - 1:
-                stamp[r * n + c] = mark
-                flat[r * n + c] = max(flat[r * n + c] + free, -clamp)
+    for lost_pass in (True, False):
+        for i in range(len(ranges)):
+            if lost[i] != lost_pass:
+                continue
+            for j in range(len(steps)):
+                if not steps[j] < reach[i]:
+                    break
+                c = int(math.floor((x + steps[j] * cos[i] - x0) / resolution))
+                r = int(math.floor((y + steps[j] * sin[i] - y0) / resolution))
+                if lost_pass and 0 <= r < n and 0 <= c < n and flat[r * n + c] > OCC_ABOVE:
+                    break
+                if 0 <= r < n and 0 <= c < n and stamp[r * n + c] < mark - 1:
+                    stamp[r * n + c] = mark
+                    flat[r * n + c] = max(flat[r * n + c] + free, -clamp)

@@ -18,9 +18,10 @@ from scipy.sparse.csgraph import dijkstra
 
 from bimtools.site.records import FREE, OccupancyGrid
 
-__all__ = ["DOOR_SEAL_MARGIN", "PlanningGrid", "with_doors_closed"]
+__all__ = ["DOOR_SEAL_MARGIN", "PREFER_WEIGHT", "PlanningGrid", "with_doors_closed"]
 
 DOOR_SEAL_MARGIN = 0.15  # m beyond each side of a door's width that the seal drawn across it reaches
+PREFER_WEIGHT = 4.0  # a step at the least clearance costs this much more than its length (prefer)
 
 
 def with_doors_closed(grid: OccupancyGrid, doors: np.ndarray) -> OccupancyGrid:
@@ -50,7 +51,9 @@ class PlanningGrid:
     nodes: np.ndarray  # (n, 2) row, col of each node
 
     @staticmethod
-    def of(grid: OccupancyGrid, clearance: float, cell: float = 0.2) -> PlanningGrid:
+    def of(grid: OccupancyGrid, clearance: float, cell: float = 0.2, prefer: float = 0.0) -> PlanningGrid:
+        """``prefer`` > ``clearance``: a step between cells closer than ``prefer`` to what is not free
+        costs up to 1 + PREFER_WEIGHT times its length (paths keep to the middle of a doorway)."""
         free = (grid.cells == FREE).astype(np.uint8)
         dist = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * grid.resolution
         ok = np.flipud(dist >= clearance)  # row 0 = lowest y
@@ -71,6 +74,10 @@ class PlanningGrid:
             dst.append(other[good])
             weight.append(np.full(good.sum(), math.hypot(dr, dc) * step * grid.resolution))
         s, d, w = np.concatenate(src), np.concatenate(dst), np.concatenate(weight)
+        if prefer > clearance:
+            at = np.flipud(dist)[nodes[:, 0] * step + step // 2, nodes[:, 1] * step + step // 2]
+            short = np.clip((prefer - at) / (prefer - clearance), 0.0, 1.0)
+            w = w * (1.0 + PREFER_WEIGHT * (short[s] + short[d]) / 2)
         graph = coo_matrix(
             (np.concatenate([w, w]), (np.concatenate([s, d]), np.concatenate([d, s]))),
             shape=(len(nodes), len(nodes)),

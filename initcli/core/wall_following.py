@@ -46,6 +46,7 @@ class WallFollowParams:
     k_distance: float = 1.5
     k_angle: float = 1.8
     lost: float = 2.0  # m: no wall point this close on the side -> arc toward it
+    radius: float = 0.3  # m: the robot's footprint radius (the width of a way it can pass)
 
 
 BEAM_CACHE_SIZE = 8  # beam layouts (a lidar's angles) whose directions ScanView keeps

@@ -59,6 +59,9 @@ class TrialRecord:
     truth: list[float] | None = None
     sweep_key: str = ""
     sweep_value: str = ""
+    # The simulator refused the start (its space closed off from the corridors, known at 0 m; a
+    # storey with no free space): counted apart, neither a success nor a failure.
+    refused: bool = False
 
     @property
     def key(self) -> TrialKey:
@@ -70,7 +73,8 @@ class MethodSummary:
     """One row of ``table.csv``: a method on a site (at one sweep value), over its trials.
 
     Means of distance, features and errors are over successful trials only, as in the paper;
-    medians and 95th percentiles likewise.
+    medians and 95th percentiles likewise. ``success_rate`` is over the accepted trials (``trials``
+    less ``refused``: starts the simulator refused).
     """
 
     site: str
@@ -92,3 +96,4 @@ class MethodSummary:
     seconds_mean: float | None
     sweep_key: str = ""
     sweep_value: str = ""
+    refused: int = 0  # trials whose start the simulator refused (not in success_rate)

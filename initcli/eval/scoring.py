@@ -59,6 +59,8 @@ def score(
     trans, rot = pose_errors(outcome)
     success, verdict, wrong = judge(outcome.localised, outcome.distance_m, trans, rule, rot)
     reason = f"{verdict}: {outcome.reason}" if outcome.localised else f"no result: {outcome.reason}"
+    if outcome.refused:
+        reason = f"refused start: {outcome.reason}"
     return TrialRecord(
         site=site,
         start=start,
@@ -78,6 +80,7 @@ def score(
         truth=None if outcome.truth is None else _pose_list(outcome.truth.as_tuple()),
         sweep_key=sweep[0],
         sweep_value=sweep[1],
+        refused=outcome.refused,
     )
 
 
@@ -103,6 +106,7 @@ def summarise(records: Iterable[TrialRecord]) -> list[MethodSummary]:
     out = []
     for (site, method, sweep_key, sweep_value), rows in groups.items():
         ok = [r for r in rows if r.success]
+        accepted = [r for r in rows if not r.refused]
         dist = _stats([r.distance_m for r in ok])
         trans = _stats([r.error_translation_m for r in ok if r.error_translation_m is not None])
         rot = _stats([r.error_rotation_deg for r in ok if r.error_rotation_deg is not None])
@@ -112,7 +116,7 @@ def summarise(records: Iterable[TrialRecord]) -> list[MethodSummary]:
                 method=method,
                 trials=len(rows),
                 successes=len(ok),
-                success_rate=100.0 * len(ok) / len(rows),
+                success_rate=100.0 * len(ok) / len(accepted) if accepted else 0.0,
                 confident_wrong=sum(r.confident_wrong for r in rows),
                 features_mean=float(np.mean([r.features for r in ok])) if ok else None,
                 distance_mean_m=dist[0],
@@ -127,6 +131,7 @@ def summarise(records: Iterable[TrialRecord]) -> list[MethodSummary]:
                 seconds_mean=float(np.mean([r.seconds for r in rows])),
                 sweep_key=sweep_key,
                 sweep_value=sweep_value,
+                refused=len(rows) - len(accepted),
             )
         )
     return out

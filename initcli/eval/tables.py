@@ -120,6 +120,7 @@ def table3(
         "Error ° median / P95",
         "Confident wrong",
         "Trials",
+        "Refused",
         "s / trial",
     ]
     rows = []
@@ -144,6 +145,7 @@ def table3(
                 f"{fmt(s.error_rotation_median_deg, 2)} / {fmt(s.error_rotation_p95_deg, 2)}",
                 str(s.confident_wrong),
                 str(s.trials),
+                str(s.refused),
                 fmt(s.seconds_mean, 2),
             ]
         )

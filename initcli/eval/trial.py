@@ -26,9 +26,10 @@ from initcli.core.geometry import Pose2D
 from initcli.eval.records import FailureRule, TrialRecord
 from initcli.eval.scoring import score
 from initcli.eval.sweep import Sweep, apply_sweep, sweep_label
-from initcli.session.result import SessionResult
+from initcli.session.result import CANNOT_LEAVE, SessionResult
 from initcli.session.simulated import sim_session
 from initcli.sim.build import SimSetup, build_sim
+from initcli.sim.scenario import NoFreeSpace
 from initcli.site import choose_storey
 
 __all__ = ["TrialJob", "run_trial", "session_outcomes", "trial_seed"]
@@ -100,6 +101,7 @@ def session_outcomes(result: SessionResult) -> dict[str, LocalisationOutcome]:
     # The session's final pose is its claim, whether the filter's covariance fell below the
     # thresholds or its distance ran out first (the reason says which).
     fine = result.success and result.pose is not None
+    bim.refused = result.reason == CANNOT_LEAVE
     bim_pf = LocalisationOutcome(
         method="bim+pf",
         localised=fine,
@@ -110,6 +112,7 @@ def session_outcomes(result: SessionResult) -> dict[str, LocalisationOutcome]:
         duration_s=result.duration_s,
         features=result.features_detected,
         wall_seconds=result.wall_seconds,
+        refused=bim.refused,
     )
     return {"bim": bim, "bim+pf": bim_pf}
 
@@ -122,7 +125,30 @@ def _trial_config(job: TrialJob) -> SessionConfig:
 
 
 def run_trial(job: TrialJob) -> list[TrialRecord]:
-    """Run the job's methods; one scored record per method."""
+    """Run the job's methods; one scored record per method. A storey the simulator can draw no
+    start on (:class:`NoFreeSpace`) gives each method a refused record, not a traceback."""
+    try:
+        return _run_trial(job)
+    except NoFreeSpace as e:
+        sweep = sweep_label(job.sweep, job.sweep_value)
+        outcomes = [
+            LocalisationOutcome(m, False, str(e), None, None, 0.0, 0.0, refused=True) for m in job.methods
+        ]
+        return [
+            score(
+                o,
+                job.rule,
+                site=job.site,
+                start=job.start,
+                seed=job.seed,
+                start_pose=(0.0, 0.0, 0.0),
+                sweep=sweep,
+            )
+            for o in outcomes
+        ]
+
+
+def _run_trial(job: TrialJob) -> list[TrialRecord]:
     config = _trial_config(job)
     site = _site(job.site_dir)
     start = Pose2D(*job.start_pose) if job.start_pose is not None else None

@@ -4,12 +4,15 @@ Wall following circles an island of clutter or an open hall with no wall in reac
 shuttles over the same few metres for minutes (a dead end behind a material stack, targets that
 keep failing). Out of a loop the robot drives to the nearest unexplored opening the lidar has
 seen (a frontier of :class:`~initcli.core.frontier.LocalMap`), else along the most open direction;
-when shuttling it follows the other wall. A crossing drives across an open floor to a wall the
-lidar sees (:func:`~initcli.core.bug_navigation.cross_floor`). While one of them is under way it
-steers instead of the wall follower.
+when shuttling it follows the other wall. A *lap* (:class:`~initcli.core.laps.LapWatch`: back where
+it was after its path turned once round a room, a hall or a closed corridor section) that brought no
+new feature sends it to an opening of the local map it can pass; with none left it is *shut in*,
+and the session stops (:class:`~initcli.session.result.ShutIn`). A crossing drives across an open
+floor to a wall the lidar sees (:func:`~initcli.core.bug_navigation.cross_floor`). While one of
+them is under way it steers instead of the wall follower.
 
-The settings are ``exploration.loops``, ``exploration.shuttles`` and ``exploration.frontier`` of
-the session config.
+The settings are ``exploration.loops``, ``exploration.shuttles``, ``exploration.frontier`` and
+``exploration.laps`` of the session config.
 """
 
 from __future__ import annotations
@@ -18,15 +21,31 @@ import math
 
 import numpy as np
 
-from initcli.core.bug_navigation import BugNavigator, BugParams, FloorCrossing, RouteNavigator, cross_floor
+from initcli.core.bug_navigation import (
+    GAP_SPEED,
+    BugNavigator,
+    BugParams,
+    FloorCrossing,
+    RouteNavigator,
+    cross_floor,
+)
 from initcli.core.confinement import ConfinementWatch
 from initcli.core.frontier import LocalMap
+from initcli.core.laps import LapWatch
 from initcli.core.wall_following import ScanView, WallFollowParams
 from initcli.drivers.base import SensorFrame
-from initcli.session.result import SessionResult
-from initcli.settings_session import FrontierSettings, LoopSettings, ShuttleSettings
+from initcli.session.result import SessionResult, ShutIn
+from initcli.settings_session import FrontierSettings, LapSettings, LoopSettings, ShuttleSettings
 
-__all__ = ["Escapes", "open_point"]
+__all__ = ["Escapes", "LAP_ROUTE_PASS", "LAP_ROUTE_SPACING", "open_point"]
+
+# A route after a lap leads through a doorway barely wider than the robot: waypoints close together,
+# each passed closely, driven at GAP_SPEED with this slack plus this many seconds (turns on the spot).
+LAP_ROUTE_SPACING = 0.5  # m between waypoints
+LAP_ROUTE_PASS = 0.2  # m: an intermediate waypoint counts as passed this close
+LAP_ROUTE_PREFER = 0.45  # m: closer than this to what is not known free costs more (mid-doorway)
+LAP_ROUTE_SLACK = 1.5
+LAP_ROUTE_EXTRA_S = 20.0
 
 
 def open_point(frame: SensorFrame, scan: ScanView | None, loops: LoopSettings) -> np.ndarray:
@@ -50,8 +69,10 @@ class Escapes:
         frontier: FrontierSettings,
         follow: WallFollowParams,
         result: SessionResult,
+        laps: LapSettings | None = None,
     ) -> None:
         self.settings = loops
+        self.lap_settings = laps or LapSettings()
         self.frontier = frontier
         self.follow = follow
         self.result = result
@@ -60,6 +81,9 @@ class Escapes:
         self.local_map = LocalMap()  # what the lidar has seen, for frontier-guided loop escapes
         self.navigator: BugNavigator | RouteNavigator | None = None  # the escape or crossing
         self.until = -1.0  # s: when it ends
+        lap = self.lap_settings
+        self.laps = LapWatch(min_lap=lap.length, radius=lap.radius, turn=math.radians(lap.turn))
+        self.lap_target: np.ndarray | None = None  # the opening the last lap sent the robot to
 
     def see(self, frame: SensorFrame, step: int) -> None:
         """Write every ``frontier.scan_every``-th scan into the local map (every ``beam_step``-th beam)."""
@@ -117,10 +141,51 @@ class Escapes:
             self.start(frame, RouteNavigator(route, BugParams(follow=self.follow)))
         return bool(route)
 
-    def start(self, frame: SensorFrame, navigator: BugNavigator | RouteNavigator) -> None:
-        """Follow ``navigator`` for ``loops.escape`` seconds instead of the wall (a loop escape)."""
+    def lap(self, frame: SensorFrame, travel: float, features: int) -> str | ShutIn | None:
+        """Watch for a lap round the space the robot is in (``travel`` m of odometry so far,
+        ``features`` confirmed): a lap that brought no new feature sends the robot to the nearest
+        opening of its local map that it can pass (an opening an earlier lap sent it to and that it
+        came round from is not chosen again while others are left), and returns why, for the log;
+        with no opening it can pass on its map it returns :class:`ShutIn` (``laps.shut_in`` false:
+        None). None while no such lap closed."""
+        if not self.laps.add(travel, frame.odom.x, frame.odom.y, features) or self.under_way(frame):
+            return None
+        lap = self.laps.lap()
+        if lap is None or features > lap.seen:
+            return None
+        self.laps.restart()
+        if self.lap_target is not None:
+            self.local_map.give_up(self.lap_target)
+        # A doorway barely wider than the robot: the map's cells blur each jamb by up to a cell.
+        clearance = self.follow.radius - self.local_map.params.resolution / 4
+        route = self.local_map.plan(frame.odom, clearance, spacing=LAP_ROUTE_SPACING, prefer=LAP_ROUTE_PREFER)
+        if not route and self.local_map.forget_failures():
+            # Every opening it can pass was tried and it came round again: an opening it failed to
+            # get through is still a way out (not shut in), tried again from here.
+            route = self.local_map.plan(
+                frame.odom, clearance, spacing=LAP_ROUTE_SPACING, prefer=LAP_ROUTE_PREFER
+            )
+        if route:
+            self.lap_target = route[-1]
+            squeeze = BugParams(follow=self.follow, squeeze=True)
+            length = float(
+                np.sum(np.hypot(*np.diff(np.vstack([[frame.odom.x, frame.odom.y], route]), axis=0).T))
+            )
+            seconds = max(self.settings.escape, LAP_ROUTE_SLACK * length / GAP_SPEED + LAP_ROUTE_EXTRA_S)
+            self.start(frame, RouteNavigator(route, squeeze, pass_radius=LAP_ROUTE_PASS), seconds)
+            self.result.laps += 1
+            return f"a {lap.length:.0f} m lap without a new feature: heading for an unexplored opening"
+        if not self.lap_settings.shut_in:
+            return None
+        return ShutIn(round(self.local_map.free_area(), 1), features, round(lap.length, 1))
+
+    def start(
+        self, frame: SensorFrame, navigator: BugNavigator | RouteNavigator, seconds: float | None = None
+    ) -> None:
+        """Follow ``navigator`` for ``seconds`` (default ``loops.escape``) instead of the wall (a loop
+        escape)."""
         self.navigator = navigator
-        self.until = frame.t + self.settings.escape
+        self.until = frame.t + (self.settings.escape if seconds is None else seconds)
         self.result.loop_escapes += 1
 
     def cross(self, frame: SensorFrame, scan: ScanView, side: int) -> FloorCrossing | None:

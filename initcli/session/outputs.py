@@ -52,7 +52,18 @@ def summary_document(result: SessionResult, simulated: bool, extra: dict | None 
         # missed_predictions, scan_fit, passed (initcli.core.verification).
         "verification": list(result.verifications),
         "rejected_matches": result.rejected,
+        "laps": result.laps,
     }
+    if result.shut_in is not None:
+        # reason "shut in": the robot went round the space it is in and has no way on it can pass
+        shut = result.shut_in
+        doc["shut_in"] = {
+            "explored_m2": shut.explored_m2,
+            "features_seen": shut.features,
+            "lap_m": shut.lap_m,
+            "advice": shut.advice,
+            "message": shut.message,
+        }
     if simulated:
         doc["truth_pose"] = _pose(result.truth_pose)
         doc["error_translation_m"] = trans

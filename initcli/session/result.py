@@ -15,7 +15,17 @@ from initcli.core.geometry import Pose2D, wrap_angle
 if TYPE_CHECKING:
     from initcli.match.pipeline import Hypothesis
 
-__all__ = ["CoarseClaim", "MatchStep", "SessionResult"]
+__all__ = ["CANNOT_LEAVE", "CoarseClaim", "MatchStep", "SHUT_IN", "SHUT_IN_ADVICE", "SessionResult", "ShutIn"]
+
+# The reason of a simulated session refused at 0 m (sim.refuse_enclosed): the simulator knows its
+# start lies in a space closed off from where the features face.
+CANNOT_LEAVE = (
+    "cannot leave: the start is in a space closed off by doors, hoardings or material "
+    "(no way wide enough for the robot to the corridors, where the features face)"
+)
+
+SHUT_IN = "shut in"  # the reason of a session that stopped shut in (a stable word of summary.json)
+SHUT_IN_ADVICE = "open a door or move the robot"
 
 
 @dataclass
@@ -37,6 +47,26 @@ class CoarseClaim:
     truth: Pose2D | None
     distance_m: float
     wall_seconds: float
+
+
+@dataclass(frozen=True)
+class ShutIn:
+    """The robot went round the space it is in without a new feature and its local map has no
+    opening left that it can pass: what it explored and saw (initcli.session.escapes)."""
+
+    explored_m2: float  # the free area of its local map
+    features: int  # features confirmed
+    lap_m: float  # m of the last lap
+    advice: str = SHUT_IN_ADVICE
+
+    @property
+    def message(self) -> str:
+        """The line a person reads: ``shut in: explored 28 m2, saw 2 features; open a door ...``."""
+        n = self.features
+        return (
+            f"{SHUT_IN}: explored {self.explored_m2:.0f} m2, saw {n} feature{'' if n == 1 else 's'};"
+            f" {self.advice}"
+        )
 
 
 @dataclass
@@ -73,6 +103,8 @@ class SessionResult:
     # The first coarse claim: where the coarse-only method ends (the fields above describe the
     # last claim, which differs after a failed fine stage and a second claim).
     first_claim: CoarseClaim | None = None
+    shut_in: ShutIn | None = None  # the session stopped shut in (reason SHUT_IN)
+    laps: int = 0  # laps without a new feature after which the robot headed for an opening
 
     def claimed(
         self,

@@ -47,7 +47,7 @@ from initcli.session.exploration import ActiveExploration
 from initcli.session.fine_tuning import FineLost, FineTuning, FineTuningHooks, matched_pairs
 from initcli.session.looks import Looks
 from initcli.session.perception import Perception
-from initcli.session.result import MatchStep, SessionResult
+from initcli.session.result import SHUT_IN, MatchStep, SessionResult
 
 __all__ = ["Observer", "Session"]
 
@@ -87,7 +87,8 @@ class Session:
         self.result = SessionResult(False, "", storey)
         self.exploration = ActiveExploration(config, site, self.follow)
         x = config.exploration
-        self.escapes = Escapes(x.loops, x.shuttles, x.frontier, self.follow, self.result)
+        self.escapes = Escapes(x.loops, x.shuttles, x.frontier, self.follow, self.result, x.laps)
+        self.finished = False  # the session ended while choosing a command (shut in)
         self.looks = Looks(x)
         self.last_feature_t = 0.0  # s: when the last new feature was confirmed
         self.hypotheses = 0  # of the last match step
@@ -167,6 +168,8 @@ class Session:
             return
         while True:
             v, w = self._command(frame)
+            if self.finished:
+                return
             previous = frame.odom
             frame = self.driver.step(v, w)
             step += 1
@@ -214,7 +217,22 @@ class Session:
             # direction; then resume.
             self.escapes.out_of_loop(frame, scan)
             self._note(frame.t, "loop escape")
+        self._watch_laps(frame)
         return v, w
+
+    def _watch_laps(self, frame: SensorFrame) -> None:
+        """Once round the room, hall or corridor section without a new feature: on to an opening the
+        robot can pass, or, with none left, the session stops shut in (``exploration.laps``)."""
+        lap = self.escapes.lap(frame, self.perception.travel, len(self.perception.confirmed))
+        if isinstance(lap, str):
+            self._note(frame.t, lap)
+        elif lap is not None:
+            self.result.shut_in = lap
+            self._set_state(
+                frame.t, "failed", reason=SHUT_IN, message=lap.message, explored_m2=lap.explored_m2
+            )
+            self.result.failed(SHUT_IN, frame.truth, frame.t, self.driver.distance, self.perception.confirmed)
+            self.finished = True
 
     def _look_again(self, frame: SensorFrame, scan: ScanView) -> bool:
         """Turn once on the spot again (:meth:`Looks.again`: open space beside, no new feature for

@@ -17,7 +17,7 @@ from bimtools.site.load import Site
 from initcli.config import SessionConfig, config_to_dict
 from initcli.core.geometry import Pose2D
 from initcli.session.outputs import render_report, summary_document, write_summary
-from initcli.session.result import SessionResult
+from initcli.session.result import CANNOT_LEAVE, SessionResult
 from initcli.session.runner import Observer, Session
 from initcli.sim.build import SimSetup, build_sim
 from initcli.site import choose_storey, prepare_site, prepare_world
@@ -57,11 +57,8 @@ def sim_session(
     setup = build_sim(config, site, simulated, seed, start, world_site=world)
     rng = np.random.default_rng(seed + SESSION_RNG_OFFSET)
     session = Session(config, site, matched, setup.driver, log_path, rng, observer, meta_source)
-    if setup.enclosed:
-        session.cannot_leave = (
-            "cannot leave: the start is in a space closed off by doors, hoardings or material "
-            "(no way wide enough for the robot to the corridors, where the features face)"
-        )
+    if setup.enclosed and config.sim.refuse_enclosed:
+        session.cannot_leave = CANNOT_LEAVE
     return SimSession(session, setup, simulated)
 
 

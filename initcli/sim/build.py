@@ -29,6 +29,7 @@ from initcli.sim.as_built import (
 )
 from initcli.sim.camera import CameraNoise, SimulatedDetector
 from initcli.sim.driver import LidarSpec, SimDriver
+from initcli.sim.fence import site_fence
 from initcli.sim.robot import DiffDriveRobot, OdometryNoise
 from initcli.sim.scenario import Circulation, place_clutter, place_workers, random_start
 from initcli.sim.synthetic_log import sim_features_from_bim
@@ -70,6 +71,9 @@ def build_sim(
     model = world_storey(site, world_site, storey)
     circulation = Circulation.of(model)
     built, clutter = _as_built(config, model, circulation, seed, rng)
+    # Where the free space reaches the outside (an open gate, a façade not built), the world ends
+    # at the building's footprint (initcli.sim.fence).
+    built.obstacles.extend(site_fence(model.grid))
     static = SimWorld.from_obstacles(built.obstacles, clutter)
     workers = place_workers(model, circulation, static.static, int(config.sim.workers), rng)
     world = SimWorld.from_obstacles(built.obstacles, clutter, workers)

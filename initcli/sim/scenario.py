@@ -9,15 +9,21 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from bimkit.errors import InputError
 from bimtools.site.load import StoreyModel
 from bimtools.site.records import FREE, Obstacle, OccupancyGrid
 from initcli.core.geometry import Pose2D
 from initcli.core.raycast import ray_segment_distances
 from initcli.sim.world import Worker
 
-__all__ = ["Circulation", "STACK_SIZE", "place_clutter", "place_workers", "random_start"]
+__all__ = ["Circulation", "NoFreeSpace", "STACK_SIZE", "place_clutter", "place_workers", "random_start"]
 
 STACK_SIZE = (1.2, 0.5)  # m: a pallet of material against a wall
+
+
+class NoFreeSpace(InputError, ValueError):
+    """A storey whose map holds no free space a robot can stand on: bad input for a session (one
+    line, exit 2), a storey the survey skips."""
 
 
 @dataclass
@@ -57,7 +63,7 @@ class Circulation:
         only the one most face."""
         grid = storey.grid
         if grid is None:
-            raise ValueError(f"storey {storey.name!r} has no occupancy map")
+            raise NoFreeSpace(f"storey {storey.name!r} has no occupancy map")
         free = (grid.cells == FREE).astype(np.uint8)
         rings = [np.asarray(o.exterior, dtype=float).reshape(-1, 2) for o in closed]
         rings += [np.asarray(b, dtype=float).reshape(-1, 2) for b in boxes]
@@ -78,11 +84,15 @@ class Circulation:
                 if 0 <= row < labels.shape[0] and 0 <= col < labels.shape[1] and labels[row, col]:
                     votes[int(labels[row, col])] = votes.get(int(labels[row, col]), 0) + 1
                     break
-        main = (
-            max(votes, key=lambda label: votes[label])
-            if votes
-            else int(np.bincount(labels.ravel())[1:].argmax() + 1)
-        )
+        sizes = np.bincount(labels.ravel())[1:]
+        if not votes and not len(sizes):
+            wide = f" a robot of radius {footprint:g} m can stand on" if footprint > 0 else ""
+            raise NoFreeSpace(
+                f"storey {storey.name!r}: its map has no free space{wide} (an open building without "
+                "spaces or floor slabs leaves its free space outside the footprint: bim-extract bounds "
+                "it by walls, IfcSpace and IfcSlab)"
+            )
+        main = max(votes, key=lambda label: votes[label]) if votes else int(sizes.argmax() + 1)
         faced = [label for label, n in votes.items() if n >= min_votes] if min_votes > 0 else []
         region = np.isin(labels, faced) if faced else labels == main
         return Circulation(grid, region, clearance, labels)
@@ -116,7 +126,7 @@ class Circulation:
 def random_start(circulation: Circulation, rng: np.random.Generator, clearance: float = 0.6) -> Pose2D:
     cells = circulation.cells(clearance)
     if len(cells) == 0:
-        raise ValueError("no free corridor cell with enough clearance for a start pose")
+        raise NoFreeSpace("no free corridor cell with enough clearance for a start pose")
     x, y = cells[int(rng.integers(len(cells)))]
     return Pose2D(float(x), float(y), float(rng.uniform(-math.pi, math.pi)))
 

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from bimkit.atomic import write_bytes_atomic
-from initcli.survey.survey import Landmark, StoreySurvey
+from initcli.survey.survey import SHUT_IN_LABEL, Landmark, StoreySurvey
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -56,6 +56,7 @@ def _panel(
             zorder=3,
             label="never unique (most headings)",
         )
+    _shut_in(ax, result, points_per_m)
     base = len(plan.features) - len(landmarks)
     f = plan.features
     for cls in sorted(set(f.cls[:base])):
@@ -80,6 +81,29 @@ def _panel(
     ax.set_ylabel("y [m]")
     ax.legend(loc="upper right", fontsize=6, markerscale=0.8)
     return sc
+
+
+MAX_ROOM_LABELS = 12  # more shut-in rooms than this: the legend names them, not each room
+
+
+def _shut_in(ax: Axes, result: StoreySurvey, points_per_m: float) -> None:
+    """Grey squares over the rooms closed off by their doors, labelled: a robot there is shut in."""
+    plan = result.plan
+    if not plan.shut_in or plan.shut_in_cells is None:
+        return
+    grid = plan.circulation.grid
+    step = max(1, round(result.params.spacing / grid.resolution))
+    rows, cols = np.nonzero(plan.shut_in_cells)
+    pick = (rows % step == 0) & (cols % step == 0)
+    x, y = grid.cell_centre(rows[pick], cols[pick])
+    size = step * grid.resolution
+    ax.scatter(x, y, marker="s", s=(size * points_per_m) ** 2, color="0.82", linewidths=0, zorder=1.5)
+    ax.scatter([], [], marker="s", s=16, color="0.82", label=f"shut in: {SHUT_IN_LABEL}")  # the legend's
+    if len(plan.shut_in) <= MAX_ROOM_LABELS:
+        for room in plan.shut_in:
+            ax.annotate(
+                SHUT_IN_LABEL, (room.x, room.y), fontsize=5, ha="center", va="center", color="0.3", zorder=6
+            )
 
 
 def survey_png(

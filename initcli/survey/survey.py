@@ -32,7 +32,9 @@ __all__ = [
     "LANDMARK_CLASS",
     "LANDMARK_HEIGHT",
     "Landmark",
+    "SHUT_IN_MIN_AREA",
     "SampleViews",
+    "ShutInRoom",
     "StoreyPlan",
     "StoreySurvey",
     "SurveyParams",
@@ -54,6 +56,8 @@ LANDMARK_CLASS = "landmark"  # each suggested landmark gets its own category: la
 LANDMARK_HEIGHT = 2.0  # m: a sign whose centre is at the camera's height
 UNIQUE_WITHIN = (5.0, 10.0, 20.0)  # m: the shares of survey.json
 FACED_BY = 1  # features facing a closed-door region that make it circulation area (rooms: none)
+SHUT_IN_MIN_AREA = 2.0  # m²: a closed-off space at least this large where a robot can stand is marked
+SHUT_IN_LABEL = "cannot initialise from here"  # what the map says over a shut-in room
 
 
 @dataclass(frozen=True)
@@ -77,6 +81,16 @@ class SurveyParams:
     landmark_stride: int = 4  # candidates are scored on every n-th start, the chosen one on all
 
 
+@dataclass(frozen=True)
+class ShutInRoom:
+    """A space closed off by the doors (every leaf closed) that no feature faces: a robot that
+    starts there goes round it and stops shut in (the session's ``reason: shut in``)."""
+
+    x: float  # m: a cell of the room where a robot can stand, nearest its centroid
+    y: float
+    area_m2: float  # where a robot can stand (the start clearance)
+
+
 @dataclass
 class StoreyPlan:
     """One storey, precomputed: features, occluders, loops, what the loops see, the start samples."""
@@ -91,6 +105,8 @@ class StoreyPlan:
     starts: np.ndarray  # (S, 3) x, y, yaw
     position: np.ndarray  # (S,) index of the start's position
     positions: np.ndarray  # (M, 2)
+    shut_in: list[ShutInRoom] = field(default_factory=list)
+    shut_in_cells: np.ndarray | None = None  # bool mask over the grid: where shut_in rooms lie
 
 
 def storey_features(storey: StoreyModel, cmap: ClassMap | None = None) -> FeatureArrays:
@@ -150,9 +166,43 @@ def plan_storey(storey: StoreyModel, params: SurveyParams, cmap: ClassMap | None
     ).reshape(-1, 3)
     position = np.repeat(np.arange(len(positions)), params.headings)
     walls = np.array([[w.x1, w.y1, w.x2, w.y2, *w.normal] for w in storey.walls], dtype=float).reshape(-1, 6)
+    rooms, cells = shut_in_rooms(circulation, params.start_clearance)
     return StoreyPlan(
-        storey.name, features, occluders, walls, circulation, loops, loop_cum, starts, position, positions
+        storey.name,
+        features,
+        occluders,
+        walls,
+        circulation,
+        loops,
+        loop_cum,
+        starts,
+        position,
+        positions,
+        rooms,
+        cells,
     )
+
+
+def shut_in_rooms(circulation: Circulation, clearance: float) -> tuple[list[ShutInRoom], np.ndarray]:
+    """The connected free regions outside the surveyed ``circulation`` (every door leaf closed; no
+    feature faces them) with at least SHUT_IN_MIN_AREA where a robot can stand (``clearance`` m from
+    the nearest obstacle), and the mask of their cells."""
+    regions = circulation.regions
+    if regions is None:
+        return [], np.zeros(circulation.label.shape, dtype=bool)
+    stand = (regions > 0) & ~circulation.label & (circulation.clearance >= clearance)
+    cell = circulation.grid.resolution**2
+    counts = np.bincount(regions[stand], minlength=int(regions.max()) + 1)
+    keep = np.flatnonzero(counts * cell >= SHUT_IN_MIN_AREA)
+    rooms: list[ShutInRoom] = []
+    for label in keep:
+        rows, cols = np.nonzero(stand & (regions == label))
+        k = int(np.argmin(np.hypot(rows - rows.mean(), cols - cols.mean())))
+        x, y = circulation.grid.cell_centre(rows[k : k + 1], cols[k : k + 1])
+        rooms.append(
+            ShutInRoom(round(float(x[0]), 2), round(float(y[0]), 2), round(float(counts[label] * cell), 1))
+        )
+    return rooms, stand & np.isin(regions, keep)
 
 
 @dataclass
@@ -215,6 +265,8 @@ def with_feature(
         plan.starts,
         plan.position,
         plan.positions,
+        plan.shut_in,
+        plan.shut_in_cells,
     )
     return new_plan, SampleViews(np.concatenate([views.look, look_extra], axis=2), approach, views.entries)
 
@@ -355,6 +407,9 @@ def summarise(result: StoreySurvey) -> dict[str, object]:
         "mean_distance_m": round(float(finite.mean()), 2) if len(finite) else None,
         "never_unique_share": round(float(np.mean(~np.isfinite(d))) if n else 0.0, 4),
         "never_unique_area_m2": round(float(result.position_never.sum() * cell), 2),
+        # rooms closed off by their doors: a robot there is shut in (cannot initialise from here)
+        "shut_in_area_m2": round(sum(r.area_m2 for r in result.plan.shut_in), 1),
+        "shut_in_rooms": [{"x": r.x, "y": r.y, "area_m2": r.area_m2} for r in result.plan.shut_in],
     }
 
 

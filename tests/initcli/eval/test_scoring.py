@@ -106,3 +106,21 @@ def test_facing_the_wrong_way_is_confident_wrong_too():
     ok, _, wrong = judge(True, 10.0, 0.3, RULE, error_deg=179.0)
     assert ok and wrong  # within the paper's 5 m rule, but turned round
     assert judge(True, 10.0, 0.3, RULE, error_deg=10.0)[2] is False
+
+
+def test_refused_starts_are_counted_apart_from_failures():
+    """A start the simulator refused (a space closed off, known at 0 m) is neither a success nor a
+    failure: the success rate is over the accepted starts, the refusals are counted on their own."""
+    refused = LocalisationOutcome("bim", False, "cannot leave: ...", None, None, 0.0, 0.0, refused=True)
+    r = score(refused, RULE, site="a", start=2, seed=3, start_pose=(0.0, 0.0, 0.0))
+    assert r.refused and not r.success and not r.confident_wrong and r.reason.startswith("refused start")
+    rows = [
+        record("bim", True, 10.0, 0.2, start=0),
+        record("bim", False, 150.0, None, start=1),
+        r,
+        record("bim", False, 0.0, None, start=3, refused=True),
+    ]
+    (bim,) = summarise(rows)
+    assert (bim.trials, bim.refused, bim.successes, bim.success_rate) == (4, 2, 1, 50.0)
+    (none_accepted,) = summarise([r])
+    assert none_accepted.success_rate == 0.0 and none_accepted.refused == 1

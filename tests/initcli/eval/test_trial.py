@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from initcli.core.geometry import Pose2D
 from initcli.eval.trial import session_outcomes, trial_seed
-from initcli.session.result import CoarseClaim, SessionResult
+from initcli.session.result import CANNOT_LEAVE, SHUT_IN, CoarseClaim, SessionResult
 
 
 def _result(**kw: object) -> SessionResult:
@@ -80,3 +80,10 @@ def test_bim_pf_claims_the_final_pose_only_on_success() -> None:
 def test_trial_seed_is_distinct_per_start() -> None:
     assert trial_seed(100, 3) == 103
     assert len({trial_seed(7, s) for s in range(10)}) == 10
+
+
+def test_a_start_refused_at_0_m_is_a_refused_outcome_a_shut_in_one_a_failure() -> None:
+    refused = session_outcomes(_result(reason=CANNOT_LEAVE, distance_total_m=0.0))
+    assert refused["bim"].refused and refused["bim+pf"].refused
+    shut = session_outcomes(_result(reason=SHUT_IN, distance_total_m=17.0))
+    assert not shut["bim"].refused and not shut["bim+pf"].localised  # the robot tried: a failure

@@ -143,7 +143,9 @@ def test_a_room_with_one_door_is_never_unique() -> None:
 
 
 def _fake(distance: list[float], position: list[int], positions: int, headings: int) -> StoreySurvey:
-    plan = SimpleNamespace(name="L9", position=np.array(position), positions=np.zeros((positions, 2)))
+    plan = SimpleNamespace(
+        name="L9", position=np.array(position), positions=np.zeros((positions, 2)), shut_in=[]
+    )
     params = SurveyParams(spacing=2.0, headings=headings, limit_m=30.0)
     return StoreySurvey(plan, np.array(distance, dtype=float), params)  # type: ignore[arg-type]
 
