@@ -346,7 +346,7 @@ def test_settings_page_has_every_schema_key_with_its_default():
             row = next(line for line in page.splitlines() if f'<a id="{key}"></a>' in line)
             assert docgen._default_of(node) in row, key
     row = next(line for line in page.splitlines() if 'id="robot.radius"' in line)
-    assert "| m |" in row and "(0, 5]" in row
+    assert "| m |" in row and "(0, 2]" in row
 
 
 @pytest.mark.parametrize(
