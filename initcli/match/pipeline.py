@@ -23,6 +23,7 @@ import numpy as np
 from bimkit.checks import read_yaml
 from bimkit.errors import InputError
 from bimtools.site.load import Site, StoreyModel, load_site
+from bimtools.site.records import LIDAR
 from initcli.core.classes import ClassMap
 from initcli.core.detection_filter import (
     ConfirmedFeature,
@@ -45,6 +46,7 @@ from initcli.core.matching import OUTLIER, BimIndex, Matcher, MatchOverflow, Mat
 from initcli.core.pose import estimate_pose, rigid_align_batch
 from initcli.core.rectify import WallArray, rectify_pose
 from initcli.io.detection_log import DetectionLog, read_log
+from initcli.match.landmarks import combined_sequence, log_landmarks, travel_at
 from initcli.match.options import MatchOptions
 from initcli.match.sightings import sightings_from_log
 
@@ -179,7 +181,7 @@ def check_classes(log: DetectionLog, cmap: ClassMap, site: Site) -> None:
     unknown: set[str] = set()
     for rec in log.detections:
         unknown.update(o.cls for o in rec.objects if cmap.canonical(o.cls) not in known)
-    unknown.update(f.cls for f in log.features if cmap.canonical(f.cls) not in known)
+    unknown.update(f.cls for f in log.features if f.source != LIDAR and cmap.canonical(f.cls) not in known)
     if unknown:
         names = ", ".join(repr(n) for n in sorted(unknown))
         raise InputError(
@@ -223,16 +225,21 @@ class _Candidates:
 
 
 def _storey_candidates(
-    model: StoreyModel, cmap: ClassMap, s_xy: np.ndarray, s_cls: Sequence[str], params: MatchParams
+    model: StoreyModel,
+    cmap: ClassMap,
+    s_xy: np.ndarray,
+    s_cls: Sequence[str],
+    params: MatchParams,
+    s_travel: np.ndarray | None = None,
 ) -> tuple[BimIndex, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     index = BimIndex(
         np.array([[f.x, f.y] for f in model.features]), [cmap.canonical(f.category) for f in model.features]
     )
     matcher = Matcher(index, params)
-    state = matcher.match(s_xy, s_cls)
+    state = matcher.match(s_xy, s_cls, s_travel)
     rows = state.matches(params)
     assign, n_out, cost = state.assign[rows], state.n_out[rows], state.cost[rows]
-    keep = drop_dominated(assign, n_out)  # rule 1 of initcli.core.hypotheses
+    keep = drop_dominated(assign, (assign == OUTLIER).sum(axis=1))  # rule 1, over every outlier
     assign, n_out, cost = assign[keep], n_out[keep], cost[keep]
     if len(assign):
         inlier = assign != OUTLIER
@@ -286,7 +293,7 @@ def match_log(
     check_classes(log, cmap, site)
     warnings = list(log.warnings)
     notes: list[str] = []
-    features, odom_pose, odom_path = _confirmed_features(log, opts, cmap, sightings, warnings, notes)
+    features, odom_pose, odom_path = _confirmed_features(log, site, opts, cmap, sightings, warnings, notes)
     if not log.detections and not log.features:
         notes.append("the log has no detections records")
     storey_names = _storeys_searched(site, opts)
@@ -319,11 +326,12 @@ def match_log(
     # one more outlier at a time up to the outlier_share budget.
     s_xy = np.array([[f.x, f.y] for f in features]).reshape(-1, 2)
     s_cls = [f.cls for f in features]
+    s_travel = travel_at(log.odom, [f.t_confirmed for f in features])
     params = opts.match_params()
-    budget = opts.outlier_budget(len(features))
+    budget = opts.outlier_budget(sum(not params.is_landmark(c) for c in s_cls))  # the camera's
     while True:
         try:
-            cand = _candidates(site, cmap, storey_names, s_xy, s_cls, params)
+            cand = _candidates(site, cmap, storey_names, s_xy, s_cls, params, s_travel)
         except MatchOverflow as exc:
             warnings.append(f"matching stopped: {exc}; the detected pattern is far too ambiguous")
             report.verdict = verdict_text(max(2, params.max_partials))
@@ -347,19 +355,22 @@ def match_log(
 
 def _confirmed_features(
     log: DetectionLog,
+    site: Site,
     opts: MatchOptions,
     cmap: ClassMap,
     sightings: Sequence[Sighting] | None,
     warnings: list[str],
     notes: list[str],
 ) -> tuple[list[ConfirmedFeature], Pose2D, np.ndarray]:
-    """Steps 1-2: Eq. 1-2 and the detection filter (within the drift window when one is set); the
-    robot's odom pose now and its odom path."""
+    """Steps 1-2: Eq. 1-2 and the detection filter, the lidar landmarks joined in
+    (:mod:`initcli.match.landmarks`) and all within the drift window when one is set; the robot's
+    odom pose now and its odom path."""
     if sightings is None:
         sightings = sightings_from_log(log, cmap, opts.edge_margin)
-    given = [GivenFeature(f.t, cmap.canonical(f.cls), f.x, f.y) for f in log.features]
+    given = [GivenFeature(f.t, cmap.canonical(f.cls), f.x, f.y) for f in log.features if f.source != LIDAR]
     filtered = filter_detections(sightings, opts.filter_params(), given)
-    features = filtered.features
+    lidar = log_landmarks(log, site, notes) if opts.landmarks else []
+    features = combined_sequence(filtered.features, lidar, cmap)
     odom_pose, odom_path, more = current_odom(log)
     warnings.extend(more)
     if opts.drift_window is not None and log.odom and len(features) > opts.min_inliers:
@@ -389,12 +400,13 @@ def _candidates(
     s_xy: np.ndarray,
     s_cls: Sequence[str],
     params: MatchParams,
+    s_travel: np.ndarray | None = None,
 ) -> _Candidates:
     """Algorithm 1 and rule 1 on every storey searched (MatchOverflow past the partial-match cap)."""
     cand = _Candidates()
     for name in storey_names:
         model = site.storeys[name]
-        index, assign, n_out, cost, transform = _storey_candidates(model, cmap, s_xy, s_cls, params)
+        index, assign, n_out, cost, transform = _storey_candidates(model, cmap, s_xy, s_cls, params, s_travel)
         cand.indexes[name] = index
         cand.storey.extend([name] * len(assign))
         cand.assign.append(assign)
@@ -414,7 +426,8 @@ def _rank(report: MatchReport, site: Site, cand: _Candidates, s_xy: np.ndarray) 
     transform = np.concatenate(cand.transform)
     storey_ids = np.array([report.storeys.index(s) for s in cand.storey])
     current = transform_poses_batch(transform, odom_pose)  # robot pose in BIM per match (rigid)
-    order = rank_order(n_out, cost)  # rule 2
+    # rule 2: camera outliers first, then the lidar landmarks' (clutter is common: they weigh less)
+    order = rank_order(n_out * (assign.shape[1] + 1) + (assign == OUTLIER).sum(axis=1), cost)
     labels, reps = pose_groups(
         current, storey_ids, order, opts.pose_radius, math.radians(opts.beta)
     )  # rule 3
