@@ -293,7 +293,10 @@ class Matcher:
         assert state.s_lidar is not None and state.s_travel is not None
         if lm is None or not (lidar and state.s_lidar[i]):
             return self.params.alpha
-        return lm.alpha + lm.drift * abs(travel - float(state.s_travel[i]))
+        # the drift allowance never makes two landmarks looser than the camera's threshold
+        return min(
+            lm.alpha + lm.drift * abs(travel - float(state.s_travel[i])), max(self.params.alpha, lm.alpha)
+        )
 
     def extend(self, state: MatchState, xy: np.ndarray, cls: str, travel: float = 0.0) -> MatchState:
         """Add detected feature s_n (the next in S_object) to every partial match of ``state``."""
@@ -347,17 +350,22 @@ class Matcher:
                 part["n_lm"] = part["n_lm"] + 1
 
         # -- outlier tolerance: s_n treated as a false/misclassified detection (a landmark: as
-        # geometry the BIM lacks, within the landmarks' own budget) ----------------------------
+        # geometry the BIM lacks, within the landmarks' own budget; landmarks before a row's first
+        # inlier are free: its pattern starts later) ----------------------------------------------
         if lidar:
             assert p.landmarks is not None and state.n_lm_out is not None
-            out = np.flatnonzero(state.n_lm_out < p.landmarks.budget(int(s_lidar.sum())))
+            started = state.n_in > 0
+            paired = state.n_in >= 3  # a row skips a landmark once a triangle (Eq. 9) holds
+            out = np.flatnonzero(
+                ~started | (paired & (state.n_lm_out < p.landmarks.budget(int(s_lidar.sum()))))
+            )
         else:
             out = np.flatnonzero(state.n_out < p.max_outliers)
         if len(out):
             base = _rows(state, out)
             base["assign"] = np.column_stack([base["assign"], np.full(len(out), OUTLIER, dtype=np.intp)])
             if lidar:
-                base["n_lm_out"] = base["n_lm_out"] + 1
+                base["n_lm_out"] = base["n_lm_out"] + started[out]
             else:
                 base["n_out"] = base["n_out"] + 1
             parts.append(base)

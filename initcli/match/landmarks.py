@@ -32,6 +32,7 @@ __all__ = [
     "combined_sequence",
     "feature_records",
     "log_landmarks",
+    "recent_landmarks",
     "scan_inputs",
     "site_scan_params",
     "site_tracker",
@@ -78,14 +79,27 @@ def log_landmarks(log: DetectionLog, site: Site, notes: list[str]) -> list[Featu
         if records:
             notes.append(f"{len(records)} lidar landmark(s) of the log left out: the site has no landmarks")
         return []
-    if records:
-        return records
-    tracker = site_tracker(site)
-    assert tracker is not None
-    found = [f for scan in scan_inputs(log) for f in tracker.add_scan(scan)]
-    if found:
-        notes.append(f"{len(found)} lidar landmark(s) found in the log's {tracker.frames} scans")
-    return feature_records(found)
+    if not records:
+        tracker = site_tracker(site)
+        assert tracker is not None
+        records = feature_records([f for scan in scan_inputs(log) for f in tracker.add_scan(scan)])
+        if records:
+            notes.append(f"{len(records)} lidar landmark(s) found in the log's {tracker.frames} scans")
+    return records
+
+
+def recent_landmarks(
+    records: Sequence[FeatureRecord], odom: Sequence[Odom], window: float, site: Site, cmap: ClassMap
+) -> list[FeatureRecord]:
+    """The landmarks worth matching: of a category the site has (no other can be matched), confirmed
+    within the last ``window`` m of odometry travel (0: all)."""
+    known = {cmap.canonical(f.category) for s in site.storeys.values() for f in s.lidar_landmarks}
+    kept = [r for r in records if cmap.canonical(r.cls) in known]
+    if window <= 0 or not kept or not odom:
+        return kept
+    travel = travel_at(odom, [r.t for r in kept])
+    now = float(travel_at(odom, [odom[-1].t])[0])
+    return [r for r, d in zip(kept, travel, strict=True) if d >= now - window]
 
 
 def feature_records(found: Sequence[ConfirmedFeature]) -> list[FeatureRecord]:

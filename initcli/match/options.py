@@ -134,6 +134,14 @@ class MatchingSettings:
         maximum=1,
         metavar="M/M",
     )
+    landmark_window: float = setting(
+        30.0,
+        "m: match only the lidar landmarks confirmed in the last M metres of travel (clutter is common and"
+        " the search grows with every landmark; odometry drifts); 0: all of them",
+        minimum=0,
+        maximum=100000,
+        metavar="M",
+    )
     landmark_weight: float = setting(
         0.5,
         "what one matched lidar landmark counts toward min_inliers (a camera feature counts 1): corners"

@@ -45,8 +45,8 @@ from initcli.core.hypotheses import (
 from initcli.core.matching import OUTLIER, BimIndex, Matcher, MatchOverflow, MatchParams
 from initcli.core.pose import estimate_pose, rigid_align_batch
 from initcli.core.rectify import WallArray, rectify_pose
-from initcli.io.detection_log import DetectionLog, read_log
-from initcli.match.landmarks import combined_sequence, log_landmarks, travel_at
+from initcli.io.detection_log import DetectionLog, FeatureRecord, read_log
+from initcli.match.landmarks import combined_sequence, log_landmarks, recent_landmarks, travel_at
 from initcli.match.options import MatchOptions
 from initcli.match.sightings import sightings_from_log
 
@@ -369,7 +369,15 @@ def _confirmed_features(
         sightings = sightings_from_log(log, cmap, opts.edge_margin)
     given = [GivenFeature(f.t, cmap.canonical(f.cls), f.x, f.y) for f in log.features if f.source != LIDAR]
     filtered = filter_detections(sightings, opts.filter_params(), given)
-    lidar = log_landmarks(log, site, notes) if opts.landmarks else []
+    lidar: list[FeatureRecord] = []
+    if opts.landmarks:
+        found = log_landmarks(log, site, notes)
+        lidar = recent_landmarks(found, log.odom, opts.landmark_window, site, cmap)
+        if len(lidar) < len(found):
+            notes.append(
+                f"matched {len(lidar)} of {len(found)} lidar landmark(s): of a category the site has, "
+                f"confirmed in the last {opts.landmark_window:g} m of travel"
+            )
     features = combined_sequence(filtered.features, lidar, cmap)
     odom_pose, odom_path, more = current_odom(log)
     warnings.extend(more)

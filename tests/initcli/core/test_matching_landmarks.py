@@ -74,10 +74,12 @@ def test_clutter_landmarks_use_their_own_outlier_budget() -> None:
     s_xy = b_xy[walk].copy()
     s_cls = [b_cls[i] for i in walk]
     # two landmarks of geometry the BIM lacks (material stacks) inside the sequence
-    s_xy = np.insert(s_xy, [2, 4], [[-30.0, -30.0], [-35.0, 70.0]], axis=0)
-    s_cls[2:2] = ["ConvexCorner"]
-    s_cls[5:5] = ["ConcaveCorner"]
-    expected = (2, 6, OUTLIER, 10, 15, OUTLIER, 20)
+    # (a row skips a landmark once it holds a triangle; landmarks before its first inlier are free)
+    s_xy = np.insert(s_xy, [0, 3, 4], [[80.0, 80.0], [-30.0, -30.0], [-35.0, 70.0]], axis=0)
+    s_cls[0:0] = ["ConcaveCorner"]
+    s_cls[4:4] = ["ConvexCorner"]
+    s_cls[6:6] = ["ConcaveCorner"]
+    expected = (OUTLIER, 2, 6, 10, OUTLIER, 15, OUTLIER, 20)
     no_camera_outliers = replace(PARAMS, max_outliers=0)
     assert expected not in matches(b_xy, b_cls, s_xy, s_cls, no_camera_outliers)
     budget = replace(no_camera_outliers, landmarks=replace(LM, outlier_share=0.34))
