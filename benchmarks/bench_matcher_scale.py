@@ -164,8 +164,8 @@ def main() -> None:
     print(f"bench_matcher_scale: {pin_one_core()}; python {sys.version.split()[0]}, numpy {np.__version__}")
     print(f"{sequences} sequences of {length} detected features per size; ms per Matcher.extend")
     print(
-        "| features | corners | sequence | alpha m (landmarks) | median ms | p95 ms | max ms | partial matches "
-        "(median / max) | goal (median) | ratio to goal |"
+        "| features | corners | sequence | alpha m (landmarks) | median ms | p95 ms | max ms | "
+        "partial matches (median / max) | goal (median) | ratio to goal |"
     )
     print("|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|")
     shipped, as_camera = MatchOptions(), MatchOptions(landmarks=False)
