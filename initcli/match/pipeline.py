@@ -239,7 +239,9 @@ def _storey_candidates(
     state = matcher.match(s_xy, s_cls, s_travel)
     rows = state.matches(params)
     assign, n_out, cost = state.assign[rows], state.n_out[rows], state.cost[rows]
-    keep = drop_dominated(assign, (assign == OUTLIER).sum(axis=1))  # rule 1, over every outlier
+    # rule 1 over the camera's outliers (a landmark sub-match has the pose of its match: rule 3 merges
+    # them; over every landmark outlier pattern rule 1 costs patterns x matches)
+    keep = drop_dominated(assign, n_out)
     assign, n_out, cost = assign[keep], n_out[keep], cost[keep]
     if len(assign):
         inlier = assign != OUTLIER
