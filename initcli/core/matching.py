@@ -275,7 +275,7 @@ class Matcher:
         self.params = params
 
     def match(
-        self, s_xy: np.ndarray, s_cls: Sequence[str], s_travel: Sequence[float] | None = None
+        self, s_xy: np.ndarray, s_cls: Sequence[str], s_travel: Sequence[float] | np.ndarray | None = None
     ) -> MatchState:
         """Run Algorithm 1 on the whole detected sequence S_object (``s_travel``: m of odometry travel
         at each feature's confirmation, for the landmarks' drift allowance; None: zeros)."""

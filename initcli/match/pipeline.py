@@ -325,34 +325,72 @@ def match_log(
         return report
 
     # Step 3-4: Algorithm 1 on every storey, then rule 1 (sub-matches) per storey; with no match,
-    # one more outlier at a time up to the outlier_share budget.
+    # one more outlier at a time up to the outlier_share budget. With lidar landmarks: the mixed
+    # sequence first (the camera's max_outliers); when it has no match, the camera's features alone
+    # as without landmarks (landmarks of geometry the BIM lacks never cost a camera match).
+    params = opts.match_params()
+    camera = [f for f in features if not params.is_landmark(f.cls)]
+    if len(camera) < len(features):
+        found = _search(report, site, cmap, storey_names, features, log, opts, escalate=False)
+        if found is not None and found.storey:
+            return report
+        if found is None:  # the landmarks' search overflowed: the camera's alone decide
+            report.overflow, report.n_hypotheses = False, 0
+            report.verdict, report.exit_code = verdict_text(0), EXIT_NO_MATCH
+        if len(camera) < opts.min_inliers:
+            return report
+        notes.append(
+            f"no match with the {len(features) - len(camera)} lidar landmark(s); matched the camera's "
+            f"{len(camera)} feature(s) alone"
+        )
+        report.features = features = _renumbered(camera)
+    _search(report, site, cmap, storey_names, features, log, opts, escalate=True)
+    return report
+
+
+def _renumbered(features: Sequence[ConfirmedFeature]) -> list[ConfirmedFeature]:
+    return [replace(f, index=i) for i, f in enumerate(features)]
+
+
+def _search(
+    report: MatchReport,
+    site: Site,
+    cmap: ClassMap,
+    storey_names: list[str],
+    features: list[ConfirmedFeature],
+    log: DetectionLog,
+    opts: MatchOptions,
+    escalate: bool,
+) -> _Candidates | None:
+    """Steps 3-7 on ``features`` into ``report`` (the camera's outlier budget grown when ``escalate``);
+    the candidates, or None when matching stopped at the partial-match cap."""
     s_xy = np.array([[f.x, f.y] for f in features]).reshape(-1, 2)
     s_cls = [f.cls for f in features]
     s_travel = travel_at(log.odom, [f.t_confirmed for f in features])
     params = opts.match_params()
-    budget = opts.outlier_budget(sum(not params.is_landmark(c) for c in s_cls))  # the camera's
+    budget = opts.outlier_budget(sum(not params.is_landmark(c) for c in s_cls)) if escalate else 0
     while True:
         try:
             cand = _candidates(site, cmap, storey_names, s_xy, s_cls, params, s_travel)
         except MatchOverflow as exc:
-            warnings.append(f"matching stopped: {exc}; the detected pattern is far too ambiguous")
+            report.warnings.append(f"matching stopped: {exc}; the detected pattern is far too ambiguous")
             report.verdict = verdict_text(max(2, params.max_partials))
             report.exit_code = EXIT_AMBIGUOUS
             report.n_hypotheses = params.max_partials
             report.overflow = True
-            return report
+            return None
         if cand.storey or params.max_outliers >= budget:
             break
         params = replace(params, max_outliers=params.max_outliers + 1, max_partials=ESCALATED_PARTIALS)
     if params.max_outliers > opts.max_outliers and cand.storey:
-        notes.append(
+        report.notes.append(
             f"no match tolerates {opts.max_outliers} outlier(s); matched with {params.max_outliers} "
             f"(outlier_share {opts.outlier_share:g} of {len(features)} features)"
         )
     report.outliers_allowed = params.max_outliers
     if cand.storey:
         _rank(report, site, cand, s_xy)
-    return report
+    return cand
 
 
 def _confirmed_features(
