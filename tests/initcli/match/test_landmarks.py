@@ -12,14 +12,16 @@ from shapely.geometry import Polygon
 from bimtools.extract.landmarks import storey_landmarks
 from bimtools.site.load import Site, StoreyModel
 from bimtools.site.manifest import SiteManifest
-from bimtools.site.records import LIDAR
+from bimtools.site.records import LIDAR, Feature
 from initcli.core.classes import ClassMap
 from initcli.core.geometry import Pose2D
 from initcli.core.landmark_tracks import LandmarkTracker, ScanInput
 from initcli.core.scan_landmarks import ScanLandmarkParams
-from initcli.io.detection_log import DetectionLog, Meta, Odom, Record, Scan
-from initcli.match.landmarks import feature_records, log_landmarks, travel_at
+from initcli.drivers.base import LaserScan, SensorFrame
+from initcli.io.detection_log import DetectionLog, FeatureRecord, Meta, Odom, Record, Scan, read_log
+from initcli.match.landmarks import feature_records, log_landmarks, site_tracker, travel_at
 from initcli.match.pipeline import MatchOptions, match_log
+from initcli.session.perception import Perception
 from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
 from tests.landmark_worlds import RANGE_MAX, SETTINGS, walled
 
@@ -101,3 +103,48 @@ def test_a_site_without_landmarks_leaves_the_logs_out_with_a_note(tmp_path) -> N
 def test_travel_at_sums_the_odometry_path() -> None:
     odom = [Odom(0.0, 0.0, 0.0, 0.0), Odom(1.0, 3.0, 4.0, 0.0), Odom(2.0, 3.0, 5.0, 0.0)]
     assert travel_at(odom, [-1.0, 0.5, 1.0, 9.0]).tolist() == [0.0, 0.0, 5.0, 6.0]
+
+
+def test_the_sessions_log_replays_to_its_landmarks_and_verdict(tmp_path) -> None:
+    site = _site(tmp_path)
+    scans, _ = _scans()
+    options = MatchOptions()
+    path = tmp_path / "session.jsonl"
+    perception = Perception(
+        Meta(DEFAULT_CAMERA, DEFAULT_MOUNT), path, ClassMap(), options, 0.0, 1, site_tracker(site)
+    )
+    for step, s in enumerate(scans):
+        scan = LaserScan(s.angle_min, s.angle_increment, s.range_max, s.ranges)
+        perception.record_frame(SensorFrame(s.t, s.pose, scan, []), step)
+    assert perception.new_features() and perception.n_features == len(perception.lidar) > 0
+    online = perception.match(scans[-1].t, site)
+    perception.close()
+    log = read_log(path)
+    assert [f for f in log.features if f.source == LIDAR] == perception.lidar
+    offline = match_log(log, site, options, ClassMap())
+    assert online.verdict == offline.verdict == "unique match"
+    assert offline.hypotheses[0].matches == online.hypotheses[0].matches
+
+
+def test_landmarks_the_bim_lacks_never_cost_the_camera_its_match(tmp_path) -> None:
+    site = _site(tmp_path)
+    doors = [(0.5, 0.0), (4.0, 0.0), (9.0, 0.0), (10.0, 2.0), (5.0, 6.0)]
+    site.storeys["L"].features += [
+        Feature(f"d{i}", "Door", x, y, 0.0, 1.0, 0.9, 2.1, "L") for i, (x, y) in enumerate(doors)
+    ]
+    to_odom = START.inverse()
+    records: list[Record] = [Odom(0.0, 0.0, 0.0, 0.0)]
+    for i, (x, y) in enumerate(doors):
+        p = to_odom.apply(np.array([[x, y]]))[0]
+        records.append(FeatureRecord(1.0 + i, "Door", float(p[0]), float(p[1])))
+    rng = np.random.default_rng(5)
+    for k, (x, y) in enumerate(rng.uniform(20, 60, size=(8, 2))):  # geometry the BIM lacks
+        records.append(FeatureRecord(10.0 + k, "ConcaveCorner", float(x), float(y), LIDAR))
+    log = DetectionLog(
+        Path("w.jsonl"), Meta(DEFAULT_CAMERA, DEFAULT_MOUNT), records, list(range(len(records)))
+    )
+    report = match_log(log, site, MatchOptions(), ClassMap())
+    assert report.verdict == "unique match", report.notes
+    assert any("matched the camera's 5 feature(s) alone" in n for n in report.notes)
+    assert report.hypotheses[0].pose.distance_to(START) < 0.05
+    assert [f.cls for f in report.features] == ["door"] * 5
