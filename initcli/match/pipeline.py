@@ -138,6 +138,17 @@ class MatchReport:
         ``pose_radius`` and ``beta`` of the best by the poses they report (``one_place``)?"""
         return self.n_hypotheses <= len(self.hypotheses) and one_place(*self._storeys_poses())
 
+    def weighted_inliers(self, hypothesis: Hypothesis) -> float:
+        """The hypothesis's matched features, a lidar landmark counting ``landmark_weight`` (what the
+        claim checks weigh: corners are many and alike)."""
+        lidar = self.options.landmark_matching().classes
+        w = self.options.landmark_weight
+        return sum(
+            w if f.cls in lidar else 1.0
+            for f, m in zip(self.features, hypothesis.matches, strict=False)
+            if m is not None
+        )
+
     def places(self) -> list[int]:
         """Indices of the listed hypotheses, one per place (``distinct_places``)."""
         return distinct_places(*self._storeys_poses())
