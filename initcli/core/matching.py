@@ -67,11 +67,11 @@ class LandmarkMatching:
     alpha: float  # m: Eq. 7 threshold between two landmarks confirmed at the same travel
     drift: float  # m per m of odometry travel between the two confirmations, added to alpha
     weight: float  # what one landmark counts toward min_inliers (a camera feature counts 1)
-    outlier_share: float  # of the first k landmarks, ceil(share * k) may be outliers
+    outlier_share: float  # of the first k landmarks, floor(share * k) (at least 1) may be outliers
 
     def budget(self, k: int) -> int:
-        """Landmark outliers a partial match of the first ``k`` landmarks may declare."""
-        return math.ceil(self.outlier_share * k - 1e-9)
+        """Landmark outliers a partial match of the first ``k`` landmarks may declare (0 if share is 0)."""
+        return max(1, math.floor(self.outlier_share * k + 1e-9)) if self.outlier_share > 0 else 0
 
 
 class MatchOverflow(RuntimeError):
@@ -350,22 +350,21 @@ class Matcher:
                 part["n_lm"] = part["n_lm"] + 1
 
         # -- outlier tolerance: s_n treated as a false/misclassified detection (a landmark: as
-        # geometry the BIM lacks, within the landmarks' own budget; landmarks before a row's first
-        # inlier are free: its pattern starts later) ----------------------------------------------
+        # geometry the BIM lacks, within the landmarks' own budget, before a row's first inlier or
+        # once it holds a triangle) ----------------------------------------------------------------
         if lidar:
             assert p.landmarks is not None and state.n_lm_out is not None
             started = state.n_in > 0
             paired = state.n_in >= 3  # a row skips a landmark once a triangle (Eq. 9) holds
-            out = np.flatnonzero(
-                ~started | (paired & (state.n_lm_out < p.landmarks.budget(int(s_lidar.sum()))))
-            )
+            within = state.n_lm_out < p.landmarks.budget(int(s_lidar.sum()))
+            out = np.flatnonzero(within & (~started | paired))
         else:
             out = np.flatnonzero(state.n_out < p.max_outliers)
         if len(out):
             base = _rows(state, out)
             base["assign"] = np.column_stack([base["assign"], np.full(len(out), OUTLIER, dtype=np.intp)])
             if lidar:
-                base["n_lm_out"] = base["n_lm_out"] + started[out]
+                base["n_lm_out"] = base["n_lm_out"] + 1
             else:
                 base["n_out"] = base["n_out"] + 1
             parts.append(base)

@@ -74,7 +74,7 @@ def test_clutter_landmarks_use_their_own_outlier_budget() -> None:
     s_xy = b_xy[walk].copy()
     s_cls = [b_cls[i] for i in walk]
     # two landmarks of geometry the BIM lacks (material stacks) inside the sequence
-    # (a row skips a landmark once it holds a triangle; landmarks before its first inlier are free)
+    # (a row skips a landmark before its first inlier or once it holds a triangle)
     s_xy = np.insert(s_xy, [0, 3, 4], [[80.0, 80.0], [-30.0, -30.0], [-35.0, 70.0]], axis=0)
     s_cls[0:0] = ["ConcaveCorner"]
     s_cls[4:4] = ["ConvexCorner"]
@@ -82,11 +82,15 @@ def test_clutter_landmarks_use_their_own_outlier_budget() -> None:
     expected = (OUTLIER, 2, 6, 10, OUTLIER, 15, OUTLIER, 20)
     no_camera_outliers = replace(PARAMS, max_outliers=0)
     assert expected not in matches(b_xy, b_cls, s_xy, s_cls, no_camera_outliers)
-    budget = replace(no_camera_outliers, landmarks=replace(LM, outlier_share=0.34))
+    budget = replace(no_camera_outliers, landmarks=replace(LM, outlier_share=0.5))
     matcher = Matcher(BimIndex(b_xy, b_cls), budget)
     state = matcher.match(s_xy, s_cls)
     rows = state.matches(budget)
     found = {tuple(int(a) for a in state.assign[r]): r for r in rows}
     assert expected in found
     assert state.n_out[found[expected]] == 0  # the camera's budget untouched
-    assert LM.budget(3) == 0 and replace(LM, outlier_share=0.34).budget(3) == 2
+    assert LM.budget(3) == 0 and replace(LM, outlier_share=0.34).budget(3) == 1
+    assert replace(LM, outlier_share=0.34).budget(6) == 2
+    # beyond the budget (3 of 7 with a share of 0.34: 2) the pattern is no match
+    tight = replace(no_camera_outliers, landmarks=replace(LM, outlier_share=0.34))
+    assert expected not in matches(b_xy, b_cls, s_xy, s_cls, tight)
