@@ -30,6 +30,15 @@ the robot, so that with few detections the alternative "one of them was false" i
 The cost (Eq. 14) is taken over the inliers. How such matches are ranked against full matches
 and counted is defined in :mod:`initcli.core.hypotheses` (fewer outliers first; sub-matches of
 a match with fewer outliers are dropped; only pose-distinct hypotheses count).
+
+Lidar landmarks (beyond the paper, :class:`LandmarkMatching`; None: every feature is the camera's):
+wall corners and openings of the scans join S with their own labels. Between two landmarks Eq. 7
+and Eq. 9 use the landmarks' alpha plus a drift allowance per metre of odometry travel between
+their confirmations (at most the camera's alpha); a landmark inlier counts ``weight`` toward
+``min_inliers``; landmark outliers (geometry the BIM lacks) have their own budget, a share of the
+landmarks so far (at least one), declared before a partial match's first inlier or once it holds
+a triangle (a pair must be the next landmark: the search stays small with thousands of corners).
+``n_out`` counts the camera's outliers only.
 """
 
 from __future__ import annotations
