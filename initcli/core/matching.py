@@ -70,7 +70,8 @@ OUTLIER = -1
 @dataclass(frozen=True)
 class LandmarkMatching:
     """How Algorithm 1 treats lidar landmarks in a mixed sequence (beyond the paper; the module doc,
-    "Lidar landmarks"). No defaults here: ``initcli.match.options.LandmarkMatchingSettings``."""
+    "Lidar landmarks"). No defaults here: the ``landmark_*`` fields of
+    ``initcli.match.options.MatchingSettings``."""
 
     classes: frozenset[str]  # canonical class names of the lidar landmarks
     alpha: float  # m: Eq. 7 threshold between two landmarks confirmed at the same travel
