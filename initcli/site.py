@@ -63,7 +63,7 @@ def choose_storey(config: SessionConfig, site: Site) -> tuple[str, str | None]:
         site.storey(wanted)  # raises with the valid names
         return wanted, wanted
     with_maps = [s for s in site.storeys.values() if s.grid is not None]
-    simulated = max(with_maps, key=lambda s: len(s.features)).name
+    simulated = max(with_maps, key=lambda s: len(s.camera_features)).name
     return simulated, (None if len(site.storeys) > 1 else simulated)
 
 

@@ -223,6 +223,34 @@ class DetectionFilter:
             track.confirmed_at = s.t
         _suppress_duplicates(tracks, track, p.merge_radius, s.t, self.k)
 
+    def confirmed_new(self, seen: set[int]) -> list[ConfirmedFeature]:
+        """The features confirmed since the last call (``seen``: the track numbers returned before,
+        updated here) that rule 6 keeps now, in confirmation order, each where its track is now: for a
+        caller that writes every feature once, when it is confirmed (the session's lidar landmarks).
+        ``index`` is the track's number."""
+        fresh = [
+            tr
+            for tr in self.tracks
+            if tr.confirmed_at is not None
+            and tr.created not in seen
+            and (tr.fixed is not None or not _misclassified(self.tracks, tr, self.params))
+        ]
+        fresh.sort(key=lambda tr: (tr.confirmed_at, tr.created))
+        seen.update(tr.created for tr in fresh)
+        return [
+            ConfirmedFeature(
+                index=tr.created,
+                cls=tr.cls,
+                x=float(tr.pos[0]),
+                y=float(tr.pos[1]),
+                sightings=int(tr.n),
+                t_first=float(tr.t_first),
+                t_confirmed=float(tr.confirmed_at),  # type: ignore[arg-type]
+                given=tr.fixed is not None,
+            )
+            for tr in fresh
+        ]
+
     def result(self) -> FilterResult:
         """S_object so far (Eq. 3), ordered by confirmation time, with the counters."""
         tracks, p = self.tracks, self.params

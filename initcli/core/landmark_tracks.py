@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from initcli.core.detection_filter import DetectionFilter, FilterParams, Sighting
+from initcli.core.detection_filter import ConfirmedFeature, DetectionFilter, FilterParams, Sighting
 from initcli.core.geometry import Pose2D, rot2
 from initcli.core.scan_landmarks import ScanLandmark, ScanLandmarkParams, scan_landmarks
 
@@ -164,6 +164,31 @@ def merge_sightings(sightings: Iterable[LandmarkSighting], params: TrackParams) 
     return out
 
 
+class LandmarkTracker:
+    """The landmarks of a path one scan at a time, each confirmed landmark given once, when it is
+    confirmed, where its track is then (the online session writes it to its log at that moment, and
+    ``bim-init match`` replays a log's scans through the same tracker: the same landmarks)."""
+
+    def __init__(
+        self, params: ScanLandmarkParams, track: TrackParams | None = None, mount: Pose2D | None = None
+    ):
+        self.params = params
+        self.track = track or TrackParams()
+        self.mount = mount
+        self.filter = DetectionFilter(self.track.filter_params())
+        self.frames = 0  # scans added so far
+        self._seen: set[int] = set()
+
+    def add_scan(self, scan: ScanInput) -> list[ConfirmedFeature]:
+        """One scan's landmarks into the tracks; the landmarks it confirmed (odom frame)."""
+        p = self.params
+        found = scan_landmarks(scan.ranges, scan.angle_min, scan.angle_increment, scan.range_max, p)
+        for s in to_odom(scan.t, self.frames, scan.pose, found, self.mount):
+            self.filter.add(Sighting(s.t, s.category, s.x, s.y, score=1.0, depth=s.range, frame=s.frame))
+        self.frames += 1
+        return self.filter.confirmed_new(self._seen)
+
+
 def accumulate_landmarks(
     scans: Iterable[ScanInput],
     params: ScanLandmarkParams,
@@ -181,6 +206,7 @@ def accumulate_landmarks(
 
 __all__ = [
     "LandmarkSighting",
+    "LandmarkTracker",
     "LidarLandmark",
     "ScanInput",
     "TrackParams",

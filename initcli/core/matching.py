@@ -30,6 +30,15 @@ the robot, so that with few detections the alternative "one of them was false" i
 The cost (Eq. 14) is taken over the inliers. How such matches are ranked against full matches
 and counted is defined in :mod:`initcli.core.hypotheses` (fewer outliers first; sub-matches of
 a match with fewer outliers are dropped; only pose-distinct hypotheses count).
+
+Lidar landmarks (beyond the paper, :class:`LandmarkMatching`; None: every feature is the camera's):
+wall corners and openings of the scans join S with their own labels. Between two landmarks Eq. 7
+and Eq. 9 use the landmarks' alpha plus a drift allowance per metre of odometry travel between
+their confirmations (at most the camera's alpha); a landmark inlier counts ``weight`` toward
+``min_inliers``; landmark outliers (geometry the BIM lacks) have their own budget, a share of the
+landmarks so far (at least one), declared before a partial match's first inlier or once it holds
+a triangle (a pair must be the next landmark: the search stays small with thousands of corners).
+``n_out`` counts the camera's outliers only.
 """
 
 from __future__ import annotations
@@ -44,9 +53,35 @@ from scipy.spatial import cKDTree
 
 from initcli.core.pattern import angle_difference, pair_distance, rotation_angle
 
-__all__ = ["BimIndex", "MatchOverflow", "MatchParams", "MatchState", "Matcher", "OUTLIER", "match_sequence"]
+__all__ = [
+    "BimIndex",
+    "LandmarkMatching",
+    "MatchOverflow",
+    "MatchParams",
+    "MatchState",
+    "Matcher",
+    "OUTLIER",
+    "match_sequence",
+]
 
 OUTLIER = -1
+
+
+@dataclass(frozen=True)
+class LandmarkMatching:
+    """How Algorithm 1 treats lidar landmarks in a mixed sequence (beyond the paper; the module doc,
+    "Lidar landmarks"). No defaults here: the ``landmark_*`` fields of
+    ``initcli.match.options.MatchingSettings``."""
+
+    classes: frozenset[str]  # canonical class names of the lidar landmarks
+    alpha: float  # m: Eq. 7 threshold between two landmarks confirmed at the same travel
+    drift: float  # m per m of odometry travel between the two confirmations, added to alpha
+    weight: float  # what one landmark counts toward min_inliers (a camera feature counts 1)
+    outlier_share: float  # of the first k landmarks, floor(share * k) (at least 1) may be outliers
+
+    def budget(self, k: int) -> int:
+        """Landmark outliers a partial match of the first ``k`` landmarks may declare (0 if share is 0)."""
+        return max(1, math.floor(self.outlier_share * k + 1e-9)) if self.outlier_share > 0 else 0
 
 
 class MatchOverflow(RuntimeError):
@@ -75,6 +110,10 @@ class MatchParams:
     # false one could yield a wrong unique match (measured in benchmarks/bench_match.py).
     min_inliers_outlier: int = 2
     max_partials: int = 20_000_000  # safety cap on partial matches held in memory
+    landmarks: LandmarkMatching | None = None  # None: every feature is a camera feature
+
+    def is_landmark(self, cls: str) -> bool:
+        return self.landmarks is not None and cls in self.landmarks.classes
 
 
 class BimIndex:
@@ -159,11 +198,26 @@ class MatchState:
     s_xy: np.ndarray  # (n, 2) detected features in the odom frame
     s_cls: list[str]
     assign: np.ndarray  # (K, n) int
-    n_out: np.ndarray  # (K,)
-    n_in: np.ndarray  # (K,)
+    n_out: np.ndarray  # (K,) camera features declared outliers
+    n_in: np.ndarray  # (K,) inliers, camera features and landmarks
     last2: np.ndarray  # (K,)
     last1: np.ndarray  # (K,)
     cost: np.ndarray  # (K,)
+    n_lm: np.ndarray | None = None  # (K,) landmark inliers (None: zeros)
+    n_lm_out: np.ndarray | None = None  # (K,) landmarks declared outliers (None: zeros)
+    s_travel: np.ndarray | None = None  # (n,) m of odometry travel at each confirmation (None: zeros)
+    s_lidar: np.ndarray | None = None  # (n,) bool: a lidar landmark (None: none is)
+
+    def __post_init__(self) -> None:
+        k, n = len(self.cost), len(self.s_cls)
+        if self.n_lm is None:
+            self.n_lm = np.zeros(k, dtype=np.intp)
+        if self.n_lm_out is None:
+            self.n_lm_out = np.zeros(k, dtype=np.intp)
+        if self.s_travel is None:
+            self.s_travel = np.zeros(n)
+        if self.s_lidar is None:
+            self.s_lidar = np.zeros(n, dtype=bool)
 
     @property
     def n(self) -> int:
@@ -186,26 +240,28 @@ class MatchState:
             cost=np.zeros(1),
         )
 
-    def complete(self, min_inliers: int, min_inliers_outlier: int = 2) -> np.ndarray:
+    def complete(
+        self, min_inliers: int, min_inliers_outlier: int = 2, landmark_weight: float = 1.0
+    ) -> np.ndarray:
         """Indices of rows that are matches: a full match needs ``min_inliers`` inliers, a match with
-        outliers ``min_inliers_outlier`` (at least 2 either way)."""
+        camera outliers ``min_inliers_outlier`` (at least 2 either way); a landmark inlier counts
+        ``landmark_weight`` toward them (landmark outliers are expected: clutter, hoardings)."""
         need = np.where(self.n_out == 0, max(2, min_inliers), max(2, min_inliers_outlier))
-        return np.flatnonzero(self.n_in >= need)
+        assert self.n_lm is not None
+        count = (self.n_in - self.n_lm) + landmark_weight * self.n_lm
+        return np.flatnonzero((count >= need - 1e-9) & (self.n_in >= 2))
 
     def matches(self, params: MatchParams) -> np.ndarray:
         """Indices of the rows that are complete matches under ``params``."""
-        return self.complete(params.min_inliers, params.min_inliers_outlier)
+        weight = params.landmarks.weight if params.landmarks is not None else 1.0
+        return self.complete(params.min_inliers, params.min_inliers_outlier, weight)
+
+
+_ROW_FIELDS = ("assign", "n_out", "n_in", "last2", "last1", "cost", "n_lm", "n_lm_out")
 
 
 def _rows(state: MatchState, keep: np.ndarray) -> dict[str, np.ndarray]:
-    return {
-        "assign": state.assign[keep],
-        "n_out": state.n_out[keep],
-        "n_in": state.n_in[keep],
-        "last2": state.last2[keep],
-        "last1": state.last1[keep],
-        "cost": state.cost[keep],
-    }
+    return {name: getattr(state, name)[keep] for name in _ROW_FIELDS}
 
 
 def _sector_radius(d: float, alpha: float, beta: float) -> float:
@@ -228,18 +284,39 @@ class Matcher:
         self.index = index
         self.params = params
 
-    def match(self, s_xy: np.ndarray, s_cls: Sequence[str]) -> MatchState:
-        """Run Algorithm 1 on the whole detected sequence S_object."""
+    def match(
+        self, s_xy: np.ndarray, s_cls: Sequence[str], s_travel: Sequence[float] | np.ndarray | None = None
+    ) -> MatchState:
+        """Run Algorithm 1 on the whole detected sequence S_object (``s_travel``: m of odometry travel
+        at each feature's confirmation, for the landmarks' drift allowance; None: zeros)."""
         state = MatchState.empty()
-        for xy, cls in zip(np.asarray(s_xy, dtype=float).reshape(-1, 2), s_cls, strict=True):
-            state = self.extend(state, xy, cls)
+        xy = np.asarray(s_xy, dtype=float).reshape(-1, 2)
+        travel = np.zeros(len(xy)) if s_travel is None else np.asarray(s_travel, dtype=float)
+        for p, cls, d in zip(xy, s_cls, travel, strict=True):
+            state = self.extend(state, p, cls, float(d))
         return state
 
-    def extend(self, state: MatchState, xy: np.ndarray, cls: str) -> MatchState:
+    def _alpha(self, state: MatchState, i: int, travel: float, lidar: bool) -> float:
+        """The Eq. 7 threshold between s_i and the feature at ``travel`` (a landmark if ``lidar``):
+        the camera's alpha, or between two landmarks the landmark alpha plus the drift allowance."""
+        lm = self.params.landmarks
+        assert state.s_lidar is not None and state.s_travel is not None
+        if lm is None or not (lidar and state.s_lidar[i]):
+            return self.params.alpha
+        # the drift allowance never makes two landmarks looser than the camera's threshold
+        return min(
+            lm.alpha + lm.drift * abs(travel - float(state.s_travel[i])), max(self.params.alpha, lm.alpha)
+        )
+
+    def extend(self, state: MatchState, xy: np.ndarray, cls: str, travel: float = 0.0) -> MatchState:
         """Add detected feature s_n (the next in S_object) to every partial match of ``state``."""
         p = self.params
         n = state.n
+        lidar = p.is_landmark(cls)
+        assert state.s_lidar is not None and state.s_travel is not None
         s_xy = np.vstack([state.s_xy, np.asarray(xy, dtype=float).reshape(1, 2)])
+        s_travel = np.append(state.s_travel, travel)
+        s_lidar = np.append(state.s_lidar, lidar)
         s_new = s_xy[n]
         parts: list[dict[str, np.ndarray]] = []
 
@@ -250,7 +327,9 @@ class Matcher:
             for key in np.unique(keys):
                 rows = tri[keys == key]
                 a, b = int(state.last2[rows[0]]), int(state.last1[rows[0]])
-                part = self._extend_triples(state, rows, a, b, s_xy, cls)
+                alpha_ab = self._alpha(state, a, float(state.s_travel[b]), bool(state.s_lidar[b]))
+                alpha_an = self._alpha(state, a, travel, lidar)
+                part = self._extend_triples(state, rows, a, b, s_xy, cls, alpha_ab, alpha_an)
                 if part is not None:
                     parts.append(part)
 
@@ -259,7 +338,8 @@ class Matcher:
         if len(one):
             for a in np.unique(state.last1[one]):
                 rows = one[state.last1[one] == a]
-                part = self._extend_pairs(state, rows, int(a), s_xy[int(a)], s_new, cls)
+                alpha = self._alpha(state, int(a), travel, lidar)
+                part = self._extend_pairs(state, rows, int(a), s_xy[int(a)], s_new, cls, alpha)
                 if part is not None:
                     parts.append(part)
 
@@ -275,19 +355,40 @@ class Matcher:
             base["last2"] = base["last1"].copy()
             base["last1"] = np.full(len(r), n, dtype=np.intp)
             parts.append(base)
+        if lidar:
+            for part in parts:
+                part["n_lm"] = part["n_lm"] + 1
 
-        # -- outlier tolerance: s_n treated as a false/misclassified detection --------------------
-        out = np.flatnonzero(state.n_out < p.max_outliers)
+        # -- outlier tolerance: s_n treated as a false/misclassified detection (a landmark: as
+        # geometry the BIM lacks, within the landmarks' own budget, before a row's first inlier or
+        # once it holds a triangle) ----------------------------------------------------------------
+        if lidar:
+            assert p.landmarks is not None and state.n_lm_out is not None
+            started = state.n_in > 0
+            paired = state.n_in >= 3  # a row skips a landmark once a triangle (Eq. 9) holds
+            within = state.n_lm_out < p.landmarks.budget(int(s_lidar.sum()))
+            out = np.flatnonzero(within & (~started | paired))
+        else:
+            out = np.flatnonzero(state.n_out < p.max_outliers)
         if len(out):
             base = _rows(state, out)
             base["assign"] = np.column_stack([base["assign"], np.full(len(out), OUTLIER, dtype=np.intp)])
-            base["n_out"] = base["n_out"] + 1
+            if lidar:
+                base["n_lm_out"] = base["n_lm_out"] + 1
+            else:
+                base["n_out"] = base["n_out"] + 1
             parts.append(base)
 
-        return self._assemble(parts, s_xy, [*state.s_cls, cls], n + 1)
+        return self._assemble(parts, s_xy, [*state.s_cls, cls], n + 1, s_travel, s_lidar)
 
     def _assemble(
-        self, parts: list[dict[str, np.ndarray]], s_xy: np.ndarray, s_cls: list[str], n: int
+        self,
+        parts: list[dict[str, np.ndarray]],
+        s_xy: np.ndarray,
+        s_cls: list[str],
+        n: int,
+        s_travel: np.ndarray,
+        s_lidar: np.ndarray,
     ) -> MatchState:
         total = sum(len(part["cost"]) for part in parts)
         if total > self.params.max_partials:
@@ -303,22 +404,23 @@ class Matcher:
                 empty.copy(),
                 empty.copy(),
                 np.zeros(0),
+                s_travel=s_travel,
+                s_lidar=s_lidar,
             )
-        return MatchState(
-            s_xy=s_xy,
-            s_cls=s_cls,
-            assign=np.concatenate([part["assign"] for part in parts]).astype(np.intp, copy=False),
-            n_out=np.concatenate([part["n_out"] for part in parts]),
-            n_in=np.concatenate([part["n_in"] for part in parts]),
-            last2=np.concatenate([part["last2"] for part in parts]),
-            last1=np.concatenate([part["last1"] for part in parts]),
-            cost=np.concatenate([part["cost"] for part in parts]),
-        )
+        joined = {name: np.concatenate([part[name] for part in parts]) for name in _ROW_FIELDS}
+        joined["assign"] = joined["assign"].astype(np.intp, copy=False)
+        return MatchState(s_xy=s_xy, s_cls=s_cls, s_travel=s_travel, s_lidar=s_lidar, **joined)
 
     def _extend_pairs(
-        self, state: MatchState, rows: np.ndarray, a: int, s_a: np.ndarray, s_new: np.ndarray, cls: str
+        self,
+        state: MatchState,
+        rows: np.ndarray,
+        a: int,
+        s_a: np.ndarray,
+        s_new: np.ndarray,
+        cls: str,
+        alpha: float,
     ) -> dict[str, np.ndarray] | None:
-        alpha = self.params.alpha
         b_xy = self.index.xy
         d_s = float(pair_distance(s_a, s_new))  # d^S_{12} (Eq. 5 in the odom frame)
         u = state.assign[rows, a]
@@ -340,9 +442,17 @@ class Matcher:
         return base
 
     def _extend_triples(
-        self, state: MatchState, rows: np.ndarray, a: int, b: int, s_xy: np.ndarray, cls: str
+        self,
+        state: MatchState,
+        rows: np.ndarray,
+        a: int,
+        b: int,
+        s_xy: np.ndarray,
+        cls: str,
+        alpha_ab: float,
+        alpha_an: float,
     ) -> dict[str, np.ndarray] | None:
-        alpha, beta = self.params.alpha, self.params.beta
+        beta = self.params.beta
         n = state.n
         b_xy = self.index.xy
         s_a, s_b, s_n = s_xy[a], s_xy[b], s_xy[n]
@@ -355,7 +465,7 @@ class Matcher:
         bu, bv = b_xy[u], b_xy[v]
         d_uv = pair_distance(bu, bv)
         err_uv = np.abs(d_uv - d_ab)
-        ok = err_uv <= alpha  # Eq. 9, first condition: z_d({s_{i-2}, b_u}, {s_{i-1}, b_v}) = 1
+        ok = err_uv <= alpha_ab  # Eq. 9, first condition: z_d({s_{i-2}, b_u}, {s_{i-1}, b_v}) = 1
         if not ok.any():
             return None
         rows, u, bu, bv, d_uv, err_uv = rows[ok], u[ok], bu[ok], bv[ok], d_uv[ok], err_uv[ok]
@@ -365,11 +475,11 @@ class Matcher:
         safe = np.where(d_uv > 0.0, d_uv, 1.0)
         dx, dy = (bv[:, 0] - bu[:, 0]) / safe, (bv[:, 1] - bu[:, 1]) / safe
         pred = bu + d_an * np.column_stack([c * dx - s * dy, s * dx + c * dy])
-        radius = _sector_radius(d_an, alpha, beta)
+        radius = _sector_radius(d_an, alpha_an, beta)
         degenerate = d_uv <= 0.0  # coincident BIM features: direction undefined, search the disc
         if degenerate.any():
             pred[degenerate] = bu[degenerate]
-            radius = max(radius, d_an + alpha + 1e-9)
+            radius = max(radius, d_an + alpha_an + 1e-9)
         q, w = self.index.ball(pred, cls, radius)
         if len(q) == 0:
             return None
@@ -377,7 +487,7 @@ class Matcher:
         bw = b_xy[w]
         err_uw = np.abs(pair_distance(bu[q], bw) - d_an)
         err_th = angle_difference(rotation_angle(bu[q], bv[q], bw), th_s)
-        ok = (err_uw <= alpha) & (err_th <= beta)  # Eq. 9, second and third conditions
+        ok = (err_uw <= alpha_an) & (err_th <= beta)  # Eq. 9, second and third conditions
         if not ok.any():
             return None
         q, w, err_uw, err_th = q[ok], w[ok], err_uw[ok], err_th[ok]

@@ -50,11 +50,16 @@ class LandmarkRules(Protocol):
     """What makes a landmark, as the categories file's ``landmarks:`` block says it
     (:class:`bimtools.extract.settings.LandmarkSettings`): angles in degrees, lengths in metres."""
 
-    corner_angle: tuple[float, float]
-    min_leg: float
-    column_max_side: float
-    opening_width: tuple[float, float]
-    min_recess: float
+    @property
+    def corner_angle(self) -> tuple[float, float]: ...
+    @property
+    def min_leg(self) -> float: ...
+    @property
+    def column_max_side(self) -> float: ...
+    @property
+    def opening_width(self) -> tuple[float, float]: ...
+    @property
+    def min_recess(self) -> float: ...
 
 
 @dataclass(frozen=True)

@@ -13,8 +13,10 @@ import math
 from dataclasses import dataclass
 
 from bimkit.errors import InputError
+from bimtools.site.records import LANDMARK_CATEGORIES
+from initcli.core.classes import ClassMap
 from initcli.core.detection_filter import FilterParams
-from initcli.core.matching import MatchParams
+from initcli.core.matching import LandmarkMatching, MatchParams
 from initcli.core.pose import POSE_METHODS
 from initcli.settings import check_ranges, setting, shared
 
@@ -108,6 +110,56 @@ class MatchingSettings:
         maximum=10000,
         metavar="PX",
     )
+    # Lidar landmarks (wall corners, column corners, openings; beyond the paper): used when the site
+    # has them (bim-extract's landmarks: block) and the log has them or scans to find them in.
+    landmarks: bool = setting(
+        True,
+        "match the lidar landmarks too when the site has them (the log's lidar feature records, or those"
+        " found in its scans); false: the camera's features alone",
+        flag="--landmarks/--no-landmarks",
+    )
+    landmark_alpha: float = setting(
+        0.15,
+        "m: distance threshold of Eq. 7 between two lidar landmarks confirmed at the same travel (scan"
+        " landmarks are cm-accurate; the camera's alpha would let thousands of corners share a pattern)",
+        above=0,
+        maximum=50,
+        metavar="M",
+    )
+    landmark_drift: float = setting(
+        0.02,
+        "m per m of odometry travel between two lidar landmarks' confirmations, added to landmark_alpha"
+        " (odometry drift between the sightings dominates over the scan's accuracy)",
+        minimum=0,
+        maximum=1,
+        metavar="M/M",
+    )
+    landmark_window: float = setting(
+        30.0,
+        "m: match only the lidar landmarks confirmed in the last M metres of travel (clutter is common and"
+        " the search grows with every landmark; odometry drifts); 0: all of them",
+        minimum=0,
+        maximum=100000,
+        metavar="M",
+    )
+    landmark_weight: float = setting(
+        0.5,
+        "what one matched lidar landmark counts toward min_inliers (a camera feature counts 1): corners"
+        " are many, so patterns of landmarks need more members",
+        above=0,
+        maximum=1,
+        metavar="W",
+    )
+    # 0.34: bench_matcher_scale meets the speed goals (0.5 missed them, 0.91 against 1.09 ms at 1,000)
+    landmark_outlier_share: float = setting(
+        0.34,
+        "share of the lidar landmarks a match may declare outliers (at least one; before its first"
+        " inlier or once it holds a triangle), a budget apart from the camera's (geometry the BIM lacks:"
+        " material stacks, hoardings, furniture, open door leaves)",
+        minimum=0,
+        maximum=0.9,
+        metavar="S",
+    )
 
 
 @dataclass
@@ -146,6 +198,17 @@ class MatchOptions(MatchingSettings):
             max_outliers=self.max_outliers,
             min_inliers=self.min_inliers,
             revisits=self.revisits,
+            landmarks=self.landmark_matching() if self.landmarks else None,
+        )
+
+    def landmark_matching(self) -> LandmarkMatching:
+        """How Algorithm 1 treats the lidar landmarks (canonical class names of LANDMARK_CATEGORIES)."""
+        return LandmarkMatching(
+            classes=frozenset(ClassMap().canonical(c) for c in LANDMARK_CATEGORIES),
+            alpha=self.landmark_alpha,
+            drift=self.landmark_drift,
+            weight=self.landmark_weight,
+            outlier_share=self.landmark_outlier_share,
         )
 
     def filter_params(self) -> FilterParams:

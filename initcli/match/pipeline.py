@@ -23,6 +23,7 @@ import numpy as np
 from bimkit.checks import read_yaml
 from bimkit.errors import InputError
 from bimtools.site.load import Site, StoreyModel, load_site
+from bimtools.site.records import LIDAR
 from initcli.core.classes import ClassMap
 from initcli.core.detection_filter import (
     ConfirmedFeature,
@@ -44,7 +45,8 @@ from initcli.core.hypotheses import (
 from initcli.core.matching import OUTLIER, BimIndex, Matcher, MatchOverflow, MatchParams
 from initcli.core.pose import estimate_pose, rigid_align_batch
 from initcli.core.rectify import WallArray, rectify_pose
-from initcli.io.detection_log import DetectionLog, read_log
+from initcli.io.detection_log import DetectionLog, FeatureRecord, read_log
+from initcli.match.landmarks import combined_sequence, log_landmarks, recent_landmarks, travel_at
 from initcli.match.options import MatchOptions
 from initcli.match.sightings import sightings_from_log
 
@@ -136,6 +138,17 @@ class MatchReport:
         ``pose_radius`` and ``beta`` of the best by the poses they report (``one_place``)?"""
         return self.n_hypotheses <= len(self.hypotheses) and one_place(*self._storeys_poses())
 
+    def weighted_inliers(self, hypothesis: Hypothesis) -> float:
+        """The hypothesis's matched features, a lidar landmark counting ``landmark_weight`` (what the
+        claim checks weigh: corners are many and alike)."""
+        lidar = self.options.landmark_matching().classes
+        w = self.options.landmark_weight
+        return sum(
+            w if f.cls in lidar else 1.0
+            for f, m in zip(self.features, hypothesis.matches, strict=False)
+            if m is not None
+        )
+
     def places(self) -> list[int]:
         """Indices of the listed hypotheses, one per place (``distinct_places``)."""
         return distinct_places(*self._storeys_poses())
@@ -179,7 +192,7 @@ def check_classes(log: DetectionLog, cmap: ClassMap, site: Site) -> None:
     unknown: set[str] = set()
     for rec in log.detections:
         unknown.update(o.cls for o in rec.objects if cmap.canonical(o.cls) not in known)
-    unknown.update(f.cls for f in log.features if cmap.canonical(f.cls) not in known)
+    unknown.update(f.cls for f in log.features if f.source != LIDAR and cmap.canonical(f.cls) not in known)
     if unknown:
         names = ", ".join(repr(n) for n in sorted(unknown))
         raise InputError(
@@ -223,16 +236,23 @@ class _Candidates:
 
 
 def _storey_candidates(
-    model: StoreyModel, cmap: ClassMap, s_xy: np.ndarray, s_cls: Sequence[str], params: MatchParams
+    model: StoreyModel,
+    cmap: ClassMap,
+    s_xy: np.ndarray,
+    s_cls: Sequence[str],
+    params: MatchParams,
+    s_travel: np.ndarray | None = None,
 ) -> tuple[BimIndex, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     index = BimIndex(
         np.array([[f.x, f.y] for f in model.features]), [cmap.canonical(f.category) for f in model.features]
     )
     matcher = Matcher(index, params)
-    state = matcher.match(s_xy, s_cls)
+    state = matcher.match(s_xy, s_cls, s_travel)
     rows = state.matches(params)
     assign, n_out, cost = state.assign[rows], state.n_out[rows], state.cost[rows]
-    keep = drop_dominated(assign, n_out)  # rule 1 of initcli.core.hypotheses
+    # rule 1 over the camera's outliers (a landmark sub-match has the pose of its match: rule 3 merges
+    # them; over every landmark outlier pattern rule 1 costs patterns x matches)
+    keep = drop_dominated(assign, n_out)
     assign, n_out, cost = assign[keep], n_out[keep], cost[keep]
     if len(assign):
         inlier = assign != OUTLIER
@@ -302,7 +322,7 @@ def match_log(
     check_classes(log, cmap, site)
     warnings = list(log.warnings)
     notes: list[str] = []
-    features, odom_pose, odom_path = _confirmed_features(log, opts, cmap, sightings, warnings, notes)
+    features, odom_pose, odom_path = _confirmed_features(log, site, opts, cmap, sightings, warnings, notes)
     if not log.detections and not log.features:
         notes.append("the log has no detections records")
     storey_names = _storeys_searched(site, opts)
@@ -332,50 +352,100 @@ def match_log(
         return report
 
     # Step 3-4: Algorithm 1 on every storey, then rule 1 (sub-matches) per storey; with no match,
-    # one more outlier at a time up to the outlier_share budget.
+    # one more outlier at a time up to the outlier_share budget. With lidar landmarks: the mixed
+    # sequence first (the camera's max_outliers); when it has no match, the camera's features alone
+    # as without landmarks (landmarks of geometry the BIM lacks never cost a camera match).
+    params = opts.match_params()
+    camera = [f for f in features if not params.is_landmark(f.cls)]
+    if len(camera) < len(features):
+        found = _search(report, site, cmap, storey_names, features, log, opts, escalate=False)
+        if found is not None and found.storey:
+            return report
+        if found is None:  # the landmarks' search overflowed: the camera's alone decide
+            report.overflow, report.n_hypotheses = False, 0
+            report.verdict, report.exit_code = verdict_text(0), EXIT_NO_MATCH
+        if len(camera) < opts.min_inliers:
+            return report
+        notes.append(
+            f"no match with the {len(features) - len(camera)} lidar landmark(s); matched the camera's "
+            f"{len(camera)} feature(s) alone"
+        )
+        report.features = features = _renumbered(camera)
+    _search(report, site, cmap, storey_names, features, log, opts, escalate=True)
+    return report
+
+
+def _renumbered(features: Sequence[ConfirmedFeature]) -> list[ConfirmedFeature]:
+    return [replace(f, index=i) for i, f in enumerate(features)]
+
+
+def _search(
+    report: MatchReport,
+    site: Site,
+    cmap: ClassMap,
+    storey_names: list[str],
+    features: list[ConfirmedFeature],
+    log: DetectionLog,
+    opts: MatchOptions,
+    escalate: bool,
+) -> _Candidates | None:
+    """Steps 3-7 on ``features`` into ``report`` (the camera's outlier budget grown when ``escalate``);
+    the candidates, or None when matching stopped at the partial-match cap."""
     s_xy = np.array([[f.x, f.y] for f in features]).reshape(-1, 2)
     s_cls = [f.cls for f in features]
+    s_travel = travel_at(log.odom, [f.t_confirmed for f in features])
     params = opts.match_params()
-    budget = opts.outlier_budget(len(features))
+    budget = opts.outlier_budget(sum(not params.is_landmark(c) for c in s_cls)) if escalate else 0
     while True:
         try:
-            cand = _candidates(site, cmap, storey_names, s_xy, s_cls, params)
+            cand = _candidates(site, cmap, storey_names, s_xy, s_cls, params, s_travel)
         except MatchOverflow as exc:
-            warnings.append(f"matching stopped: {exc}; the detected pattern is far too ambiguous")
+            report.warnings.append(f"matching stopped: {exc}; the detected pattern is far too ambiguous")
             report.verdict = verdict_text(max(2, params.max_partials))
             report.exit_code = EXIT_AMBIGUOUS
             report.n_hypotheses = params.max_partials
             report.overflow = True
-            return report
+            return None
         if cand.storey or params.max_outliers >= budget:
             break
         params = replace(params, max_outliers=params.max_outliers + 1, max_partials=ESCALATED_PARTIALS)
     if params.max_outliers > opts.max_outliers and cand.storey:
-        notes.append(
+        report.notes.append(
             f"no match tolerates {opts.max_outliers} outlier(s); matched with {params.max_outliers} "
             f"(outlier_share {opts.outlier_share:g} of {len(features)} features)"
         )
     report.outliers_allowed = params.max_outliers
     if cand.storey:
         _rank(report, site, cand, s_xy)
-    return report
+    return cand
 
 
 def _confirmed_features(
     log: DetectionLog,
+    site: Site,
     opts: MatchOptions,
     cmap: ClassMap,
     sightings: Sequence[Sighting] | None,
     warnings: list[str],
     notes: list[str],
 ) -> tuple[list[ConfirmedFeature], Pose2D, np.ndarray]:
-    """Steps 1-2: Eq. 1-2 and the detection filter (within the drift window when one is set); the
-    robot's odom pose now and its odom path."""
+    """Steps 1-2: Eq. 1-2 and the detection filter, the lidar landmarks joined in
+    (:mod:`initcli.match.landmarks`) and all within the drift window when one is set; the robot's
+    odom pose now and its odom path."""
     if sightings is None:
         sightings = sightings_from_log(log, cmap, opts.edge_margin)
-    given = [GivenFeature(f.t, cmap.canonical(f.cls), f.x, f.y) for f in log.features]
+    given = [GivenFeature(f.t, cmap.canonical(f.cls), f.x, f.y) for f in log.features if f.source != LIDAR]
     filtered = filter_detections(sightings, opts.filter_params(), given)
-    features = filtered.features
+    lidar: list[FeatureRecord] = []
+    if opts.landmarks:
+        found = log_landmarks(log, site, notes)
+        lidar = recent_landmarks(found, log.odom, opts.landmark_window, site, cmap)
+        if len(lidar) < len(found):
+            notes.append(
+                f"matched {len(lidar)} of {len(found)} lidar landmark(s): of a category the site has, "
+                f"confirmed in the last {opts.landmark_window:g} m of travel"
+            )
+    features = combined_sequence(filtered.features, lidar, cmap)
     odom_pose, odom_path, more = current_odom(log)
     warnings.extend(more)
     if opts.drift_window is not None and log.odom and len(features) > opts.min_inliers:
@@ -405,12 +475,13 @@ def _candidates(
     s_xy: np.ndarray,
     s_cls: Sequence[str],
     params: MatchParams,
+    s_travel: np.ndarray | None = None,
 ) -> _Candidates:
     """Algorithm 1 and rule 1 on every storey searched (MatchOverflow past the partial-match cap)."""
     cand = _Candidates()
     for name in storey_names:
         model = site.storeys[name]
-        index, assign, n_out, cost, transform = _storey_candidates(model, cmap, s_xy, s_cls, params)
+        index, assign, n_out, cost, transform = _storey_candidates(model, cmap, s_xy, s_cls, params, s_travel)
         cand.indexes[name] = index
         cand.storey.extend([name] * len(assign))
         cand.assign.append(assign)
@@ -430,7 +501,8 @@ def _rank(report: MatchReport, site: Site, cand: _Candidates, s_xy: np.ndarray) 
     transform = np.concatenate(cand.transform)
     storey_ids = np.array([report.storeys.index(s) for s in cand.storey])
     current = transform_poses_batch(transform, odom_pose)  # robot pose in BIM per match (rigid)
-    order = rank_order(n_out, cost)  # rule 2
+    # rule 2: camera outliers first, then the lidar landmarks' (clutter is common: they weigh less)
+    order = rank_order(n_out * (assign.shape[1] + 1) + (assign == OUTLIER).sum(axis=1), cost)
     labels, reps = pose_groups(
         current, storey_ids, order, opts.pose_radius, math.radians(opts.beta)
     )  # rule 3

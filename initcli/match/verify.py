@@ -85,7 +85,7 @@ class StoreyEvidence:
 
     @staticmethod
     def of(storey: StoreyModel, cmap: ClassMap) -> StoreyEvidence:
-        f = storey.features
+        f = storey.camera_features  # what the camera must see (the lidar landmarks are not its)
         walls = np.array([[w.x1, w.y1, w.x2, w.y2] for w in storey.walls], dtype=float).reshape(-1, 4)
         return StoreyEvidence(
             [x.id for x in f],

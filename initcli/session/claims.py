@@ -147,7 +147,7 @@ class ClaimChecks:
         favoured = track_favoured(
             [check.passed for _, check in places_checked],
             [h.n_outliers for h, _ in places_checked],
-            [h.n_inliers for h, _ in places_checked],
+            [int(report.weighted_inliers(h)) for h, _ in places_checked],
             tracks,
             lambda k: self.track(frame, places_checked[k][0], places_checked[k][1], wide=True),
             c,
@@ -181,9 +181,9 @@ class ClaimChecks:
         if not c.enabled:
             return True, None, []
         hypothesis = report.hypotheses[0]
-        inliers = hypothesis.n_inliers
+        inliers = report.weighted_inliers(hypothesis)  # a lidar landmark counts matching.landmark_weight
         if inliers < c.min_claim_inliers:
-            self.note(frame.t, f"unique match on {inliers} features: waiting for {c.min_claim_inliers}")
+            self.note(frame.t, f"unique match on {inliers:g} features: waiting for {c.min_claim_inliers}")
             return False, None, []
         budget = report.options.outlier_budget(len(report.features))
         extra = rival_search(

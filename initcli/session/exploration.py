@@ -101,7 +101,7 @@ class ActiveExploration:
         """A route (odom waypoints) to a viewpoint in front of the BIM feature of the highest-priority
         category (fewest in the BIM) that ``hypothesis`` has not matched yet, nearest along the
         BIM's corridors, not visited before; and its length."""
-        features = self.site.storeys[hypothesis.storey].features
+        features = self.site.storeys[hypothesis.storey].camera_features
         counts: dict[str, int] = {}
         for f in features:
             counts[f.category] = counts.get(f.category, 0) + 1
@@ -146,7 +146,7 @@ class ActiveExploration:
             p = other.transform.apply(where)
             same = [
                 g
-                for g in self.site.storeys[other.storey].features
+                for g in self.site.storeys[other.storey].camera_features
                 if g.category == feature.category
                 and math.hypot(g.x - p[0], g.y - p[1]) < self.settings.discrimination_radius
             ]

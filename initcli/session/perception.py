@@ -17,10 +17,12 @@ from bimtools.site.load import Site
 from initcli.core.classes import ClassMap
 from initcli.core.detection_filter import ConfirmedFeature, DetectionFilter, Sighting
 from initcli.core.geometry import Pose2D
+from initcli.core.landmark_tracks import LandmarkTracker, ScanInput
 from initcli.drivers.base import SensorFrame
 from initcli.io.detection_log import (
     DetectionLog,
     Detections,
+    FeatureRecord,
     HypothesesRecord,
     LogWriter,
     Meta,
@@ -29,6 +31,7 @@ from initcli.io.detection_log import (
     Scan,
     Truth,
 )
+from initcli.match.landmarks import feature_records
 from initcli.match.pipeline import Hypothesis, MatchOptions, MatchReport, match_log
 from initcli.match.sightings import image_sightings
 from initcli.match.verify import PathEvidence
@@ -50,6 +53,7 @@ class Perception:
         options: MatchOptions,
         drift_window: float,
         scan_every: int,
+        landmarks: LandmarkTracker | None = None,
     ) -> None:
         self.meta = meta
         self.cmap = cmap
@@ -68,6 +72,12 @@ class Perception:
         self.path = PathEvidence()  # images and scans along the odometry path, for verification
         self.travel = 0.0  # m of odometry travel so far
         self._last_odom: Pose2D | None = None
+        # the lidar landmarks (None: the site has none, or matching.landmarks is off): every logged
+        # scan goes through the tracker, each landmark it confirms is logged as a feature record
+        # (source lidar), which is what ``bim-init match`` reads back from the log
+        self.landmarks = landmarks
+        self.lidar: list[FeatureRecord] = []
+        self._lidar_matched = 0  # landmarks the last new_features() call had seen
 
     def write(self, record: Record, keep: bool = True) -> None:
         """Write ``record`` to the log file; ``keep`` it in the in-memory log that matching reads."""
@@ -133,6 +143,13 @@ class Perception:
             self.write(Scan(t, s.angle_min, s.angle_increment, s.range_max, ranges), keep=False)
             angles = s.angle_min + s.angle_increment * np.arange(len(ranges))
             self.path.add_scan(frame.odom, self.travel, angles, np.array(ranges, dtype=float), s.range_max)
+            if self.landmarks is not None:
+                scan = ScanInput(
+                    t, frame.odom, np.array(ranges, dtype=float), s.angle_min, s.angle_increment, s.range_max
+                )
+                for rec in feature_records(self.landmarks.add_scan(scan)):
+                    self.write(rec)
+                    self.lidar.append(rec)
         if frame.detections is not None and self.detecting:
             record = Detections(t, frame.odom, tuple(frame.detections))
             self.write(record)
@@ -149,18 +166,25 @@ class Perception:
             )
             self.frames += 1
 
+    @property
+    def n_features(self) -> int:
+        """Confirmed features so far: the camera's and the lidar landmarks."""
+        return len(self.confirmed) + len(self.lidar)
+
     def new_features(self) -> bool:
         """Feed the detection filter (Eq. 3) the sightings since the last call; True if it confirmed
-        more features."""
+        more features or the lidar confirmed more landmarks."""
+        lidar_grew = len(self.lidar) > self._lidar_matched
+        self._lidar_matched = len(self.lidar)
         if self._filtered == len(self.sightings):
-            return False
+            return lidar_grew
         for sighting in self.sightings[self._filtered :]:
             self.filter.add(sighting)
         self._filtered = len(self.sightings)
         confirmed = self.filter.result().features
         grew = len(confirmed) > len(self.confirmed)
         self.confirmed = confirmed
-        return grew
+        return grew or lidar_grew
 
     def match(self, t: float, site: Site) -> MatchReport:
         """Algorithm 1 on the log so far, logged as a ``hypotheses`` record."""

@@ -40,6 +40,7 @@ from initcli.core.verification import TRACK_HYPOTHESES, CameraView
 from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
 from initcli.io.detection_log import Meta, State
+from initcli.match.landmarks import site_tracker
 from initcli.match.pipeline import MatchReport
 from initcli.session.claims import ClaimChecks
 from initcli.session.escapes import Escapes
@@ -77,8 +78,9 @@ class Session:
         self.options = match_options(config, storey)
         meta = Meta(driver.camera, driver.mount, depth_window=driver.depth_window, source=meta_source)
         cmap, m = ClassMap(config.detector.classes), config.matching
+        tracker = site_tracker(site) if self.options.landmarks else None
         self.perception = Perception(
-            meta, log_path, cmap, self.options, m.drift_window, config.lidar.log_every
+            meta, log_path, cmap, self.options, m.drift_window, config.lidar.log_every, tracker
         )
         self.side = followed_side(config)
         self.follow = wall_follow_params(config)
@@ -291,12 +293,12 @@ class Session:
             if undecided and self.perception.travel - self.decided_at >= self.config.matching.redecide:
                 return self._decide(frame)
             return False
-        confirmed = self.perception.confirmed
+        features = self.perception.n_features
         self.last_feature_t = frame.t
         self.looks.new_feature(self.perception.travel)
         self.exploration.fruitless = 0
-        self.result.features_detected = len(confirmed)
-        if len(confirmed) < self.options.min_inliers:
+        self.result.features_detected = features
+        if features < self.options.min_inliers:
             if self.state == "recovery":
                 self._set_state(frame.t, "explore", why="new feature")
             return False
@@ -378,7 +380,7 @@ class Session:
                 if self.fine_failures
                 else ""
             )
-            features = len(self.perception.confirmed)
+            features = self.perception.n_features
             self._fail(
                 frame,
                 f"moved {limits.max_distance:g} m without a unique match ({features} features, "

@@ -142,7 +142,7 @@ def _as_built(
     """The storey as built (from its own generator, so that the starts are the same at every
     as-built setting) and the material stacks placed in it (from ``rng``)."""
     cmap = ClassMap(config.detector.classes)
-    design = sim_features_from_bim(model.features, cmap)
+    design = sim_features_from_bim(model.camera_features, cmap)  # the camera's; the lidar sees walls
     doors = door_ids(model.features)
     built = derive_as_built(
         model.obstacles,

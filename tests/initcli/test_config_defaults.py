@@ -36,6 +36,12 @@ SITE_KEYS = {
     "max_depth": ("matching", "max_depth"),
     "edge_margin": ("matching", "edge_margin"),
     "drift_window": ("matching", "drift_window"),  # the session's retry window (default 50 m, 0: off)
+    "landmarks": ("matching", "landmarks"),
+    "landmark_alpha": ("matching", "landmark_alpha"),
+    "landmark_drift": ("matching", "landmark_drift"),
+    "landmark_window": ("matching", "landmark_window"),
+    "landmark_weight": ("matching", "landmark_weight"),
+    "landmark_outlier_share": ("matching", "landmark_outlier_share"),
 }
 # Options of ``bim-init match`` that are about input/output, not matching.
 # How a BAG is read (bag2log's options, initcli/cli/bag_options.py): not match settings.

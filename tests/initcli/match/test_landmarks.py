@@ -1,0 +1,150 @@
+"""initcli.match.landmarks: a log's lidar landmarks (its records, or found in its scans by the tracker
+the session runs) and Algorithm 1 on them, with the camera seeing nothing."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+from shapely.geometry import Polygon
+
+from bimtools.extract.landmarks import storey_landmarks
+from bimtools.site.load import Site, StoreyModel
+from bimtools.site.manifest import SiteManifest
+from bimtools.site.records import LIDAR, Feature
+from initcli.core.classes import ClassMap
+from initcli.core.geometry import Pose2D
+from initcli.core.landmark_tracks import LandmarkTracker, ScanInput
+from initcli.core.scan_landmarks import ScanLandmarkParams
+from initcli.drivers.base import LaserScan, SensorFrame
+from initcli.io.detection_log import DetectionLog, FeatureRecord, Meta, Odom, Record, Scan, read_log
+from initcli.match.landmarks import feature_records, log_landmarks, site_tracker, travel_at
+from initcli.match.pipeline import MatchOptions, match_log
+from initcli.session.perception import Perception
+from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
+from tests.landmark_worlds import RANGE_MAX, SETTINGS, walled
+
+# A staircase-shaped floor: corners in no symmetric pattern.
+WORLD = walled(Polygon([(0, 0), (10, 0), (10, 3), (7, 3), (7, 6), (3, 6), (3, 9), (0, 9)]))
+START = Pose2D(1.0, 1.0, 0.0)  # the odom frame's origin in the BIM frame
+ROUTE = [(1.0, 1.0), (9.0, 1.5), (5.0, 2.0), (5.0, 5.0), (1.5, 5.0), (1.5, 8.0)]
+
+
+def _site(tmp_path: Path, landmarks: bool = True) -> Site:
+    rows = storey_landmarks(WORLD.plan.walls, SETTINGS, "L", 0.0, WORLD.free) if landmarks else []
+    manifest = SiteManifest(
+        "w.ifc", "", "IFC4", "", "m", 1.0, 1.0, 0.05, landmarks=SETTINGS if landmarks else None
+    )
+    return Site(tmp_path, {"L": StoreyModel("L", 0.0, rows)}, manifest)
+
+
+def _scans(seed: int = 0, step: float = 0.25) -> tuple[list[ScanInput], Pose2D]:
+    rng = np.random.default_rng(seed)
+    out, t, pose = [], 0.0, START
+    for (x0, y0), (x1, y1) in zip(ROUTE, ROUTE[1:], strict=False):
+        yaw = math.atan2(y1 - y0, x1 - x0)
+        n = max(1, int(math.hypot(x1 - x0, y1 - y0) / step))
+        for k in range(n):
+            pose = Pose2D(x0 + (x1 - x0) * k / n, y0 + (y1 - y0) * k / n, yaw)
+            r, a0, inc = WORLD.scan(pose.x, pose.y, pose.yaw, rng)
+            out.append(ScanInput(t, START.inverse().compose(pose), np.round(r, 3), a0, inc, RANGE_MAX))
+            t += 0.5
+    return out, pose
+
+
+def _log(scans: list[ScanInput], extra: list[Record] = ()) -> DetectionLog:
+    records: list[Record] = []
+    for s in scans:
+        records.append(Odom(s.t, s.pose.x, s.pose.y, s.pose.yaw))
+        records.append(Scan(s.t, s.angle_min, s.angle_increment, s.range_max, tuple(s.ranges.tolist())))
+    records += list(extra)
+    records.sort(key=lambda r: r.t)  # type: ignore[union-attr]
+    return DetectionLog(
+        Path("w.jsonl"), Meta(DEFAULT_CAMERA, DEFAULT_MOUNT), records, list(range(len(records)))
+    )
+
+
+def test_scans_replay_to_the_landmarks_the_session_logs(tmp_path) -> None:
+    site = _site(tmp_path)
+    scans, _ = _scans()
+    tracker = LandmarkTracker(ScanLandmarkParams.from_rules(SETTINGS))
+    online = feature_records([f for s in scans for f in tracker.add_scan(s)])  # the session's way
+    notes: list[str] = []
+    offline = log_landmarks(_log(scans), site, notes)
+    assert online and offline == online
+    assert all(r.source == LIDAR for r in offline) and "found in the log's" in notes[0]
+    # a log that holds the records is read as it is (its scans are not searched again)
+    moved = [type(r)(r.t, r.cls, r.x + 1.0, r.y, r.source) for r in online]
+    assert log_landmarks(_log(scans, moved), site, []) == moved
+
+
+def test_the_camera_off_the_lidar_landmarks_place_the_robot(tmp_path) -> None:
+    site = _site(tmp_path)
+    scans, end = _scans()
+    report = match_log(_log(scans), site, MatchOptions(), ClassMap())
+    assert report.verdict == "unique match", (report.verdict, report.notes)
+    best = report.hypotheses[0]
+    assert best.pose.distance_to(end) < 0.1 and best.pose.yaw_error(end) < math.radians(2)
+    assert best.n_inliers >= MatchOptions().min_inliers / MatchOptions().landmark_weight
+    off = match_log(_log(scans), site, MatchOptions(landmarks=False), ClassMap())
+    assert off.hypotheses == [] and off.verdict == "no consistent match"
+
+
+def test_a_site_without_landmarks_leaves_the_logs_out_with_a_note(tmp_path) -> None:
+    scans, _ = _scans()
+    tracker = LandmarkTracker(ScanLandmarkParams.from_rules(SETTINGS))
+    records = feature_records([f for s in scans for f in tracker.add_scan(s)])
+    notes: list[str] = []
+    assert log_landmarks(_log(scans, records), _site(tmp_path, landmarks=False), notes) == []
+    assert "the site has no landmarks" in notes[0]
+
+
+def test_travel_at_sums_the_odometry_path() -> None:
+    odom = [Odom(0.0, 0.0, 0.0, 0.0), Odom(1.0, 3.0, 4.0, 0.0), Odom(2.0, 3.0, 5.0, 0.0)]
+    assert travel_at(odom, [-1.0, 0.5, 1.0, 9.0]).tolist() == [0.0, 0.0, 5.0, 6.0]
+
+
+def test_the_sessions_log_replays_to_its_landmarks_and_verdict(tmp_path) -> None:
+    site = _site(tmp_path)
+    scans, _ = _scans()
+    options = MatchOptions()
+    path = tmp_path / "session.jsonl"
+    perception = Perception(
+        Meta(DEFAULT_CAMERA, DEFAULT_MOUNT), path, ClassMap(), options, 0.0, 1, site_tracker(site)
+    )
+    for step, s in enumerate(scans):
+        scan = LaserScan(s.angle_min, s.angle_increment, s.range_max, s.ranges)
+        perception.record_frame(SensorFrame(s.t, s.pose, scan, []), step)
+    assert perception.new_features() and perception.n_features == len(perception.lidar) > 0
+    online = perception.match(scans[-1].t, site)
+    perception.close()
+    log = read_log(path)
+    assert [f for f in log.features if f.source == LIDAR] == perception.lidar
+    offline = match_log(log, site, options, ClassMap())
+    assert online.verdict == offline.verdict == "unique match"
+    assert offline.hypotheses[0].matches == online.hypotheses[0].matches
+
+
+def test_landmarks_the_bim_lacks_never_cost_the_camera_its_match(tmp_path) -> None:
+    site = _site(tmp_path)
+    doors = [(0.5, 0.0), (4.0, 0.0), (9.0, 0.0), (10.0, 2.0), (5.0, 6.0)]
+    site.storeys["L"].features += [
+        Feature(f"d{i}", "Door", x, y, 0.0, 1.0, 0.9, 2.1, "L") for i, (x, y) in enumerate(doors)
+    ]
+    to_odom = START.inverse()
+    records: list[Record] = [Odom(0.0, 0.0, 0.0, 0.0)]
+    for i, (x, y) in enumerate(doors):
+        p = to_odom.apply(np.array([[x, y]]))[0]
+        records.append(FeatureRecord(1.0 + i, "Door", float(p[0]), float(p[1])))
+    rng = np.random.default_rng(5)
+    for k, (x, y) in enumerate(rng.uniform(20, 60, size=(8, 2))):  # geometry the BIM lacks
+        records.append(FeatureRecord(10.0 + k, "ConcaveCorner", float(x), float(y), LIDAR))
+    log = DetectionLog(
+        Path("w.jsonl"), Meta(DEFAULT_CAMERA, DEFAULT_MOUNT), records, list(range(len(records)))
+    )
+    report = match_log(log, site, MatchOptions(), ClassMap())
+    assert report.verdict == "unique match", report.notes
+    assert any("matched the camera's 5 feature(s) alone" in n for n in report.notes)
+    assert report.hypotheses[0].pose.distance_to(START) < 0.05
+    assert [f.cls for f in report.features] == ["door"] * 5
