@@ -21,7 +21,8 @@ from typing import Any
 import ifcopenshell
 
 from bimtools.samples.ifc_writer import write_model
-from bimtools.samples.layouts import PLANS, plan, truth_document
+from bimtools.samples.layouts import truth_document
+from bimtools.samples.plans import PLANS, plan
 from bimtools.site.records import Feature
 
 MODELS: tuple[str, ...] = tuple(PLANS)

@@ -57,6 +57,7 @@ from bimtools.samples.layouts import (
     StairSpec,
     WallPiece,
     host_wall,
+    round_um,
     wall_pieces,
 )
 
@@ -78,10 +79,6 @@ DOOR_TYPES: dict[str, tuple[str, str]] = {
 }
 
 
-def _r(value: float) -> float:
-    return round(value, 6) + 0.0
-
-
 @dataclass(frozen=True)
 class Frame:
     """A placement in the storey frame: origin and an axis-aligned local X direction about +Z."""
@@ -97,11 +94,11 @@ class Frame:
         ox, oy = self.x - parent.x, self.y - parent.y
         c, s = parent.dx, parent.dy
         return Frame(
-            x=_r(c * ox + s * oy),
-            y=_r(-s * ox + c * oy),
-            z=_r(self.z - parent.z),
-            dx=_r(c * self.dx + s * self.dy),
-            dy=_r(-s * self.dx + c * self.dy),
+            x=round_um(c * ox + s * oy),
+            y=round_um(-s * ox + c * oy),
+            z=round_um(self.z - parent.z),
+            dx=round_um(c * self.dx + s * self.dy),
+            dy=round_um(-s * self.dx + c * self.dy),
         )
 
 
@@ -223,7 +220,7 @@ class _Writer:
 
     def _create_wall(self, index: int, piece: WallPiece) -> Entity:
         half = WALL_THICKNESS / 2
-        length = _r(piece.length + WALL_THICKNESS)
+        length = round_um(piece.length + WALL_THICKNESS)
         wall = ifcopenshell.api.root.create_entity(
             self.model, ifc_class="IfcWall", name=f"Wall {index:03d}", predefined_type="SOLIDWALL"
         )
@@ -257,7 +254,7 @@ class _Writer:
         )
         api.feature.add_feature(self.model, feature=opening, element=wall)
         self._place(opening, frame, wall)
-        depth = _r(WALL_THICKNESS + OPENING_EXTRA_DEPTH)
+        depth = round_um(WALL_THICKNESS + OPENING_EXTRA_DEPTH)
         self._assign_body(opening, self._box(spec.width, depth, spec.height))
         return opening
 
@@ -309,7 +306,7 @@ class _Writer:
         self._place(flight, frame, stair)
         flight.NumberOfRisers = spec.risers
         flight.NumberOfTreads = spec.risers
-        flight.RiserHeight = _r(spec.riser_height)
+        flight.RiserHeight = round_um(spec.riser_height)
         flight.TreadLength = spec.going
         self._assign_body(flight, self._stepped_solid(spec))
         return stair
@@ -368,14 +365,17 @@ class _Writer:
         rise, going = spec.riser_height, spec.going
         points = [(0.0, 0.0)]
         for i in range(spec.risers):
-            points += [(_r(i * going), _r((i + 1) * rise)), (_r((i + 1) * going), _r((i + 1) * rise))]
+            points += [
+                (round_um(i * going), round_um((i + 1) * rise)),
+                (round_um((i + 1) * going), round_um((i + 1) * rise)),
+            ]
         points += [(spec.run, 0.0), (0.0, 0.0)]
         point_list = self.model.createIfcCartesianPointList2D(points)
         curve = self.model.createIfcIndexedPolyCurve(point_list, None, False)
         profile = self.model.createIfcArbitraryClosedProfileDef("AREA", f"{spec.name} side profile", curve)
         # Profile X = climb direction, profile Y = up; extrude along -Y of the flight by its width.
         position = self.model.createIfcAxis2Placement3D(
-            self.model.createIfcCartesianPoint((0.0, _r(spec.width / 2), 0.0)),
+            self.model.createIfcCartesianPoint((0.0, round_um(spec.width / 2), 0.0)),
             self.model.createIfcDirection((0.0, -1.0, 0.0)),
             self.model.createIfcDirection((1.0, 0.0, 0.0)),
         )

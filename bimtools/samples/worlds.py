@@ -21,17 +21,8 @@ import dataclasses
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
-from bimtools.samples.layouts import (
-    Cell,
-    DoorSpec,
-    FloorPlan,
-    LiftSpec,
-    StairSpec,
-    _DoorMaker,
-    _r,
-    _row,
-    plan,
-)
+from bimtools.samples.layouts import Cell, DoorSpec, FloorPlan, LiftSpec, StairSpec, round_um
+from bimtools.samples.plans import DoorMaker, cell_row, plan
 
 __all__ = [
     "AS_BUILT_CHANGES",
@@ -47,7 +38,7 @@ __all__ = [
 ]
 
 
-def _open(d: _DoorMaker, tags: Iterable[str]) -> tuple[tuple[DoorSpec, ...], tuple[DoorSpec, ...]]:
+def _open(d: DoorMaker, tags: Iterable[str]) -> tuple[tuple[DoorSpec, ...], tuple[DoorSpec, ...]]:
     """The maker's doors with ``tags`` taken out as openings no door fills: (doors, openings)."""
     wanted = set(tags)
     doors = tuple(x for x in d.doors if x.tag not in wanted)
@@ -61,7 +52,7 @@ def crane_hall() -> FloorPlan:
     """A 60 x 18 m crane hall (y 6-24) between a row of workshops and stores (south, y 0-6) and
     offices, a lift and a gap in the north façade (y 24-30); gates open to the outside."""
     cells = [Cell("Hall", "corridor", 0.0, 6.0, 60.0, 24.0, "Crane hall")]
-    cells += _row(
+    cells += cell_row(
         "room",
         ["Workshop 1", "Workshop 2", "Store 1", "Workshop 3", "Store 2"],
         [0.0, 11.0, 20.0, 27.5, 38.0, 47.0],
@@ -70,11 +61,11 @@ def crane_hall() -> FloorPlan:
         "Room",
     )
     cells += [Cell("Stair 1", "stair_enclosure", 47.0, 0.0, 60.0, 6.0, "Staircase 1")]
-    cells += _row("room", ["Office 1", "Office 2"], [0.0, 9.0, 21.5], 24.0, 30.0, "Office")
+    cells += cell_row("room", ["Office 1", "Office 2"], [0.0, 9.0, 21.5], 24.0, 30.0, "Office")
     cells += [Cell("Lift 1", "lift_shaft", 21.5, 24.0, 24.0, 26.5, "Lift shaft 1")]
     # x 24-33 of the north façade is the hall's own wall (the north gate), then two more offices
-    cells += _row("room", ["Office 3", "Office 4"], [33.0, 46.0, 60.0], 24.0, 30.0, "Office")
-    d = _DoorMaker(cells)
+    cells += cell_row("room", ["Office 3", "Office 4"], [33.0, 46.0, 60.0], 24.0, 30.0, "Office")
+    d = DoorMaker(cells)
     south = {"Workshop 1": 4.0, "Workshop 2": 16.5, "Store 1": 22.0, "Workshop 3": 31.0, "Store 2": 44.0}
     for name, at in south.items():
         d.into(name, "N", at, "room", f"{name} door")
@@ -112,7 +103,7 @@ def open_hall() -> FloorPlan:
     gates standing open in both end façades. Its whole free space reaches the outside; only the
     floor slab bounds it (bim-extract before slabs: no free space at all)."""
     cells = [Cell("Hall", "corridor", 0.0, 0.0, 48.0, 16.0, "Assembly hall")]
-    d = _DoorMaker(cells)
+    d = DoorMaker(cells)
     for k, at in enumerate((4.0, 13.5, 21.0, 33.0)):
         d.exit("Hall", "S", at, f"South door {k + 1}")
     for k, at in enumerate((6.0, 17.0, 26.5, 31.0, 42.5)):
@@ -147,7 +138,7 @@ def house(bedroom_door: bool = True) -> FloorPlan:
     """A 12 x 10 m house: the hallway x 5-7 runs north from the entrance; the bedroom (x 7-12,
     y 0-6: 5 x 6 m) east of it; ``bedroom_door`` False leaves its doorway open."""
     cells = _house_cells()
-    d = _DoorMaker(cells)
+    d = DoorMaker(cells)
     d.into("Living", "E", 2.0, "room", "Living room door")
     d.into("Kitchen", "E", 8.5, "room", "Kitchen door")
     bedroom = d.into("Bedroom", "W", 4.5, "room", "Bedroom door")
@@ -204,7 +195,7 @@ def as_built_plan(
         if door.tag in shifted:
             s = shifted[door.tag]
             door = dataclasses.replace(
-                door, x=_r(door.x + s * door.along[0]), y=_r(door.y + s * door.along[1])
+                door, x=round_um(door.x + s * door.along[0]), y=round_um(door.y + s * door.along[1])
             )
         (openings if door.tag in gone else doors).append(door)
     return dataclasses.replace(

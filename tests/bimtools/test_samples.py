@@ -19,7 +19,7 @@ from shapely.geometry import Point, Polygon
 from shapely.ops import unary_union
 
 from bimtools import samples
-from bimtools.samples import layouts
+from bimtools.samples import layouts, plans
 from bimtools.samples.__main__ import main
 from tests.helpers import SAMPLES
 
@@ -62,7 +62,7 @@ def test_models_are_the_three_paper_environments() -> None:
 
 @pytest.mark.parametrize("name", samples.MODELS)
 def test_plans_are_consistent(name: str) -> None:
-    assert layouts.check_plan(layouts.plan(name)) == []
+    assert layouts.check_plan(plans.plan(name)) == []
 
 
 @pytest.mark.parametrize("name", samples.MODELS)

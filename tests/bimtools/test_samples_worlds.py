@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from bimtools.extract.pipeline import extract_site
-from bimtools.samples.layouts import check_plan, plan
+from bimtools.samples.layouts import check_plan
+from bimtools.samples.plans import plan
 from bimtools.samples.worlds import AS_BUILT_CHANGES, WORLDS, sample_as_built, world, write_plan
 from bimtools.site.records import FREE
 
