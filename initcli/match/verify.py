@@ -20,12 +20,12 @@ from initcli.core.classes import ClassMap
 from initcli.core.detection_filter import Sighting
 from initcli.core.geometry import Pose2D
 from initcli.core.particle_filter import LikelihoodField, likelihood_field
+from initcli.core.scan_fit import ScanSample
 from initcli.core.verification import (
     TRACK_HYPOTHESES,
     CameraView,
     FreeSpace,
     PathTrack,
-    ScanSample,
     Verification,
     judge,
     track_favoured,

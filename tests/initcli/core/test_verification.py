@@ -11,12 +11,11 @@ from bimtools.site.records import FREE, OCCUPIED, OccupancyGrid
 from initcli.core.geometry import Pose2D, poses_to_array
 from initcli.core.particle_filter import LikelihoodField
 from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.core.scan_fit import ScanSample, best_scan_alignment
 from initcli.core.verification import (
     CameraView,
-    ScanSample,
     Verification,
     VerificationParams,
-    best_scan_alignment,
     explained,
     frames_in_view,
     misses_reject,
