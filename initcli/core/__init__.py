@@ -14,7 +14,7 @@ One concept per module; equation numbers of the paper are cited next to the code
 - :mod:`~initcli.core.pose` -- trilateration (Eq. 10), heading (Eq. 11-13), rigid Kabsch.
 - :mod:`~initcli.core.rectify` -- BIM-based rectification (Eq. 17).
 - :mod:`~initcli.core.verification` -- a hypothesis checked against evidence Algorithm 1 does not use.
-- :mod:`~initcli.core.scan_fit` -- the lidar scans' fit of a pose to the BIM walls, and its best small correction.
+- :mod:`~initcli.core.scan_fit` -- the lidar scans' fit of a pose to the BIM walls, and its best correction.
 - :mod:`~initcli.core.particle_filter` -- particle-filter fine tuning (Eq. 18) on the BIM map.
 - :mod:`~initcli.core.global_localisation` -- AMCL global localisation (the ``amcl`` baseline).
 - :mod:`~initcli.core.marker_pose` -- the robot pose from one ArUco tag (the marker baseline).

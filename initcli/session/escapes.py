@@ -35,7 +35,7 @@ from initcli.core.laps import LapWatch
 from initcli.core.wall_following import ScanView, WallFollowParams
 from initcli.drivers.base import SensorFrame
 from initcli.session.result import SessionResult, ShutIn
-from initcli.settings_session import FrontierSettings, LapSettings, LoopSettings, ShuttleSettings
+from initcli.settings_exploration import FrontierSettings, LapSettings, LoopSettings, ShuttleSettings
 
 __all__ = ["Escapes", "LAP_ROUTE_PASS", "LAP_ROUTE_SPACING", "open_point"]
 

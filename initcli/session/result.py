@@ -14,8 +14,18 @@ from initcli.core.geometry import Pose2D, wrap_angle
 
 if TYPE_CHECKING:
     from initcli.match.pipeline import Hypothesis
+    from initcli.settings_session import LimitsSection
 
-__all__ = ["CANNOT_LEAVE", "CoarseClaim", "MatchStep", "SHUT_IN", "SHUT_IN_ADVICE", "SessionResult", "ShutIn"]
+__all__ = [
+    "CANNOT_LEAVE",
+    "CoarseClaim",
+    "MatchStep",
+    "SHUT_IN",
+    "SHUT_IN_ADVICE",
+    "SessionResult",
+    "ShutIn",
+    "limit_reason",
+]
 
 # The reason of a simulated session refused at 0 m (sim.refuse_enclosed): the simulator knows its
 # start lies in a space closed off from where the features face.
@@ -182,3 +192,31 @@ class SessionResult:
                 trans[key] = round(math.hypot(pose.x - truth.x, pose.y - truth.y), 4)
                 rot[key] = round(math.degrees(abs(float(wrap_angle(pose.yaw - truth.yaw)))), 3)
         return trans, rot
+
+
+def limit_reason(
+    limits: LimitsSection,
+    travel: float,
+    t: float,
+    features: int,
+    hypotheses: int,
+    storeys: Sequence[str] = (),
+    earlier_fine_failure: str = "",
+) -> str | None:
+    """Why a session that drove ``travel`` m by its odometry (what the robot knows, not the true
+    path) until session time ``t`` s is over its ``limits``, or None while it is within them."""
+    max_distance, max_time = limits.max_distance, limits.max_time
+    if travel > max_distance:
+        left = f" on storeys {', '.join(storeys)}: the storey is not resolved" if len(storeys) > 1 else ""
+        earlier = (
+            f"; the fine stage of an earlier one failed: {earlier_fine_failure}"
+            if earlier_fine_failure
+            else ""
+        )
+        return (
+            f"moved {max_distance:g} m without a unique match ({features} features, "
+            f"{hypotheses} hypotheses{left}){earlier}"
+        )
+    if t > max_time:
+        return f"no unique match within {max_time:g} s"
+    return None

@@ -48,7 +48,7 @@ from initcli.session.exploration import ActiveExploration
 from initcli.session.fine_tuning import FineLost, FineTuning, FineTuningHooks, matched_pairs
 from initcli.session.looks import Looks
 from initcli.session.perception import Perception
-from initcli.session.result import SHUT_IN, MatchStep, SessionResult
+from initcli.session.result import SHUT_IN, MatchStep, SessionResult, limit_reason
 
 __all__ = ["Observer", "Session"]
 
@@ -127,18 +127,10 @@ class Session:
         self.result.odom_path.append(frame.odom.as_tuple())
 
     def _emit(self, frame: SensorFrame, extra: dict | None = None) -> None:
-        if self.observer is None:
-            return
-        self.observer(
-            {
-                "t": frame.t,
-                "state": self.state,
-                "distance": self.driver.distance,
-                "features": len(self.perception.confirmed),
-                "hypotheses": self.hypotheses,
-                **(extra or {}),
-            }
-        )
+        if self.observer is not None:
+            where = {"t": frame.t, "state": self.state, "distance": self.driver.distance}
+            seen = {"features": len(self.perception.confirmed), "hypotheses": self.hypotheses}
+            self.observer({**where, **seen, **(extra or {})})
 
     # -- the loop ------------------------------------------------------------------------------------
 
@@ -370,27 +362,13 @@ class Session:
 
     def _out_of_limits(self, frame: SensorFrame) -> bool:
         """Fail once the session drove or took longer than its limits allow."""
-        limits = self.config.limits
-        # Measured on what the robot knows (its odometry), as on a real robot: not the true path.
-        if self.perception.travel > limits.max_distance:
-            storeys = self.storeys_left
-            left = f" on storeys {', '.join(storeys)}: the storey is not resolved" if len(storeys) > 1 else ""
-            earlier = (
-                f"; the fine stage of an earlier one failed: {self.fine_failed_why}"
-                if self.fine_failures
-                else ""
-            )
-            features = self.perception.n_features
-            self._fail(
-                frame,
-                f"moved {limits.max_distance:g} m without a unique match ({features} features, "
-                f"{self.hypotheses} hypotheses{left}){earlier}",
-            )
-            return True
-        if frame.t > limits.max_time:
-            self._fail(frame, f"no unique match within {limits.max_time:g} s")
-            return True
-        return False
+        p, earlier = self.perception, self.fine_failed_why if self.fine_failures else ""
+        why = limit_reason(
+            self.config.limits, p.travel, frame.t, p.n_features, self.hypotheses, self.storeys_left, earlier
+        )
+        if why is not None:
+            self._fail(frame, why)
+        return why is not None
 
     # -- the end -------------------------------------------------------------------------------------
 

@@ -16,7 +16,7 @@ from initcli.core.wall_following import ScanView, WallFollowParams
 from initcli.drivers.base import LaserScan, SensorFrame
 from initcli.session.escapes import Escapes, open_point
 from initcli.session.result import SessionResult
-from initcli.settings_session import FrontierSettings, LoopSettings, ShuttleSettings
+from initcli.settings_exploration import FrontierSettings, LoopSettings, ShuttleSettings
 
 LOOPS, SHUTTLES, FRONTIER = LoopSettings(), ShuttleSettings(), FrontierSettings()
 ANGLES = np.linspace(-math.pi, math.pi, 360, endpoint=False)

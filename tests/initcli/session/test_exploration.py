@@ -17,7 +17,7 @@ from initcli.core.wall_following import WallFollowParams
 from initcli.drivers.base import SensorFrame
 from initcli.match.pipeline import Hypothesis
 from initcli.session.exploration import ActiveExploration
-from initcli.settings_session import TargetSettings
+from initcli.settings_exploration import TargetSettings
 from tests.helpers import SAMPLES
 
 TARGETS = TargetSettings()  # exploration.targets' defaults
