@@ -55,6 +55,8 @@ __all__ = [
     "EXIT_AMBIGUOUS",
     "EXIT_BAD_INPUT",
     "EXIT_NO_MATCH",
+    "DECIDED_BY_LIDAR",
+    "DECIDED_BY_PAPER",
     "EXIT_UNIQUE",
     "Hypothesis",
     "MatchOptions",
@@ -68,6 +70,8 @@ __all__ = [
 ]
 
 EXIT_UNIQUE = 0
+DECIDED_BY_PAPER = "algorithm 1"  # MatchReport.decided_by: one place by the features alone ...
+DECIDED_BY_LIDAR = "lidar along the path"  # ... or one of several picked by the scans of the path
 EXIT_BAD_INPUT = 2
 EXIT_AMBIGUOUS = 3
 EXIT_NO_MATCH = 4
@@ -123,6 +127,8 @@ class MatchReport:
     site_model: Site | None = field(default=None, repr=False)
     outliers_allowed: int = 0  # the outlier budget the hypotheses were found with (grown: outlier_share)
     overflow: bool = False  # matching stopped at the partial-match cap (far too ambiguous)
+    decided_by: str | None = None  # what made the verdict unique: DECIDED_BY_PAPER or DECIDED_BY_LIDAR
+    paper_verdict: str | None = None  # Algorithm 1's own verdict where the lidar changed it
 
     def _storeys_poses(self) -> tuple[list[str], list[Pose2D], float, float]:
         hs = self.hypotheses
@@ -535,6 +541,7 @@ def _rank(report: MatchReport, site: Site, cand: _Candidates, s_xy: np.ndarray) 
     report.n_hypotheses = len(reps)
     report.verdict = verdict_text(len(reps))
     report.exit_code = EXIT_UNIQUE if len(reps) == 1 else EXIT_AMBIGUOUS
+    report.decided_by = DECIDED_BY_PAPER if len(reps) == 1 else None
     rep_storeys = {cand.storey[h] for h in reps}
     report.storey = next(iter(rep_storeys)) if len(rep_storeys) == 1 else None
 

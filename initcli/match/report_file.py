@@ -35,6 +35,8 @@ def report_to_dict(report: MatchReport, verifications: list[Any] | None = None) 
         "format": RESULT_FORMAT,
         "verdict": report.verdict,
         "exit_code": report.exit_code,
+        "decided_by": report.decided_by,
+        "paper_verdict": report.paper_verdict or report.verdict,
         "n_hypotheses": report.n_hypotheses,
         "storey": report.storey,
         "storeys_searched": list(report.storeys),

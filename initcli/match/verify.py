@@ -19,6 +19,7 @@ from bimtools.site.load import Site, StoreyModel, load_site
 from initcli.core.classes import ClassMap
 from initcli.core.detection_filter import Sighting
 from initcli.core.geometry import Pose2D
+from initcli.core.hypotheses import verdict_text
 from initcli.core.particle_filter import LikelihoodField, likelihood_field
 from initcli.core.scan_fit import ScanSample
 from initcli.core.verification import (
@@ -34,7 +35,14 @@ from initcli.core.verification import (
 )
 from initcli.core.verification_settings import VerificationParams
 from initcli.io.detection_log import DetectionLog, Detections, Odom, Scan, read_log
-from initcli.match.pipeline import MatchReport, site_class_map
+from initcli.match.pipeline import (
+    DECIDED_BY_LIDAR,
+    DECIDED_BY_PAPER,
+    EXIT_NO_MATCH,
+    EXIT_UNIQUE,
+    MatchReport,
+    site_class_map,
+)
 from initcli.match.sightings import sightings_from_log
 
 __all__ = [
@@ -50,6 +58,8 @@ __all__ = [
     "TRACK_KEPT_M",
     "TRACK_STEP_M",
     "check_hypotheses",
+    "lidar_unique",
+    "refuse_unique",
     "path_free_along",
     "path_track",
     "track_transform",
@@ -376,21 +386,59 @@ def check_hypotheses(
     log_path: Path, site_path: Path, report: MatchReport, skip_bad: bool, shown: int
 ) -> list[Verification | None]:
     """Negative evidence, scan fit and the lidar along the path of each hypothesis
-    (initcli.match.verify); with several hypotheses, a note naming the one the lidar along the path
-    favours (a session checks that one as a unique match). ``report`` lists up to
-    ``TRACK_HYPOTHESES`` so that the note does not depend on ``--top``; it is cut to the ``shown``
-    first here, with the checks."""
+    (initcli.match.verify); with several hypotheses, the one the lidar along the path favours,
+    matched on as many features as a session claims on (``min_claim_inliers``), makes the verdict
+    unique (:func:`lidar_unique`), as a session would claim it. ``report`` lists up to
+    ``TRACK_HYPOTHESES`` so that the verdict does not depend on ``--top``; it is cut to the
+    ``shown`` first here, with the checks."""
     site = load_site(site_path)
+    params = VerificationParams()
     checks, favoured = verify_and_favour(
-        read_log(log_path, skip_bad=skip_bad), site, report, site_class_map(site)
+        read_log(log_path, skip_bad=skip_bad), site, report, site_class_map(site), params
     )
-    if favoured is not None:
-        rank = report.hypotheses[favoured].rank
-        hidden = f" (not shown: --top {rank} shows it)" if rank > shown else ""
-        report.notes.append(
-            f"the lidar along the path favours hypothesis {rank}{hidden}:"
-            " a session checks it as a unique match"
-        )
+    if (
+        favoured is not None
+        and report.weighted_inliers(report.hypotheses[favoured]) >= params.min_claim_inliers
+    ):
+        checks = lidar_unique(report, checks, favoured)
+    elif report.decided_by == DECIDED_BY_PAPER and checks and checks[0] is not None and not checks[0].passed:
+        refuse_unique(report, checks[0])
     del report.hypotheses[shown:]
     report.options = replace(report.options, top=shown)
     return checks[:shown]
+
+
+def refuse_unique(report: MatchReport, check: Verification) -> None:
+    """Algorithm 1 left one place, but it fails the checks a session's claim must pass (the lidar
+    does not fit the walls there, or it should have seen doors it did not): no pose is claimed,
+    the verdict is ``no consistent match`` (exit 4), ``paper_verdict`` keeps ``unique match``."""
+    report.paper_verdict = report.verdict
+    report.verdict, report.exit_code = verdict_text(0), EXIT_NO_MATCH
+    report.decided_by = None
+    report.notes.append(
+        "Algorithm 1's unique match fails the checks a session's claim must pass ("
+        + "; ".join(check.reasons)
+        + "): no pose is claimed; drive on and record more"
+    )
+
+
+def lidar_unique(
+    report: MatchReport, checks: list[Verification | None], favoured: int
+) -> list[Verification | None]:
+    """Make ``report`` a unique match on its hypothesis ``favoured``, the one the lidar along the
+    path plainly favours among several (:func:`verify_and_favour`; it passes the checks and
+    outranks every other place): as a session claims it, so the log's verdict is the session's.
+    That hypothesis goes first (ranks renumbered, the others kept below it as the places the lidar
+    ruled out); ``paper_verdict`` keeps Algorithm 1's own. Returns ``checks`` in the new order."""
+    order = [favoured, *(i for i in range(len(report.hypotheses)) if i != favoured)]
+    was = report.hypotheses[favoured].rank
+    report.hypotheses = [replace(report.hypotheses[i], rank=k) for k, i in enumerate(order, 1)]
+    report.paper_verdict = report.verdict
+    report.verdict, report.exit_code = verdict_text(1), EXIT_UNIQUE
+    report.decided_by = DECIDED_BY_LIDAR
+    moved = f" (was {was})" if was != 1 else ""
+    report.notes.append(
+        f"unique by the lidar along the path: Algorithm 1 left {report.paper_verdict}; of these, the"
+        f" scans along the path fit only hypothesis 1{moved}, as a session would claim it"
+    )
+    return [checks[i] for i in order]

@@ -2,20 +2,23 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
 
 import jsonschema
 import pytest
+import yaml
 from typer.testing import CliRunner
 
 from initcli.cli.main import app
 from initcli.io.detection_log import write_log
 from initcli.sim.synthetic_floor import write_site_folder
 from initcli.sim.synthetic_log import SimFeature, make_log, path_from_waypoints
-from tests.helpers import SCHEMAS
+from tests.helpers import SAMPLES, SCHEMAS
 
 RESULT_SCHEMA = json.loads((SCHEMAS / "match_result.schema.json").read_text())
 
@@ -287,3 +290,84 @@ def test_bag_errors_name_the_bag(tmp_path: Path, args: list[str], fragment: str)
     assert_bad_input(result, fragment)
     if args != ["--class-names", "door,1=lift"]:
         assert str(bag) in result.stderr and "bim-init-bag2log-" not in result.stderr
+
+
+@pytest.fixture(scope="module")
+def symmetric_session(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    """A simulated block_a session's log and site (the sample config, the random start of seed
+    103): block_a is point-symmetric, and the doors this session saw fit two places."""
+    tmp_path = tmp_path_factory.mktemp("symmetric")
+    doc = yaml.safe_load((SAMPLES / "block_a.site.yaml").read_text())
+    doc["site"]["path"] = str(SAMPLES / "block_a.ifc")
+    config = tmp_path / "block_a.yaml"
+    config.write_text(yaml.safe_dump(doc))
+    out = tmp_path / "session"
+    result = runner.invoke(
+        app, ["run", "--config", str(config), "--out", str(out), "--seed", "103", "--quiet"]
+    )
+    assert result.exit_code == 0, result.output
+    return out / "session.jsonl", out / "site"
+
+
+def _off(pose: dict, truth: dict) -> tuple[float, float]:
+    turn = math.atan2(math.sin(pose["yaw"] - truth["yaw"]), math.cos(pose["yaw"] - truth["yaw"]))
+    return math.hypot(pose["x"] - truth["x"], pose["y"] - truth["y"]), abs(math.degrees(turn))
+
+
+def test_the_lidar_along_the_path_makes_a_symmetric_match_unique(tmp_path: Path, symmetric_session) -> None:
+    """The session saw doors that two places fit (Algorithm 1 leaves 2 hypotheses), and claimed the
+    one the scans along its path fit. ``match`` on its log says the same: unique (exit 0), decided
+    by the lidar, the right place first; without the scans the log stays ambiguous (exit 3)."""
+    log, site = symmetric_session
+    result = invoke("match", log, "--site", site, "--json")
+    doc = json.loads(result.stdout)
+    jsonschema.validate(doc, RESULT_SCHEMA)
+    assert doc["paper_verdict"].endswith(" hypotheses"), doc["paper_verdict"]  # the case under test
+    assert result.exit_code == 0 and doc["verdict"] == "unique match"
+    assert doc["decided_by"] == "lidar along the path"
+    assert [h["rank"] for h in doc["hypotheses"]] == list(range(1, len(doc["hypotheses"]) + 1))
+    metres, degrees = _off(doc["hypotheses"][0]["pose"], doc["truth"])
+    assert metres < 0.5 and degrees < 5.0
+    assert doc["hypotheses"][0]["verification"]["passed"]
+
+    no_scans = tmp_path / "no_scans.jsonl"
+    no_scans.write_text("".join(line for line in log.open() if '"type":"scan"' not in line))
+    blind = invoke("match", no_scans, "--site", site, "--json")
+    blind_doc = json.loads(blind.stdout)
+    assert blind.exit_code == 3 and blind_doc["decided_by"] is None
+    assert blind_doc["verdict"] == blind_doc["paper_verdict"] == doc["paper_verdict"]
+
+
+def test_a_unique_match_the_lidar_refutes_is_not_claimed(symmetric_session) -> None:
+    """Algorithm 1's one hypothesis is still checked: alone at the true place it stays unique; moved
+    to a place where the scans do not fit the walls, the verdict is no consistent match (exit 4)."""
+    from initcli.core.geometry import Pose2D
+    from initcli.match.pipeline import DECIDED_BY_PAPER, MatchOptions, run_match
+    from initcli.match.verify import check_hypotheses
+
+    log, site = symmetric_session
+
+    def alone(moved: Pose2D):
+        report = run_match(log, site, MatchOptions())
+        h = (
+            report.hypotheses[0]
+            if _off(_pose(report.hypotheses[0].pose), _pose(report.truth))[0] < 1
+            else report.hypotheses[1]
+        )
+        h = dataclasses.replace(h, pose=moved * h.pose, rectified_pose=None, rank=1)
+        report.hypotheses, report.n_hypotheses = [h], 1
+        report.verdict, report.exit_code, report.decided_by = "unique match", 0, DECIDED_BY_PAPER
+        checks = check_hypotheses(log, site, report, False, 1)
+        return report, checks
+
+    kept, checks = alone(Pose2D(0.0, 0.0, 0.0))
+    assert kept.exit_code == 0 and kept.decided_by == DECIDED_BY_PAPER and checks[0].passed
+    refused, checks = alone(Pose2D(0.0, 3.0, 0.0))  # 3 m across the corridor: into the walls
+    assert not checks[0].passed
+    assert refused.exit_code == 4 and refused.verdict == "no consistent match"
+    assert refused.paper_verdict == "unique match" and refused.decided_by is None
+    assert any("fails the checks" in n for n in refused.notes)
+
+
+def _pose(p) -> dict:
+    return {"x": p.x, "y": p.y, "yaw": p.yaw}

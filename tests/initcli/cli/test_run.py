@@ -190,11 +190,11 @@ def test_starts_that_once_failed_now_initialise(tmp_path, name, seed):
     assert summary["error_rotation_deg"]["fine"] < 5.0  # block_b 38 keeps the rectified heading: 3.5 deg
 
 
-def test_a_claim_by_the_lidar_along_the_path_replays_as_a_note_of_match(tmp_path):
+def test_a_claim_by_the_lidar_along_the_path_replays_as_a_unique_match(tmp_path):
     """block_b under construction, seed 56: the session claims one of 11 hypotheses because the
-    scans along its path fit only that one. ``bim-init match --json`` on the session's log keeps
-    Algorithm 1's verdict (several hypotheses, exit 3) and names the same hypothesis in a note,
-    with each hypothesis' ``track_fit``."""
+    scans along its path fit only that one. ``bim-init match --json`` on the session's log says the
+    same: unique (exit 0) by the lidar along the path, Algorithm 1's verdict (several hypotheses)
+    kept in ``paper_verdict``, the claimed hypothesis first, each hypothesis with its ``track_fit``."""
     config = write_config(tmp_path, "block_b", sim={"reality": "construction"})
     result, doc = run(tmp_path, config, "--seed", "56")
     assert result.exit_code == 0, result.output
@@ -203,17 +203,15 @@ def test_a_claim_by_the_lidar_along_the_path_replays_as_a_note_of_match(tmp_path
     match = runner.invoke(
         app, ["match", str(out / "session.jsonl"), "--site", str(out / "site"), "--json", "--top", "20"]
     )
-    assert match.exit_code == 3, match.output
+    assert match.exit_code == 0, match.output
     report = json.loads(match.stdout)
-    (note,) = [n for n in report["notes"] if "lidar along the path favours" in n]
-    rank = int(re.search(r"favours hypothesis (\d+)", note).group(1))
-    favoured = next(h for h in report["hypotheses"] if h["rank"] == rank)
-    assert favoured["matches"] == doc["matched_ids"]
+    assert report["decided_by"] == "lidar along the path" and report["verdict"] == "unique match"
+    assert re.fullmatch(r"\d+ hypotheses", report["paper_verdict"]) and report["n_hypotheses"] > 1
+    assert report["hypotheses"][0]["matches"] == doc["matched_ids"]
     assert all(h["verification"]["track_fit"] for h in report["hypotheses"])
     # the console says the same whatever --top shows, with each shown hypothesis' checks
     args = ["match", str(out / "session.jsonl"), "--site", str(out / "site"), "--top", "1"]
     shown = runner.invoke(app, args)
-    assert shown.exit_code == 3, shown.output
-    assert f"favours hypothesis {rank}" in shown.stdout
-    assert ("(not shown: --top" in shown.stdout) == (rank > 1)
+    assert shown.exit_code == 0, shown.output
+    assert "unique by the lidar along the path" in shown.stdout
     assert re.search(r"(pass|fail): missed \d+/\d+", shown.stdout)

@@ -68,9 +68,10 @@ def test_round_trip_gives_the_same_verdict_and_pose(session):
     # the command line takes the bag in place of the log
     cli = runner.invoke(app, ["match", str(session / "session.mcap"), "--site", str(site), "--json"])
     doc = json.loads(cli.stdout)
-    assert doc["verdict"] == direct.verdict and cli.exit_code == doc["exit_code"], cli.output
-    if direct.verdict != "unique match":  # several (exit 3): the note names the one claimed
-        assert any(f"favours hypothesis {claim.rank}" in n for n in doc["notes"]), doc["notes"]
+    assert doc["paper_verdict"] == direct.verdict and cli.exit_code == doc["exit_code"], cli.output
+    if direct.verdict != "unique match":  # several: the lidar along the path picks the one claimed
+        assert doc["verdict"] == "unique match" and doc["decided_by"] == "lidar along the path"
+        assert doc["hypotheses"][0]["matches"] == claim.matches
 
 
 def test_session_bag_topics_and_initialpose(session):
