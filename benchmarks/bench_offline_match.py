@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -108,8 +107,8 @@ def main() -> None:
     parser.add_argument("--realities", default=",".join(REALITIES))
     parser.add_argument("--workers", type=int, default=2)
     args = parse_args(parser, {"seeds": 1, "samples": "block_a", "realities": "sample"})
-    work = Path(tempfile.mkdtemp(prefix="bench_offline_match_"))
-    try:
+    with tempfile.TemporaryDirectory(prefix="bench_offline_match_") as tmp:
+        work = Path(tmp)
         jobs = []
         for sample in args.samples.split(","):
             for reality in args.realities.split(","):
@@ -130,8 +129,6 @@ def main() -> None:
             print(f"{len(sessions)} sessions of {len(jobs)}")
             print("whole logs:", _tally(list(pool.map(_match, whole))), flush=True)
             print("cut logs:  ", _tally(list(pool.map(_match, cut))), flush=True)
-    finally:
-        shutil.rmtree(work, ignore_errors=True)
 
 
 if __name__ == "__main__":

@@ -51,12 +51,12 @@ from initcli.match.options import MatchOptions
 from initcli.match.sightings import sightings_from_log
 
 __all__ = [
+    "DECIDED_BY_LIDAR",
+    "DECIDED_BY_PAPER",
     "ESCALATED_PARTIALS",
     "EXIT_AMBIGUOUS",
     "EXIT_BAD_INPUT",
     "EXIT_NO_MATCH",
-    "DECIDED_BY_LIDAR",
-    "DECIDED_BY_PAPER",
     "EXIT_UNIQUE",
     "Hypothesis",
     "MatchOptions",
