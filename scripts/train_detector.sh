@@ -3,8 +3,11 @@
 # data, train, export and print its numbers: door AP@0.5 on the DoorDetect hold-out and mAP@0.5 per
 # class on 500 renders of block_b (a building never trained on).
 #
-#   scripts/train_detector.sh [--smoke] [--work DIR] [--photos DIR] [--epochs N] [--batch N]
+#   scripts/train_detector.sh [--smoke] [--work DIR] [--photos DIR] [--sites DIR] [--epochs N] [--batch N]
 #   make train-detector ARGS=--smoke
+#
+# --sites DIR: take the sites from DIR (bim-extract output folders named after the models, e.g.
+# DIR/block_a) instead of extracting them: for a machine without ifcopenshell (a GPU box).
 #
 # Meant for one GPU (torch's CUDA is used when it sees one; the data loader, not the GPU, sets the
 # pace, so give it cores), and runs the same way on CPU (about 2.5 hours of training on 2 cores).
@@ -20,15 +23,17 @@ BIN=${BIN:-$ROOT/.venv/bin}
 SMOKE=0
 WORK=${WORK:-${TMPDIR:-/tmp}/bim-init-detector-train}
 PHOTOS=""
+SITES_DIR=""
 EPOCHS=""
 BATCH=8
 
-usage() { sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'; }
 while [ $# -gt 0 ]; do
   case "$1" in
     --smoke) SMOKE=1 ;;
     --work) WORK=$2; shift ;;
     --photos) PHOTOS=$2; shift ;;
+    --sites) SITES_DIR=$(cd "$2" && pwd); shift ;;
     --epochs) EPOCHS=$2; shift ;;
     --batch) BATCH=$2; shift ;;
     -h|--help) usage; exit 0 ;;
@@ -48,6 +53,7 @@ if [ -z "$PHOTOS" ] || [ ! -d "$PHOTOS/images" ]; then
 fi
 IFC_DIR=$(cd "$PHOTOS/../.." && pwd)/ifc
 [ -x "$BIN/bim-init" ] || { echo "train_detector.sh: $BIN/bim-init missing (run make install)" >&2; exit 2; }
+[ -n "$SITES_DIR" ] || [ -x "$BIN/bim-extract" ] || { echo "train_detector.sh: $BIN/bim-extract missing (run make install, or pass --sites)" >&2; exit 2; }
 
 NPROC=$(nproc)
 DEVICE=$("$BIN/python" -c "import torch; print('cuda' if torch.cuda.is_available() else 'cpu')")
@@ -58,6 +64,9 @@ MODELS=("$ROOT/sample_models/ntu_hallway.ifc" "$ROOT/sample_models/block_a.ifc")
 if [ "$SMOKE" = 1 ]; then
   IMAGES=40; TEST_IMAGES=20; VAL_MAX=16
   LIMIT=(--time-limit 0.3); EPOCHS=${EPOCHS:-1}
+elif [ -n "$SITES_DIR" ]; then
+  IMAGES=6000; TEST_IMAGES=500; VAL_MAX=176
+  LIMIT=(); EPOCHS=${EPOCHS:-8}
 else
   for f in AC20-FZK-Haus AC20-Institute-Var-2 ExampleHOM FM_ARC_DigitalHub \
            LiNear_Office_Building_Architectural_IFC_export Office_A_20110811 duplex; do
@@ -75,9 +84,23 @@ mkdir -p "$WORK/sites"
 cd "$WORK"
 stamp() { date +%s; }
 T0=$(stamp)
-echo "== sites (bim-extract, $NPROC processes) -> $WORK/sites"
-printf '%s\n' "${MODELS[@]}" "$ROOT/sample_models/block_b.ifc" |
-  xargs -P "$NPROC" -I{} sh -c 'n=$(basename "{}" .ifc); "$0/bim-extract" "{}" -o "sites/$n" --force > "sites/$n.log" 2>&1 || { echo "bim-extract {} failed:"; cat "sites/$n.log"; exit 255; }' "$BIN"
+if [ -n "$SITES_DIR" ]; then
+  # Every site folder given, the two samples first as when extracting (the renders follow the
+  # order); block_b, the held-out building, must be there and is not trained on.
+  for n in ntu_hallway block_a block_b; do
+    [ -f "$SITES_DIR/$n/features.csv" ] || { echo "train_detector.sh: $SITES_DIR/$n missing" >&2; exit 2; }
+  done
+  MODELS=(ntu_hallway block_a)
+  while read -r n; do
+    case "$n" in ntu_hallway|block_a|block_b) ;; *) [ -f "$SITES_DIR/$n/features.csv" ] && MODELS+=("$n") ;; esac
+  done < <(ls "$SITES_DIR" | LC_ALL=C sort)
+  for n in "${MODELS[@]}" block_b; do rm -rf "sites/$n" && cp -r "$SITES_DIR/$n" "sites/$n"; done
+  echo "== sites from $SITES_DIR: ${MODELS[*]} (block_b held out)"
+else
+  echo "== sites (bim-extract, $NPROC processes) -> $WORK/sites"
+  printf '%s\n' "${MODELS[@]}" "$ROOT/sample_models/block_b.ifc" |
+    xargs -P "$NPROC" -I{} sh -c 'n=$(basename "{}" .ifc); "$0/bim-extract" "{}" -o "sites/$n" --force > "sites/$n.log" 2>&1 || { echo "bim-extract {} failed:"; cat "sites/$n.log"; exit 255; }' "$BIN"
+fi
 T1=$(stamp)
 
 echo "== renders"
