@@ -212,6 +212,15 @@ class ExplorationSection:
         minimum=0,
         maximum=1000,
     )
+    feature_walls: bool = setting(
+        True,
+        "on an open floor, head for the walls that hold the features: out of a short lap round a column"
+        " (12 m or less, enclosing under a fifth of the area mapped) to the nearest long wall (4 m or more)"
+        " the path has not followed, instead of an opening of the floor; and after a look that found"
+        " nothing new, with targets.hypotheses or fewer hypotheses, across to the wall the lidar sees where"
+        " most of them put a feature not yet seen; false: the openings, and only the crossings of"
+        " cross_after",
+    )
     turn: float = setting(
         360.0,
         "degrees turned in place by a look (the initial one, one on an open floor) and by the recovery"
