@@ -54,7 +54,7 @@ LAP_ENCLOSES = 0.2
 # laps of 7-11 m in the LiNear car park), not a corridor loop that the lidar saw far beyond.
 COLUMN_LAP_M = 12.0
 LAP_ROUTE_EXTRA_S = 20.0
-# Every this many odometry samples of the path is where the robot was, for exploration.feature_walls
+# Every this many odometry samples of the path is where the robot was, for exploration.long_walls
 # (at 10 Hz and 0.4 m/s: every 0.4 m).
 PATH_STRIDE = 10
 
@@ -95,7 +95,7 @@ class Escapes:
         lap = self.lap_settings
         self.laps = LapWatch(min_lap=lap.length, radius=lap.radius, turn=math.radians(lap.turn))
         self.lap_target: np.ndarray | None = None  # the opening the last lap sent the robot to
-        self.to_long_walls = False  # out of a circle round a column to a long wall (feature_walls)
+        self.to_long_walls = False  # out of a circle round a column to a long wall (long_walls)
 
     def see(self, frame: SensorFrame, step: int) -> None:
         """Write every ``frontier.scan_every``-th scan into the local map (every ``beam_step``-th beam)."""
@@ -171,7 +171,7 @@ class Escapes:
         circle = lap.enclosed < LAP_ENCLOSES * self.local_map.free_area()
         if circle and lap.length <= COLUMN_LAP_M and self.to_long_walls and frame.scan is not None:
             # Round a column on an open floor: its openings lead to the next column; the features
-            # are on the walls (exploration.feature_walls).
+            # are on the walls (exploration.long_walls).
             s = frame.scan
             path = np.array(self.result.odom_path[::PATH_STRIDE]).reshape(-1, 3)[:, :2]
             view = ScanView.of(s.angles, s.ranges, s.range_max)

@@ -90,7 +90,7 @@ class Session:
         self.exploration = ActiveExploration(config, site, self.follow)
         x = config.exploration
         self.escapes = Escapes(x.loops, x.shuttles, x.frontier, self.follow, self.result, x.laps)
-        self.escapes.to_long_walls = x.feature_walls
+        self.escapes.to_long_walls = x.long_walls
         self.finished = False  # the session ended while choosing a command (shut in)
         self.looks = Looks(x)
         self.last_feature_t = 0.0  # s: when the last new feature was confirmed

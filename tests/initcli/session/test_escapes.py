@@ -200,7 +200,7 @@ def test_a_circle_in_a_closed_hall_is_not_shut_in_a_lap_round_a_closed_room_is()
 
 
 def test_out_of_a_circle_round_a_column_to_the_nearest_long_wall() -> None:
-    """exploration.feature_walls: round a column in the middle of a 20 x 14 m hall (the wall
+    """exploration.long_walls: round a column in the middle of a 20 x 14 m hall (the wall
     follower took it for a wall) the robot heads for the nearest long wall, the hall's south wall
     4.2 m away (the column, 0.6 m wide, is no wall)."""
     column = [(9.7, 4.7, 10.3, 4.7), (10.3, 4.7, 10.3, 5.3), (10.3, 5.3, 9.7, 5.3), (9.7, 5.3, 9.7, 4.7)]

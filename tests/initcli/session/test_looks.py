@@ -82,7 +82,7 @@ def test_with_hypotheses_a_fruitless_look_crosses_to_the_wall_that_holds_their_f
     result = SessionResult(False, "", None)
     x = EXPLORATION
     escapes = Escapes(x.loops, x.shuttles, x.frontier, WallFollowParams(), result)
-    looks = Looks(EXPLORATION)  # cross_after 6: without the hypotheses no crossing yet
+    looks = Looks(dataclasses.replace(EXPLORATION, feature_walls=True))  # cross_after 6: none yet without
     frame = SensorFrame(1.0, Pose2D(0.0, 0.0, 0.0))
     door = (np.array([[0.0, -8.9]]), np.array([[0.0, 1.0]]), np.array([0]))  # on the far wall, facing us
     crossing = looks.cross(frame, HALL, 1, escapes, travel=20.0, predicted=door)

@@ -279,3 +279,10 @@ def test_crosses_to_the_wall_where_the_hypotheses_put_an_unseen_door(
         assert driver.pose.y == pytest.approx(-11.0, abs=1.0)  # over at the door's wall
     else:
         assert abs(driver.pose.y) < 1.5 and driver.pose.x > 20.0
+
+
+@pytest.mark.parametrize("long_walls", [True, False])
+def test_long_walls_reaches_the_escapes(config, long_walls) -> None:
+    exploration = dataclasses.replace(config.exploration, long_walls=long_walls)
+    session, _ = _session(dataclasses.replace(config, exploration=exploration))
+    assert session.escapes.to_long_walls is long_walls
