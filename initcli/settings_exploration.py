@@ -219,10 +219,10 @@ class ExplorationSection:
         " where the doors and stairs are; false: to an opening of the local map, as after any lap",
     )
     feature_walls: bool = setting(
-        False,
+        True,
         "after a look on an open floor that found nothing new, with targets.hypotheses or fewer hypotheses,"
-        " drive across to the wall the lidar sees where most of them put a feature not yet seen (off: it"
-        " did not help in the real storeys or the samples, and cost one as-built block_a start 65 m)",
+        " drive across to the wall the lidar sees where most of them put a feature not yet seen; false:"
+        " only the crossings of cross_after",
     )
     turn: float = setting(
         360.0,
