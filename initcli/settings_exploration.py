@@ -212,6 +212,18 @@ class ExplorationSection:
         minimum=0,
         maximum=1000,
     )
+    long_walls: bool = setting(
+        True,
+        "out of a short lap round a column on an open floor (12 m or less, enclosing under a fifth of the"
+        " area mapped) to the nearest long wall (4 m or more) the lidar sees that the path has not followed,"
+        " where the doors and stairs are; false: to an opening of the local map, as after any lap",
+    )
+    feature_walls: bool = setting(
+        True,
+        "after a look on an open floor that found nothing new, with targets.hypotheses or fewer hypotheses,"
+        " drive across to the wall the lidar sees where most of them put a feature not yet seen; false:"
+        " only the crossings of cross_after",
+    )
     turn: float = setting(
         360.0,
         "degrees turned in place by a look (the initial one, one on an open floor) and by the recovery"

@@ -40,6 +40,7 @@ __all__ = [
     "SQUEEZE_MARGIN",
     "around_side",
     "cross_floor",
+    "crossing_to",
     "gap_bearing",
 ]
 
@@ -217,7 +218,11 @@ def cross_floor(pose: Pose2D, scan: ScanView, side: int, follow: WallFollowParam
     across = across_the_floor(scan, side)
     if across is None:
         return None
-    bearing, reach = across
+    return crossing_to(pose, *across, follow)
+
+
+def crossing_to(pose: Pose2D, bearing: float, reach: float, follow: WallFollowParams) -> FloorCrossing:
+    """The drive from ``pose`` (odom) ``reach`` m along ``bearing`` (rad, robot frame) across a floor."""
     toward = pose.apply(reach * np.array([math.cos(bearing), math.sin(bearing)]))
     seconds = CROSSING_SLACK * reach / max(follow.speed, 1e-6) + CROSSING_EXTRA_S
     return FloorCrossing(BugNavigator(toward, BugParams(follow=follow)), seconds, reach)

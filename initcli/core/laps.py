@@ -29,6 +29,7 @@ class Lap:
     length: float  # m
     turn: float  # rad the path's direction turned over the lap (signed)
     seen: int  # what was counted (features confirmed) when the lap began
+    enclosed: float = 0.0  # m2 the lap's path encloses (shoelace formula)
 
 
 @dataclass
@@ -82,8 +83,17 @@ class LapWatch:
             turned = self.winding[n] - self.winding[i]
             px, py = self.xy[i]
             if abs(turned) >= self.turn and math.hypot(x - px, y - py) <= self.radius:
-                return Lap(self.travel[i], length, turned, self.seen[i])
+                return Lap(self.travel[i], length, turned, self.seen[i], self._enclosed(i, n))
         return None
+
+    def _enclosed(self, i: int, n: int) -> float:
+        """The area (m2) the path from sample ``i`` to sample ``n`` encloses, closed by a straight
+        line back."""
+        xs = [p[0] for p in self.xy[i : n + 1]]
+        ys = [p[1] for p in self.xy[i : n + 1]]
+        twice = sum(xs[k] * ys[k + 1] - xs[k + 1] * ys[k] for k in range(len(xs) - 1))
+        twice += xs[-1] * ys[0] - xs[0] * ys[-1]
+        return abs(twice) / 2.0
 
     def restart(self) -> None:
         """Forget the path: the next lap is counted from the newest sample on."""

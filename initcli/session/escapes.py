@@ -28,8 +28,10 @@ from initcli.core.bug_navigation import (
     FloorCrossing,
     RouteNavigator,
     cross_floor,
+    crossing_to,
 )
 from initcli.core.confinement import ConfinementWatch
+from initcli.core.feature_walls import toward_long_wall
 from initcli.core.frontier import LocalMap
 from initcli.core.laps import LapWatch
 from initcli.core.wall_following import ScanView, WallFollowParams
@@ -37,7 +39,7 @@ from initcli.drivers.base import SensorFrame
 from initcli.session.result import SessionResult, ShutIn
 from initcli.settings_exploration import FrontierSettings, LapSettings, LoopSettings, ShuttleSettings
 
-__all__ = ["Escapes", "LAP_ROUTE_PASS", "LAP_ROUTE_SPACING", "open_point"]
+__all__ = ["Escapes", "LAP_ROUTE_PASS", "LAP_ROUTE_SPACING", "PATH_STRIDE", "open_point"]
 
 # A route after a lap leads through a doorway barely wider than the robot: waypoints close together,
 # each passed closely, driven at GAP_SPEED with this slack plus this many seconds (turns on the spot).
@@ -45,7 +47,16 @@ LAP_ROUTE_SPACING = 0.5  # m between waypoints
 LAP_ROUTE_PASS = 0.2  # m: an intermediate waypoint counts as passed this close
 LAP_ROUTE_PREFER = 0.45  # m: closer than this to what is not known free costs more (mid-doorway)
 LAP_ROUTE_SLACK = 1.5
+# Shut in needs a lap round the space: its path encloses at least this share of the free area the
+# local map holds (round a 5 x 6 m room at 0.7 m from the walls: 0.55; a 1.3 m circle in a hall: 0.05).
+LAP_ENCLOSES = 0.2
+# ... and a lap this short round little is round a column (0.3-0.6 m columns followed at 0.7 m:
+# laps of 7-11 m in the LiNear car park), not a corridor loop that the lidar saw far beyond.
+COLUMN_LAP_M = 12.0
 LAP_ROUTE_EXTRA_S = 20.0
+# Every this many odometry samples of the path is where the robot was, for exploration.long_walls
+# (at 10 Hz and 0.4 m/s: every 0.4 m).
+PATH_STRIDE = 10
 
 
 def open_point(frame: SensorFrame, scan: ScanView | None, loops: LoopSettings) -> np.ndarray:
@@ -84,6 +95,7 @@ class Escapes:
         lap = self.lap_settings
         self.laps = LapWatch(min_lap=lap.length, radius=lap.radius, turn=math.radians(lap.turn))
         self.lap_target: np.ndarray | None = None  # the opening the last lap sent the robot to
+        self.to_long_walls = False  # out of a circle round a column to a long wall (long_walls)
 
     def see(self, frame: SensorFrame, step: int) -> None:
         """Write every ``frontier.scan_every``-th scan into the local map (every ``beam_step``-th beam)."""
@@ -156,6 +168,16 @@ class Escapes:
         self.laps.restart()
         if self.lap_target is not None:
             self.local_map.give_up(self.lap_target)
+        circle = lap.enclosed < LAP_ENCLOSES * self.local_map.free_area()
+        if circle and lap.length <= COLUMN_LAP_M and self.to_long_walls and frame.scan is not None:
+            # Round a column on an open floor: its openings lead to the next column; the features
+            # are on the walls (exploration.long_walls).
+            s = frame.scan
+            path = np.array(self.result.odom_path[::PATH_STRIDE]).reshape(-1, 3)[:, :2]
+            view = ScanView.of(s.angles, s.ranges, s.range_max)
+            way = toward_long_wall(view, frame.odom.apply_inverse(path))
+            if way is not None and self.cross(frame, view, 1, way) is not None:
+                return f"a {lap.length:.0f} m circle without a new feature: heading for the nearest long wall"
         # A doorway barely wider than the robot: the map's cells blur each jamb by up to a cell.
         clearance = self.follow.radius - self.local_map.params.resolution / 4
         route = self.local_map.plan(frame.odom, clearance, spacing=LAP_ROUTE_SPACING, prefer=LAP_ROUTE_PREFER)
@@ -177,6 +199,10 @@ class Escapes:
             return f"a {lap.length:.0f} m lap without a new feature: heading for an unexplored opening"
         if not self.lap_settings.shut_in:
             return None
+        if circle:
+            # A circle on an open floor (the wall follower lost its wall), not a lap round the room:
+            # the loop watch drives it out; shut in needs the lap round what the robot has seen.
+            return f"a {lap.length:.0f} m circle without a new feature on an open floor"
         return ShutIn(round(self.local_map.free_area(), 1), features, round(lap.length, 1))
 
     def start(
@@ -188,10 +214,17 @@ class Escapes:
         self.until = frame.t + (self.settings.escape if seconds is None else seconds)
         self.result.loop_escapes += 1
 
-    def cross(self, frame: SensorFrame, scan: ScanView, side: int) -> FloorCrossing | None:
+    def cross(
+        self, frame: SensorFrame, scan: ScanView, side: int, way: tuple[float, float] | None = None
+    ) -> FloorCrossing | None:
         """Drive across the open floor on the side away from the followed wall (``side``) to a wall
-        the lidar sees (:func:`cross_floor`); None when there is none to drive to."""
-        crossing = cross_floor(frame.odom, scan, side, self.follow)
+        the lidar sees (:func:`cross_floor`), or along ``way`` (bearing rad, reach m) when given; None
+        when there is none to drive to."""
+        crossing = (
+            cross_floor(frame.odom, scan, side, self.follow)
+            if way is None
+            else crossing_to(frame.odom, *way, self.follow)
+        )
         if crossing is None:
             return None
         self.navigator = crossing.navigator

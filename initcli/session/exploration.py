@@ -26,7 +26,7 @@ from initcli.core.wall_following import ScanView, WallFollowParams
 from initcli.drivers.base import SensorFrame
 from initcli.match.pipeline import Hypothesis
 
-__all__ = ["ActiveExploration", "Target"]
+__all__ = ["ActiveExploration", "Target", "unseen_features"]
 
 
 @dataclass(frozen=True)
@@ -222,3 +222,27 @@ class ActiveExploration:
             self.progress = (frame.t, remaining)
             return False
         return frame.t - since > self.settings.stall
+
+
+def unseen_features(
+    site: Site, hypotheses: list[Hypothesis], odom: Pose2D
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The camera features each hypothesis has not matched yet, in the robot's frame at ``odom``:
+    points (N x 2), normals (N x 2) and the index of the hypothesis each belongs to (N,), for
+    :func:`initcli.core.feature_walls.toward_feature_wall`."""
+    points, normals, owner = [], [], []
+    for k, hypothesis in enumerate(hypotheses):
+        matched = {m for m in hypothesis.matches if m is not None}
+        robot = hypothesis.transform * odom  # the robot in the BIM frame under this hypothesis
+        for f in site.storeys[hypothesis.storey].camera_features:
+            if f.id in matched:
+                continue
+            points.append(robot.apply_inverse(np.array([f.x, f.y])))
+            c, s = math.cos(robot.yaw), math.sin(robot.yaw)
+            normals.append((c * f.norm_x + s * f.norm_y, -s * f.norm_x + c * f.norm_y))
+            owner.append(k)
+    return (
+        np.array(points, dtype=float).reshape(-1, 2),
+        np.array(normals, dtype=float).reshape(-1, 2),
+        np.array(owner, dtype=int),
+    )

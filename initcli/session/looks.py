@@ -12,7 +12,10 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from initcli.core.bug_navigation import FloorCrossing
+from initcli.core.feature_walls import toward_feature_wall
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.wall_following import ScanView, open_beside
 from initcli.drivers.base import SensorFrame
@@ -33,6 +36,7 @@ class Looks:
         self.count = 0  # looks begun (the initial one included)
         self.open_floor = False  # the look under way is one on an open floor, not the initial one
         self.fruitless = 0  # looks on an open floor ended since the last new feature or crossing
+        self.feature_walls: list[np.ndarray] = []  # odom points where crossings to feature walls ended
 
     def begin(self) -> None:
         """A look (or the recovery rotation) starts turning."""
@@ -69,19 +73,37 @@ class Looks:
         self.fruitless = 0
 
     def cross(
-        self, frame: SensorFrame, scan: ScanView, side: int, escapes: Escapes, travel: float
+        self,
+        frame: SensorFrame,
+        scan: ScanView,
+        side: int,
+        escapes: Escapes,
+        travel: float,
+        predicted: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+        path: np.ndarray | None = None,
     ) -> FloorCrossing | None:
         """A look on an open floor ended at ``travel`` m: after ``cross_after`` such looks since the
         last new feature (a look that found one counts as the first), drive across the floor
         (:meth:`Escapes.cross`), then follow the wall found there: from the façade of an open-plan
         office the doors of the rooms in the middle are out of the camera's reach, and looking again
         from the same wall finds nothing. The next look comes look_every m after the crossing's
-        reach. The crossing started, or None."""
+        reach. With ``predicted`` (the hypotheses' unseen features, :func:`unseen_features`) and
+        ``exploration.feature_walls``, every such look first tries the wall that holds them
+        (:func:`toward_feature_wall`; ``path``: odom points driven so far). The crossing started, or None."""
         self.fruitless += 1
+        crossing = None
+        if predicted is not None and self.settings.feature_walls:
+            been = frame.odom.apply_inverse(np.array(self.feature_walls).reshape(-1, 2))
+            passed = None if path is None else frame.odom.apply_inverse(np.asarray(path).reshape(-1, 2))
+            way = toward_feature_wall(scan, *predicted, been=been, passed=passed)
+            if way is not None:
+                crossing = escapes.cross(frame, scan, side, way[:2])
+                end = frame.odom.apply(way[1] * np.array([math.cos(way[0]), math.sin(way[0])]))
+                self.feature_walls.append(end)
         after = self.settings.cross_after
-        if after <= 0 or self.fruitless < after:
+        if crossing is None and (after <= 0 or self.fruitless < after):
             return None
-        crossing = escapes.cross(frame, scan, side)
+        crossing = crossing or escapes.cross(frame, scan, side)
         if crossing is None:
             return None
         self.fruitless = 0

@@ -41,10 +41,10 @@ from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follo
 from initcli.drivers.base import RobotDriver, SensorFrame
 from initcli.io.detection_log import Meta, State
 from initcli.match.landmarks import site_tracker
-from initcli.match.pipeline import MatchReport
+from initcli.match.pipeline import Hypothesis, MatchReport
 from initcli.session.claims import ClaimChecks
-from initcli.session.escapes import Escapes
-from initcli.session.exploration import ActiveExploration
+from initcli.session.escapes import PATH_STRIDE, Escapes
+from initcli.session.exploration import ActiveExploration, unseen_features
 from initcli.session.fine_tuning import FineLost, FineTuning, FineTuningHooks, matched_pairs
 from initcli.session.looks import Looks
 from initcli.session.perception import Perception
@@ -90,10 +90,13 @@ class Session:
         self.exploration = ActiveExploration(config, site, self.follow)
         x = config.exploration
         self.escapes = Escapes(x.loops, x.shuttles, x.frontier, self.follow, self.result, x.laps)
+        self.escapes.to_long_walls = x.long_walls
         self.finished = False  # the session ended while choosing a command (shut in)
         self.looks = Looks(x)
         self.last_feature_t = 0.0  # s: when the last new feature was confirmed
         self.hypotheses = 0  # of the last match step
+        # its hypotheses when no more than exploration.targets.hypotheses (exploration.feature_walls)
+        self.last_hypotheses: list[Hypothesis] = []
         self.decided_at = 0.0  # m of travel at the last match step
         self.storeys_left: list[str] = []  # storeys the last match step's hypotheses lie on
         self.checks = config.verification
@@ -260,7 +263,11 @@ class Session:
                 why = "look done" if self.looks.open_floor else "initial look done"
                 self._set_state(frame.t, "explore", why=why)
                 if self.looks.open_floor and scan is not None:
-                    crossing = self.looks.cross(frame, scan, self.side, self.escapes, self.perception.travel)
+                    predicted = unseen_features(self.site, self.last_hypotheses, frame.odom)
+                    path = np.array(self.result.odom_path[::PATH_STRIDE])[:, :2]
+                    crossing = self.looks.cross(
+                        frame, scan, self.side, self.escapes, self.perception.travel, predicted, path
+                    )
                     if crossing is not None:
                         self._note(frame.t, f"crossing the open floor ({crossing.reach:.1f} m)")
             elif self.exploration.exhausted:
@@ -302,6 +309,8 @@ class Session:
         self.decided_at = self.perception.travel
         report = self._match(frame.t)
         self.hypotheses = report.n_hypotheses
+        few = len(report.hypotheses) <= self.config.exploration.targets.hypotheses
+        self.last_hypotheses = report.hypotheses if few else []  # of many, the top few vote at random
         self.storeys_left = sorted({h.storey for h in report.hypotheses})
         unique = report.n_hypotheses == 1 or report.one_place()
         claim = report if unique else self.claims.lidar_unique(frame, report)

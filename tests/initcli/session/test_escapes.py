@@ -15,7 +15,7 @@ from initcli.core.raycast import ray_segment_distances
 from initcli.core.wall_following import ScanView, WallFollowParams
 from initcli.drivers.base import LaserScan, SensorFrame
 from initcli.session.escapes import Escapes, open_point
-from initcli.session.result import SessionResult
+from initcli.session.result import SessionResult, ShutIn
 from initcli.settings_exploration import FrontierSettings, LoopSettings, ShuttleSettings
 
 LOOPS, SHUTTLES, FRONTIER = LoopSettings(), ShuttleSettings(), FrontierSettings()
@@ -151,3 +151,62 @@ def test_a_crossing_drives_to_the_wall_across_the_open_floor() -> None:
     assert not e.under_way(SensorFrame(5.0 + crossing.seconds, at))
     corridor = [(-30.0, 0.7, 30.0, 0.7), (-30.0, -1.3, 30.0, -1.3)]
     assert e.cross(frame, view(scan_of(corridor, at)), side=1) is None and result.crossings == 1
+
+
+def _lap_in(
+    walls: list[tuple[float, float, float, float]],
+    path: list[tuple[float, float]],
+    seen_from: list[tuple[float, float]] = (),
+    to_long_walls: bool = False,
+):
+    """Integrate the scans from ``seen_from`` and along ``path`` (odom = world) among ``walls`` into
+    the local map, then drive ``path`` as the lap watch sees it, 0 features: what
+    :meth:`Escapes.lap` returns."""
+    e, result = escapes()
+    e.to_long_walls = to_long_walls
+    poses = [Pose2D(x, y, 0.0) for x, y in path]
+    for step, at in enumerate([Pose2D(x, y, 0.0) for x, y in seen_from] + poses):
+        e.see(SensorFrame(0.1 * step, at, scan_of(walls, at)), step * FRONTIER.scan_every)
+    travel, why = 0.0, None
+    for k, at in enumerate(poses):
+        travel += 0.0 if k == 0 else math.hypot(at.x - poses[k - 1].x, at.y - poses[k - 1].y)
+        result.odom_path.append(at.as_tuple())
+        got = e.lap(SensorFrame(100.0 + 0.1 * k, at, scan_of(walls, at)), travel, 0)
+        why = why or got
+    return why, result
+
+
+def test_a_circle_in_a_closed_hall_is_not_shut_in_a_lap_round_a_closed_room_is() -> None:
+    """Both spaces are closed (no opening on the local map). Round the 5 x 6 m room, 0.7 m from its
+    walls, the lap encloses most of what the lidar saw: shut in. A 1.3 m circle in a 20 x 14 m hall
+    (the wall follower lost its wall) encloses a twentieth of it: not shut in, only a circle."""
+    room = [(0.0, 0.0, 5.0, 0.0), (5.0, 0.0, 5.0, 6.0), (5.0, 6.0, 0.0, 6.0), (0.0, 6.0, 0.0, 0.0)]
+    corners = [(0.7, 0.7), (4.3, 0.7), (4.3, 5.3), (0.7, 5.3), (0.7, 0.7), (1.5, 0.7)]
+    lap_path = [
+        (x0 + (x1 - x0) * t / 10, y0 + (y1 - y0) * t / 10)
+        for (x0, y0), (x1, y1) in zip(corners[:-1], corners[1:], strict=True)
+        for t in range(10)
+    ]
+    shut, _ = _lap_in(room, lap_path)
+    assert isinstance(shut, ShutIn) and shut.features == 0
+    hall = [(0.0, 0.0, 20.0, 0.0), (20.0, 0.0, 20.0, 14.0), (20.0, 14.0, 0.0, 14.0), (0.0, 14.0, 0.0, 0.0)]
+    circle = [
+        (10.0 + 1.3 * math.cos(a * math.pi / 20), 7.0 + 1.3 * math.sin(a * math.pi / 20)) for a in range(46)
+    ]
+    everywhere = [(x, y) for x in np.arange(2.0, 19.0, 2.0) for y in np.arange(2.0, 13.0, 2.0)]
+    why, result = _lap_in(hall, circle, everywhere)
+    assert why == "a 7 m circle without a new feature on an open floor" and result.laps == 0
+    assert result.crossings == 0
+
+
+def test_out_of_a_circle_round_a_column_to_the_nearest_long_wall() -> None:
+    """exploration.long_walls: round a column in the middle of a 20 x 14 m hall (the wall
+    follower took it for a wall) the robot heads for the nearest long wall, the hall's south wall
+    4.2 m away (the column, 0.6 m wide, is no wall)."""
+    column = [(9.7, 4.7, 10.3, 4.7), (10.3, 4.7, 10.3, 5.3), (10.3, 5.3, 9.7, 5.3), (9.7, 5.3, 9.7, 4.7)]
+    hall = [(0.0, 0.0, 20.0, 0.0), (20.0, 0.0, 20.0, 14.0), (20.0, 14.0, 0.0, 14.0), (0.0, 14.0, 0.0, 0.0)]
+    round_it = [(10.0 + math.cos(a * math.pi / 20), 5.0 + math.sin(a * math.pi / 20)) for a in range(46)]
+    everywhere = [(x, y) for x in np.arange(2.0, 19.0, 2.0) for y in np.arange(2.0, 13.0, 2.0)]
+    why, result = _lap_in(hall + column, round_it, everywhere, to_long_walls=True)
+    assert why == "a 6 m circle without a new feature: heading for the nearest long wall"
+    assert result.crossings == 1

@@ -76,3 +76,17 @@ def test_the_floor_is_crossed_after_cross_after_fruitless_looks() -> None:
     assert looks.cross(frame, HALL, 1, escapes, travel=50.0) is None
     off = Looks(dataclasses.replace(EXPLORATION, cross_after=0))
     assert all(off.cross(frame, HALL, 1, escapes, travel=60.0) is None for _ in range(5))
+
+
+def test_with_hypotheses_a_fruitless_look_crosses_to_the_wall_that_holds_their_features() -> None:
+    result = SessionResult(False, "", None)
+    x = EXPLORATION
+    escapes = Escapes(x.loops, x.shuttles, x.frontier, WallFollowParams(), result)
+    looks = Looks(dataclasses.replace(EXPLORATION, feature_walls=True))  # cross_after 6: none yet without
+    frame = SensorFrame(1.0, Pose2D(0.0, 0.0, 0.0))
+    door = (np.array([[0.0, -8.9]]), np.array([[0.0, 1.0]]), np.array([0]))  # on the far wall, facing us
+    crossing = looks.cross(frame, HALL, 1, escapes, travel=20.0, predicted=door)
+    assert crossing is not None and result.crossings == 1 and 5.0 < crossing.reach < 8.0
+    assert looks.cross(frame, HALL, 1, escapes, travel=30.0, predicted=door) is None  # been there
+    off = Looks(dataclasses.replace(EXPLORATION, feature_walls=False))
+    assert off.cross(frame, HALL, 1, escapes, travel=20.0, predicted=door) is None

@@ -242,3 +242,47 @@ def test_a_failed_fine_stage_explores_on_and_fine_tunes_the_next_claim(
         assert result.pose is not None and result.pose.distance_to(result.truth_pose) < 0.5
     else:
         assert not result.success and result.reason == "lost during fine tuning (forced by the test)"
+
+
+@pytest.mark.parametrize(("feature_walls", "crossings"), [(True, 1), (False, 0)])
+def test_crosses_to_the_wall_where_the_hypotheses_put_an_unseen_door(
+    config, feature_walls, crossings
+) -> None:
+    """A hall whose far wall is 11 m to the right of the followed one, one hypothesis (its transform
+    turned 2 rad) whose storey holds a door on that wall, facing the robot, not yet seen. After the
+    first look on the open floor the robot crosses to it (exploration.feature_walls), long before
+    cross_after (6) fruitless looks would send it over; off, it drives on along its wall."""
+    from bimtools.site.load import StoreyModel
+    from bimtools.site.records import Feature
+    from initcli.match.pipeline import Hypothesis
+
+    theta = 2.0
+    transform = Pose2D(3.0, -4.0, theta)  # odom -> BIM
+    door_xy = transform.apply(np.array([10.0, -11.0]))  # on the far wall, beside the first look
+    normal = (-math.sin(theta), math.cos(theta))  # (0, 1) in odom: toward the followed wall
+    door = Feature("door", "Door", float(door_xy[0]), float(door_xy[1]), *normal, 0.9, 2.1)
+    exploration = dataclasses.replace(
+        config.exploration, initial_look=False, look_every=10.0, feature_walls=feature_walls
+    )
+    session, driver = _session(
+        dataclasses.replace(config, exploration=exploration),
+        scan=corridor_ranges(0.7, 11.0),
+        max_distance=21.0,
+        max_time=600.0,
+    )
+    session.site = Site(SAMPLES, {"hall": StoreyModel("hall", 0.0, [door])})
+    pose = Pose2D(0.0, 0.0, 0.0)
+    session.last_hypotheses = [Hypothesis(0, "hall", (), [], 0, 0.0, pose, None, transform, 1.0, 1)]
+    result = session.run()
+    assert exploration.cross_after > 1 and result.crossings == crossings
+    if crossings:
+        assert driver.pose.y == pytest.approx(-11.0, abs=1.0)  # over at the door's wall
+    else:
+        assert abs(driver.pose.y) < 1.5 and driver.pose.x > 20.0
+
+
+@pytest.mark.parametrize("long_walls", [True, False])
+def test_long_walls_reaches_the_escapes(config, long_walls) -> None:
+    exploration = dataclasses.replace(config.exploration, long_walls=long_walls)
+    session, _ = _session(dataclasses.replace(config, exploration=exploration))
+    assert session.escapes.to_long_walls is long_walls
