@@ -20,6 +20,7 @@ import numpy as np
 
 from bimtools.site.load import Site
 from initcli.core.geometry import Pose2D
+from initcli.core.registration import Registration
 from initcli.core.verification import (
     TRACK_HYPOTHESES,
     CameraView,
@@ -34,6 +35,7 @@ from initcli.drivers.base import SensorFrame
 from initcli.match.pipeline import Hypothesis, MatchReport
 from initcli.match.verify import StoreyEvidence, track_transform, verify_transform
 from initcli.session.perception import Perception
+from initcli.session.registration import DECIDED_BY_REGISTRATION
 from initcli.session.result import SessionResult
 from initcli.settings_session import VerificationSection
 
@@ -80,6 +82,10 @@ class ClaimChecks:
         checks = self.checks
         if fine:
             checks = dataclasses.replace(checks, min_scan_fit=checks.min_fine_scan_fit)
+        if self.blind():
+            # No detection at all so far (the camera is off, or sees nothing): a feature predicted in
+            # view and missed says nothing of the place, the camera would have missed it anywhere.
+            checks = dataclasses.replace(checks, log_odds=math.inf)
         if rival:
             factor = checks.rivals.search_factor
             checks = dataclasses.replace(checks, scan_search_xy=factor * checks.scan_search_xy)
@@ -91,6 +97,10 @@ class ClaimChecks:
             self.view,
             checks,
         )
+
+    def blind(self) -> bool:
+        """Has the camera seen nothing at all (no sighting in the images so far)?"""
+        return self.perception.frames > 0 and not self.perception.sightings
 
     def track(self, frame: SensorFrame, h: Hypothesis, check: Verification, wide: bool = False) -> np.ndarray:
         """The lidar's fit along the path for hypothesis ``h`` (``check`` its verification now),
@@ -297,6 +307,53 @@ class ClaimChecks:
             return rivals, found, 0
         credible = [h for h in found if rival_check(h).passed]
         return len(credible), credible, 0
+
+    def registration_favoured(self, found: Registration, last: Pose2D) -> bool:
+        """Do the scans along the path (``track_m``, window by window) plainly favour the best pose of
+        a registration over every place that fits its submap within the margin (``contested``; each
+        also searched wide, as a hypothesis about to be outranked: ``track_outranks``)? The submap
+        of a corridor or of rooms that repeat fits several places; the path before it, through a
+        lobby or round a corridor end, fits one (beyond the paper)."""
+        c = self.checks
+        best = found.best
+        if best is None or not found.contested or c.track_m <= 0:
+            return False
+        if len(found.candidates) - 1 <= len(found.contested):
+            return False  # every place refined fits alike: the search may not have reached the true one
+        path = self.perception.path
+
+        def track(storey: str, pose: Pose2D, wide: bool = False) -> np.ndarray:
+            return track_transform(pose * last.inverse(), self.evidence_of(storey), path, c, wide)
+
+        mine = track(best.storey, best.pose)
+        return all(
+            track_outranks(mine, track(r.storey, r.pose), c)
+            and track_outranks(mine, track(r.storey, r.pose, wide=True), c)
+            for r in found.contested
+        )
+
+    def registered(
+        self, frame: SensorFrame, storey: str, transform: Pose2D, found: Registration
+    ) -> tuple[bool, Pose2D | None]:
+        """Check the pose of a unique lidar registration (``transform``, odom -> BIM, on ``storey``)
+        as a claim is checked: the path through free space, the recent scans' fit and, when the
+        camera has seen anything, negative evidence. Whether it passed and the transform moved to
+        where the recent scans fit best."""
+        check = self.verify(storey, transform)
+        best, rival = found.best, found.rival
+        assert best is not None
+        extra = {
+            "decided_by": DECIDED_BY_REGISTRATION,
+            "registration_fit": round(best.fit, 4),
+            "registration_rival_fit": None if rival is None else round(rival.fit, 4),
+            "negative_evidence": not self.blind(),
+            "registration_contested": len(found.contested),
+        }
+        self.record(frame, "coarse", storey, transform * frame.odom, check, **extra)
+        if check.passed or not self.checks.enabled:
+            return True, check.aligned
+        self.result.rejected += 1
+        return False, None
 
     # -- the end -------------------------------------------------------------------------------------
 
