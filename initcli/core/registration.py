@@ -202,10 +202,17 @@ def register(
     for coarse, storey, pose in _coarse(points, maps, grid):
         field_ = fields[storey]
         step = grid.turn_step_deg
-        first = best_scan_alignment(pose, sub, field_, tolerance, 0.25, math.radians(step), 5, step / 2.0)
+        # two grids: the coarse cell and turn step searched over 1/8 m and a third of the step, then
+        # 1/32 m and half a degree round the best
+        first = best_scan_alignment(
+            pose, sub, field_, tolerance, 2 * grid.cell, math.radians(step), 9, step / 3.0
+        )
         assert first is not None
         fit, moved = (
-            best_scan_alignment(first[1], sub, field_, tolerance, 0.1, math.radians(1.5), 5, 0.75) or first
+            best_scan_alignment(
+                first[1], sub, field_, tolerance, grid.cell / 2, math.radians(step / 3), 9, 0.5
+            )
+            or first
         )
         refined.append(Candidate(storey, moved, fit, coarse))
     refined.sort(key=lambda c: -c.fit)
