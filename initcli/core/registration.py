@@ -43,7 +43,7 @@ class SearchGrid:
     cell: float = 0.25  # m: coarse grid of positions and of the template
     turn_step_deg: float = 5.0  # degrees between the coarse headings
     reach: float = 0.5  # m: the coarse wall map falls to 0 this far from a wall
-    peaks: int = 16  # coarse peaks refined (and local maxima kept per heading)
+    peaks: int = 24  # coarse peaks refined (and local maxima kept per heading)
     peak_m: float = 1.0  # m: coarse peaks at least this far apart ...
     peak_deg: float = 15.0  # ... or turned this much
     max_points: int = 1500  # beam ends kept (thinned on a grid of cell / 2)

@@ -20,7 +20,7 @@ import numpy as np
 
 from bimtools.site.load import Site
 from initcli.core.geometry import Pose2D
-from initcli.core.registration import Registration
+from initcli.core.registration import Candidate, Registration
 from initcli.core.verification import (
     TRACK_HYPOTHESES,
     CameraView,
@@ -308,43 +308,51 @@ class ClaimChecks:
         credible = [h for h in found if rival_check(h).passed]
         return len(credible), credible, 0
 
-    def registration_favoured(self, found: Registration, last: Pose2D) -> bool:
-        """Do the scans along the path (``track_m``, window by window) plainly favour the best pose of
-        a registration over every place that fits its submap within the margin (``contested``; each
-        also searched wide, as a hypothesis about to be outranked: ``track_outranks``)? The submap
-        of a corridor or of rooms that repeat fits several places; the path before it, through a
-        lobby or round a corridor end, fits one (beyond the paper)."""
+    def registration_favoured(self, found: Registration, last: Pose2D) -> Candidate | None:
+        """Of the best pose of a registration and the places that fit its submap within the margin
+        (``contested``), the one the scans along the path (``track_m``, window by window) plainly
+        favour: it ``track_outranks`` every other, each other also searched wide (as a hypothesis
+        about to be outranked); None when none stands out so. The submap of a corridor or of rooms
+        that repeat fits several places; the path before it, through a lobby or round a corridor
+        end, fits one (beyond the paper). None too when every refined place fits within the margin
+        (the search may not have reached the true one)."""
         c = self.checks
-        best = found.best
-        if best is None or not found.contested or c.track_m <= 0:
-            return False
+        if found.best is None or not found.contested or c.track_m <= 0:
+            return None
         if len(found.candidates) - 1 <= len(found.contested):
-            return False  # every place refined fits alike: the search may not have reached the true one
+            return None
         path = self.perception.path
+        group = [found.best, *found.contested]
 
-        def track(storey: str, pose: Pose2D, wide: bool = False) -> np.ndarray:
-            return track_transform(pose * last.inverse(), self.evidence_of(storey), path, c, wide)
+        def track(k: int, wide: bool = False) -> np.ndarray:
+            g = group[k]
+            return track_transform(g.pose * last.inverse(), self.evidence_of(g.storey), path, c, wide)
 
-        mine = track(best.storey, best.pose)
-        return all(
-            track_outranks(mine, track(r.storey, r.pose), c)
-            and track_outranks(mine, track(r.storey, r.pose, wide=True), c)
-            for r in found.contested
-        )
+        tracks = [track(k) for k in range(len(group))]
+        others = [[j for j in range(len(group)) if j != i] for i in range(len(group))]
+        winners = [
+            i for i in range(len(group)) if all(track_outranks(tracks[i], tracks[j], c) for j in others[i])
+        ]
+        if len(winners) != 1:
+            return None
+        w = winners[0]
+        if all(track_outranks(tracks[w], track(j, wide=True), c) for j in others[w]):
+            return group[w]
+        return None
 
     def registered(
-        self, frame: SensorFrame, storey: str, transform: Pose2D, found: Registration
+        self, frame: SensorFrame, claim: Candidate, transform: Pose2D, found: Registration
     ) -> tuple[bool, Pose2D | None]:
-        """Check the pose of a unique lidar registration (``transform``, odom -> BIM, on ``storey``)
+        """Check the place ``claim`` of a lidar registration ``found`` (``transform``, odom -> BIM)
         as a claim is checked: the path through free space, the recent scans' fit and, when the
         camera has seen anything, negative evidence. Whether it passed and the transform moved to
         where the recent scans fit best."""
+        storey = claim.storey
         check = self.verify(storey, transform)
-        best, rival = found.best, found.rival
-        assert best is not None
+        rival = next((c for c in found.candidates if c is not claim), None)
         extra = {
             "decided_by": DECIDED_BY_REGISTRATION,
-            "registration_fit": round(best.fit, 4),
+            "registration_fit": round(claim.fit, 4),
             "registration_rival_fit": None if rival is None else round(rival.fit, 4),
             "negative_evidence": not self.blind(),
             "registration_contested": len(found.contested),

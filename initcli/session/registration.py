@@ -14,17 +14,18 @@ from initcli.core.particle_filter import likelihood_field
 from initcli.core.registration import Registration, RegistrationMap, register
 from initcli.core.registration_settings import RegistrationParams
 from initcli.core.scan_fit import BeamEnds, ScanSample
+from initcli.core.verification import TRACK_HYPOTHESES
 from initcli.match.pipeline import Hypothesis
 from initcli.match.verify import PathEvidence
 
 __all__ = ["CONTESTED_MAX", "DECIDED_BY_REGISTRATION", "SubmapRegistration", "registered_hypothesis"]
 
 DECIDED_BY_REGISTRATION = "lidar registration"  # summary.json's decided_by for such a claim
-# The lidar along the path may pick the best pose of a registration out of at most this many places
-# that fit its submap alike (a point-symmetric floor: the place and its turned twin). More places
-# alike are rooms or bays that repeat, and the refined peaks may not hold the true one: in
-# ntu_hallway (camera off, seed 1) the path favoured the best of 10, 59 m from the truth.
-CONTESTED_MAX = 2
+# The lidar along the path may pick one pose out of a registration's best and at most this many
+# places that fit its submap alike (TRACK_HYPOTHESES in all, as for the camera's hypotheses), and
+# only when some refined place fits worse (the search went past the places alike: with 16 refined
+# peaks, all alike, ntu_hallway's true place was not among them and the path favoured one 59 m off).
+CONTESTED_MAX = TRACK_HYPOTHESES - 1
 
 
 class SubmapRegistration:

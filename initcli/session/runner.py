@@ -352,12 +352,18 @@ class Session:
         if best is None or last is None:
             return False
         if not found.unique:
-            if len(found.contested) > CONTESTED_MAX or not self.claims.registration_favoured(found, last):
+            favoured = None
+            if len(found.contested) <= CONTESTED_MAX:
+                favoured = self.claims.registration_favoured(found, last)
+            if favoured is None:
                 return False
+            best = favoured
             places = 1 + len(found.contested)
-            self._note(frame.t, f"lidar registration: the lidar along the path favours the best of {places}")
+            self._note(
+                frame.t, f"lidar registration: the lidar along the path favours one of {places} places"
+            )
         transform = best.pose * last.inverse()
-        verified, aligned = self.claims.registered(frame, best.storey, transform, found)
+        verified, aligned = self.claims.registered(frame, best, transform, found)
         if not verified:
             return False
         hypothesis = registered_hypothesis(best.storey, transform, frame.odom)
