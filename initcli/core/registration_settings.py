@@ -15,9 +15,9 @@ class RegistrationParams:
     """When the session registers its lidar submap over the BIM map, and when the result is unique."""
 
     enabled: bool = setting(
-        False,
+        True,
         "register the lidar submap of the recent path over every storey's map when no camera claim"
-        " exists (beyond the paper: a pose with the camera off)",
+        " exists (beyond the paper: a pose with the camera off; false: the paper's pipeline)",
     )
     min_travel: float = setting(10.0, "m of travel before the first registration", minimum=0, maximum=1000)
     every: float = setting(5.0, "m of travel between two registrations", above=0, maximum=1000)

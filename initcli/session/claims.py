@@ -308,38 +308,6 @@ class ClaimChecks:
         credible = [h for h in found if rival_check(h).passed]
         return len(credible), credible, 0
 
-    def registration_favoured(self, found: Registration, last: Pose2D) -> Candidate | None:
-        """Of the best pose of a registration and the places that fit its submap within the margin
-        (``contested``), the one the scans along the path (``track_m``, window by window) plainly
-        favour: it ``track_outranks`` every other, each other also searched wide (as a hypothesis
-        about to be outranked); None when none stands out so. The submap of a corridor or of rooms
-        that repeat fits several places; the path before it, through a lobby or round a corridor
-        end, fits one (beyond the paper). None too when every refined place fits within the margin
-        (the search may not have reached the true one)."""
-        c = self.checks
-        if found.best is None or not found.contested or c.track_m <= 0:
-            return None
-        if len(found.candidates) - 1 <= len(found.contested):
-            return None
-        path = self.perception.path
-        group = [found.best, *found.contested]
-
-        def track(k: int, wide: bool = False) -> np.ndarray:
-            g = group[k]
-            return track_transform(g.pose * last.inverse(), self.evidence_of(g.storey), path, c, wide)
-
-        tracks = [track(k) for k in range(len(group))]
-        others = [[j for j in range(len(group)) if j != i] for i in range(len(group))]
-        winners = [
-            i for i in range(len(group)) if all(track_outranks(tracks[i], tracks[j], c) for j in others[i])
-        ]
-        if len(winners) != 1:
-            return None
-        w = winners[0]
-        if all(track_outranks(tracks[w], track(j, wide=True), c) for j in others[w]):
-            return group[w]
-        return None
-
     def registered(
         self, frame: SensorFrame, claim: Candidate, transform: Pose2D, found: Registration
     ) -> tuple[bool, Pose2D | None]:
@@ -355,7 +323,6 @@ class ClaimChecks:
             "registration_fit": round(claim.fit, 4),
             "registration_rival_fit": None if rival is None else round(rival.fit, 4),
             "negative_evidence": not self.blind(),
-            "registration_contested": len(found.contested),
         }
         self.record(frame, "coarse", storey, transform * frame.odom, check, **extra)
         if check.passed or not self.checks.enabled:

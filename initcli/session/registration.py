@@ -14,18 +14,12 @@ from initcli.core.particle_filter import likelihood_field
 from initcli.core.registration import Registration, RegistrationMap, register
 from initcli.core.registration_settings import RegistrationParams
 from initcli.core.scan_fit import BeamEnds, ScanSample
-from initcli.core.verification import TRACK_HYPOTHESES
 from initcli.match.pipeline import Hypothesis
 from initcli.match.verify import PathEvidence
 
-__all__ = ["CONTESTED_MAX", "DECIDED_BY_REGISTRATION", "SubmapRegistration", "registered_hypothesis"]
+__all__ = ["DECIDED_BY_REGISTRATION", "SubmapRegistration", "registered_hypothesis"]
 
 DECIDED_BY_REGISTRATION = "lidar registration"  # summary.json's decided_by for such a claim
-# The lidar along the path may pick one pose out of a registration's best and at most this many
-# places that fit its submap alike (TRACK_HYPOTHESES in all, as for the camera's hypotheses), and
-# only when some refined place fits worse (the search went past the places alike: with 16 refined
-# peaks, all alike, ntu_hallway's true place was not among them and the path favoured one 59 m off).
-CONTESTED_MAX = TRACK_HYPOTHESES - 1
 
 
 class SubmapRegistration:
