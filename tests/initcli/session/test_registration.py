@@ -1,5 +1,6 @@
 """The session's lidar submap registration: with the camera off (every feature missed) a block_b
-session initialises from the lidar alone, and says so; without the registration it cannot."""
+session initialises from the lidar alone, and says so; without the registration it cannot; with
+the camera on, a registration claim weighs the doors the camera missed."""
 
 from __future__ import annotations
 
@@ -49,3 +50,22 @@ def test_with_the_camera_off_and_no_registration_nothing_is_claimed(camera_off) 
     result = _run(config, site, False)
     assert not result.success and result.decided_by is None
     assert result.coarse_pose is None
+
+
+def test_with_the_camera_on_a_registration_claim_weighs_the_doors_it_missed(
+    tmp_path_factory: pytest.TempPathFactory,
+) -> None:
+    """block_b under construction, seed 7: the camera has seen doors but not yet enough for a unique
+    match when the lidar's submap is unique (30 m; the doors alone claimed after 87 m). The camera
+    works, so the doors the place predicts in view and the camera missed count against it before
+    the claim."""
+    config = load_config(SAMPLES / "block_b.site.yaml", reality="construction")
+    site = prepare_site(config, tmp_path_factory.mktemp("block_b_construction"))
+    result = sim_session(config, site, 7).session.run()
+    assert result.success, result.reason
+    assert result.decided_by == DECIDED_BY_REGISTRATION
+    assert result.features_detected > 0
+    coarse = result.verifications[0]
+    assert coarse["negative_evidence"] is True and coarse["passed"]
+    assert result.pose is not None and result.truth_pose is not None
+    assert result.pose.distance_to(result.truth_pose) < 0.3
