@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from initcli.core.registration_settings import RegistrationParams
 from initcli.core.verification_settings import VerificationParams
 from initcli.match.options import SCORE_THRESHOLD, MatchingSettings
 from initcli.settings import section, setting
@@ -377,6 +378,10 @@ class SessionConfig:
         VerificationSection,
         "checks of a unique match before it is claimed: negative evidence and the lidar's fit (beyond"
         " the paper)",
+    )
+    registration: RegistrationParams = section(
+        RegistrationParams,
+        "the lidar submap registered over the BIM map when no camera claim exists (beyond the paper)",
     )
     source: Path | None = None  # the YAML file (not a setting)
 

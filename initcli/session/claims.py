@@ -20,6 +20,7 @@ import numpy as np
 
 from bimtools.site.load import Site
 from initcli.core.geometry import Pose2D
+from initcli.core.registration import Candidate, Registration
 from initcli.core.verification import (
     TRACK_HYPOTHESES,
     CameraView,
@@ -34,6 +35,7 @@ from initcli.drivers.base import SensorFrame
 from initcli.match.pipeline import Hypothesis, MatchReport
 from initcli.match.verify import StoreyEvidence, track_transform, verify_transform
 from initcli.session.perception import Perception
+from initcli.session.registration import DECIDED_BY_REGISTRATION
 from initcli.session.result import SessionResult
 from initcli.settings_session import VerificationSection
 
@@ -80,6 +82,10 @@ class ClaimChecks:
         checks = self.checks
         if fine:
             checks = dataclasses.replace(checks, min_scan_fit=checks.min_fine_scan_fit)
+        if self.blind():
+            # No detection at all so far (the camera is off, or sees nothing): a feature predicted in
+            # view and missed says nothing of the place, the camera would have missed it anywhere.
+            checks = dataclasses.replace(checks, log_odds=math.inf)
         if rival:
             factor = checks.rivals.search_factor
             checks = dataclasses.replace(checks, scan_search_xy=factor * checks.scan_search_xy)
@@ -91,6 +97,10 @@ class ClaimChecks:
             self.view,
             checks,
         )
+
+    def blind(self) -> bool:
+        """Has the camera seen nothing at all (no sighting in the images so far)?"""
+        return self.perception.frames > 0 and not self.perception.sightings
 
     def track(self, frame: SensorFrame, h: Hypothesis, check: Verification, wide: bool = False) -> np.ndarray:
         """The lidar's fit along the path for hypothesis ``h`` (``check`` its verification now),
@@ -297,6 +307,28 @@ class ClaimChecks:
             return rivals, found, 0
         credible = [h for h in found if rival_check(h).passed]
         return len(credible), credible, 0
+
+    def registered(
+        self, frame: SensorFrame, claim: Candidate, transform: Pose2D, found: Registration
+    ) -> tuple[bool, Pose2D | None]:
+        """Check the place ``claim`` of a lidar registration ``found`` (``transform``, odom -> BIM)
+        as a claim is checked: the path through free space, the recent scans' fit and, when the
+        camera has seen anything, negative evidence. Whether it passed and the transform moved to
+        where the recent scans fit best."""
+        storey = claim.storey
+        check = self.verify(storey, transform)
+        rival = next((c for c in found.candidates if c is not claim), None)
+        extra = {
+            "decided_by": DECIDED_BY_REGISTRATION,
+            "registration_fit": round(claim.fit, 4),
+            "registration_rival_fit": None if rival is None else round(rival.fit, 4),
+            "negative_evidence": not self.blind(),
+        }
+        self.record(frame, "coarse", storey, transform * frame.odom, check, **extra)
+        if check.passed or not self.checks.enabled:
+            return True, check.aligned
+        self.result.rejected += 1
+        return False, None
 
     # -- the end -------------------------------------------------------------------------------------
 

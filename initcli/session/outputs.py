@@ -52,6 +52,7 @@ def summary_document(result: SessionResult, simulated: bool, extra: dict | None 
         # missed_predictions, scan_fit, passed (initcli.core.verification).
         "verification": list(result.verifications),
         "rejected_matches": result.rejected,
+        "decided_by": result.decided_by,
         "laps": result.laps,
     }
     if result.shut_in is not None:

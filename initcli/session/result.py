@@ -114,6 +114,9 @@ class SessionResult:
     # last claim, which differs after a failed fine stage and a second claim).
     first_claim: CoarseClaim | None = None
     shut_in: ShutIn | None = None  # the session stopped shut in (reason SHUT_IN)
+    # what made the last claim unique: "algorithm 1", "lidar along the path" (of several
+    # hypotheses) or "lidar registration" (the lidar submap alone); None: no claim
+    decided_by: str | None = None
     laps: int = 0  # laps without a new feature after which the robot headed for an opening
 
     def claimed(

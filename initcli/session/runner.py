@@ -35,19 +35,21 @@ from initcli.config import (
     wall_follow_params,
 )
 from initcli.core.classes import ClassMap
+from initcli.core.detection_filter import ConfirmedFeature
 from initcli.core.geometry import Pose2D
 from initcli.core.verification import TRACK_HYPOTHESES, CameraView
 from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
 from initcli.io.detection_log import Meta, State
 from initcli.match.landmarks import site_tracker
-from initcli.match.pipeline import Hypothesis, MatchReport
+from initcli.match.pipeline import DECIDED_BY_LIDAR, DECIDED_BY_PAPER, Hypothesis, MatchReport
 from initcli.session.claims import ClaimChecks
 from initcli.session.escapes import PATH_STRIDE, Escapes
 from initcli.session.exploration import ActiveExploration, unseen_features
 from initcli.session.fine_tuning import FineLost, FineTuning, FineTuningHooks, matched_pairs
 from initcli.session.looks import Looks
 from initcli.session.perception import Perception
+from initcli.session.registration import DECIDED_BY_REGISTRATION, SubmapRegistration, registered_hypothesis
 from initcli.session.result import SHUT_IN, MatchStep, SessionResult, limit_reason
 
 __all__ = ["Observer", "Session"]
@@ -102,6 +104,7 @@ class Session:
         self.checks = config.verification
         view = CameraView(driver.camera, driver.mount, self.options.min_depth)
         self.claims = ClaimChecks(self.checks, site, self.perception, view, self.result, self._note)
+        self.registration = SubmapRegistration(config.registration, site, storey, self.checks.scan_tolerance)
         self.cannot_leave: str | None = None  # set when the start is known to be closed in
         self.fine_failures = 0  # fine stages that failed
         self.fine_failed_why = ""  # why the last one failed
@@ -176,6 +179,8 @@ class Session:
                 return
             if self.resume_from is not None:  # a fine stage drove on and failed: go on from there
                 frame, self.resume_from = self.resume_from, None
+            elif self.registration.due(self.perception.travel) and self._register(frame):
+                return
             self._emit(frame)
             self._watch_shuttling(frame)
             if self._out_of_limits(frame):
@@ -317,7 +322,10 @@ class Session:
         if claim is not None:
             verified, aligned, rivals = self.claims.verified(frame, claim, picked=not unique)
             if verified:
-                return self._coarse_done(frame, claim, aligned)
+                by = DECIDED_BY_PAPER if unique else DECIDED_BY_LIDAR
+                return self._coarse_done(
+                    frame, claim.hypotheses[0], claim.features, claim.verdict, by, aligned
+                )
             if self.state == "look":
                 return False  # the look turns all the way round first: what is behind costs no distance
             if rivals and self._active_below(len(rivals)):
@@ -338,6 +346,26 @@ class Session:
         elif self.state != "explore":
             self._set_state(frame.t, "explore", why=report.verdict)
         return False
+
+    def _register(self, frame: SensorFrame) -> bool:
+        """Register the lidar submap of the recent path over the BIM map (no camera claim so far);
+        claim a unique registration that passes the checks. True once the session is over."""
+        found, last = self.registration.attempt(self.perception.path, self.perception.travel)
+        self._note(frame.t, f"lidar registration: {found.why}")
+        best = found.best
+        if best is None or last is None:
+            return False
+        if not found.unique:
+            # Places that fit the submap alike are not told apart by the lidar along the path here:
+            # it picked a place 40-60 m off in the test halls (CHANGELOG, lidar registration).
+            return False
+        transform = best.pose * last.inverse()
+        verified, aligned = self.claims.registered(frame, best, transform, found)
+        if not verified:
+            return False
+        hypothesis = registered_hypothesis(best.storey, transform, frame.odom)
+        verdict = f"unique pose by lidar registration ({found.why})"
+        return self._coarse_done(frame, hypothesis, [], verdict, DECIDED_BY_REGISTRATION, aligned)
 
     def _active_below(self, hypotheses: int) -> bool:
         """Go and look where ``hypotheses`` disagree (§3.3.4: fewer than m_thre of them)?"""
@@ -385,14 +413,23 @@ class Session:
         self._set_state(frame.t, "failed", reason=reason)
         self.result.failed(reason, frame.truth, frame.t, self.driver.distance, self.perception.confirmed)
 
-    def _coarse_done(self, frame: SensorFrame, report: MatchReport, aligned: Pose2D | None = None) -> bool:
-        """The unique match: record the coarse and rectified poses (Eq. 17), fine-tune (Eq. 18);
-        True once the session is over (False: the fine stage failed and exploration goes on)."""
+    def _coarse_done(
+        self,
+        frame: SensorFrame,
+        best: Hypothesis,
+        features: list[ConfirmedFeature],
+        verdict: str,
+        decided_by: str,
+        aligned: Pose2D | None = None,
+    ) -> bool:
+        """The unique match ``best`` (of ``features``; ``decided_by`` what made it unique): record the
+        coarse and rectified poses (Eq. 17), fine-tune (Eq. 18); True once the session is over (False:
+        the fine stage failed and exploration goes on)."""
         cfg = self.config
-        best = report.hypotheses[0]
         r = self.result
         elapsed = time.perf_counter() - self._started
-        r.claimed(best, frame.truth, self.driver.distance, elapsed, report.features)
+        r.claimed(best, frame.truth, self.driver.distance, elapsed, features)
+        r.decided_by = decided_by
         # Fine tuning starts where the recent scans fit the BIM best near the coarse pose (``aligned``,
         # the verification's search: decimetres, degrees): a coarse pose from doors built off their
         # place can be 15 degrees off, which a filter seeded 10 degrees wide may not recover.
@@ -404,7 +441,8 @@ class Session:
         self._set_state(
             frame.t,
             "coarse",
-            verdict=report.verdict,
+            verdict=verdict,
+            decided_by=decided_by,
             pose=[round(v, 4) for v in best.pose.as_tuple()],
             rectified_pose=[round(v, 4) for v in best.reported_pose.as_tuple()],
             matches=best.matches,

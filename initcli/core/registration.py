@@ -1,0 +1,237 @@
+"""Global lidar submap registration against the BIM map (beyond the paper): a pose with no camera.
+
+The beam end points of the recent scans (:class:`~initcli.core.scan_fit.BeamEnds`, in the robot frame
+at the last scan, odometry joining them) are a local submap. It is placed over every storey's map by
+the score of the fine-tuning filter's end-point model (Eq. 18's likelihood field, with no beam
+skipped): the share of beam ends within a tolerance of a mapped wall.
+
+* **Coarse**: for each heading of a ``turn_step_deg`` grid the submap is rasterised into a template
+  of ``cell`` m cells and correlated with a soft wall map of the same cells (``1 - d / reach`` for a
+  cell whose nearest wall is ``d`` away, max-pooled, so that the rounding to coarse cells costs no
+  fit) by ``cv2.matchTemplate``; only positions on free cells count (the robot stood there).
+* **Peaks**: the best coarse poses, no two closer than ``peak_m`` and ``peak_deg``.
+* **Fine**: each peak refined by :func:`~initcli.core.scan_fit.best_scan_alignment` (two grids),
+  its fit the share of beams on walls at ``tolerance``.
+* **Unique**: the best fit must reach ``min_fit``, and every refined peak ``distinct_m`` or
+  ``distinct_deg`` away from it (a rival) must trail it by ``margin``: a corridor or rooms that
+  repeat leave two places alike and no pose is reported.
+
+Pure numpy (and OpenCV's correlation); the session decides what to do with the result.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from bimtools.site.records import FREE, OccupancyGrid
+from initcli.core.geometry import Pose2D, wrap_angle
+from initcli.core.particle_filter import LikelihoodField
+from initcli.core.registration_settings import RegistrationParams
+from initcli.core.scan_fit import BeamEnds, best_scan_alignment
+
+__all__ = ["Candidate", "GRID", "Registration", "RegistrationMap", "SearchGrid", "register", "thin_points"]
+
+
+@dataclass(frozen=True)
+class SearchGrid:
+    """The coarse search's grids (fixed: measured on the samples, not settings)."""
+
+    cell: float = 0.25  # m: coarse grid of positions and of the template
+    turn_step_deg: float = 5.0  # degrees between the coarse headings
+    reach: float = 0.5  # m: the coarse wall map falls to 0 this far from a wall
+    peaks: int = 24  # coarse peaks refined (and local maxima kept per heading)
+    peak_m: float = 1.0  # m: coarse peaks at least this far apart ...
+    peak_deg: float = 15.0  # ... or turned this much
+    max_points: int = 1500  # beam ends kept (thinned on a grid of cell / 2)
+
+
+GRID = SearchGrid()
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A refined peak: its storey, the robot's pose at the last scan and its fit."""
+
+    storey: str
+    pose: Pose2D
+    fit: float
+    coarse: float  # the coarse score, share of beam ends
+
+    def apart(self, other: Candidate, params: RegistrationParams) -> bool:
+        """Is ``other`` a distinct place (another storey, or ``distinct_m`` / ``distinct_deg`` away)?"""
+        if other.storey != self.storey:
+            return True
+        far = self.pose.distance_to(other.pose) >= params.distinct_m
+        return far or self.pose.yaw_error(other.pose) >= math.radians(params.distinct_deg)
+
+
+@dataclass(frozen=True)
+class Registration:
+    """The outcome: the refined peaks best first; ``unique`` when the best one stands out."""
+
+    candidates: tuple[Candidate, ...]  # the best pose, then the distinct places, best first
+    unique: bool
+    why: str
+    points: int
+    contested: tuple[Candidate, ...] = ()  # distinct places within margin of a best pose fitting min_fit
+
+    @property
+    def best(self) -> Candidate | None:
+        return self.candidates[0] if self.candidates else None
+
+    @property
+    def rival(self) -> Candidate | None:
+        """The best candidate distinct from the best one (None: none found)."""
+        return self.candidates[1] if len(self.candidates) > 1 else None
+
+
+class RegistrationMap:
+    """One storey's map prepared for the coarse search (once per map)."""
+
+    def __init__(self, storey: str, grid: OccupancyGrid, field_: LikelihoodField, params: SearchGrid = GRID):
+        self.storey, self.grid, self.field_ = storey, grid, field_
+        k = max(1, int(round(params.cell / grid.resolution)))
+        self.cell = k * grid.resolution
+        rows, cols = grid.cells.shape
+        h, w = -(-rows // k), -(-cols // k)
+        # rows counted up from the map's bottom edge (y grows with the row index here)
+        soft = np.clip(1.0 - field_.distance[::-1] / params.reach, 0.0, 1.0).astype(np.float32)
+        free = (grid.cells[::-1] == FREE).astype(np.uint8)
+        pad_s = np.zeros((h * k, w * k), np.float32)
+        pad_s[:rows, :cols] = soft
+        pad_f = np.zeros((h * k, w * k), np.uint8)
+        pad_f[:rows, :cols] = free
+        self.score = pad_s.reshape(h, k, w, k).max(axis=(1, 3))  # max-pooled soft wall map
+        self.free = pad_f.reshape(h, k, w, k).max(axis=(1, 3)) > 0
+        self.origin = (float(grid.origin[0]), float(grid.origin[1]))
+
+
+def thin_points(xy: np.ndarray, cell: float, limit: int) -> np.ndarray:
+    """One beam end per ``cell`` grid cell (the first), at most ``limit`` of them, evenly picked: the
+    submap's walls weigh by their length, not by how often the robot scanned them."""
+    if len(xy) == 0:
+        return xy
+    keys = np.floor(xy / cell).astype(np.int64)
+    _, first = np.unique(keys, axis=0, return_index=True)
+    kept = xy[np.sort(first)]
+    if len(kept) > limit:
+        kept = kept[np.linspace(0, len(kept) - 1, limit).astype(np.intp)]
+    return kept
+
+
+def _placements(
+    points: np.ndarray, turn: float, m: RegistrationMap
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The coarse score of every placement of the submap turned by ``turn`` whose robot stands on a
+    free cell of ``m``: (scores (rows, cols) in beam ends, the map rows, the map columns)."""
+    cell = m.cell
+    c, s = math.cos(turn), math.sin(turn)
+    q = np.column_stack([c * points[:, 0] - s * points[:, 1], s * points[:, 0] + c * points[:, 1]])
+    low = np.floor(q.min(axis=0) / cell)
+    idx = (np.floor(q / cell) - low).astype(np.intp)
+    th, tw = int(idx[:, 1].max()) + 1, int(idx[:, 0].max()) + 1
+    templ = np.zeros((th, tw), np.float32)
+    np.add.at(templ, (idx[:, 1], idx[:, 0]), 1.0)
+    # the map padded by the template on every side: submap points off the map score 0
+    corr = cv2.matchTemplate(np.pad(m.score, ((th, th), (tw, tw))), templ, cv2.TM_CCORR)
+    # placement (i, j) puts the template's cell (0, 0) on the map's cell (i - th, j - tw); the robot
+    # (the submap's point (0, 0)) is the template's cell -low, so on the map's (i - th - low_y, ...)
+    ry = np.arange(corr.shape[0]) - th - int(low[1])
+    rx = np.arange(corr.shape[1]) - tw - int(low[0])
+    ry, rx = ry[(ry >= 0) & (ry < m.free.shape[0])], rx[(rx >= 0) & (rx < m.free.shape[1])]
+    sub = corr[np.ix_(ry + th + int(low[1]), rx + tw + int(low[0]))]
+    return np.where(m.free[np.ix_(ry, rx)], sub, np.float32(0.0)), ry, rx
+
+
+def _coarse(
+    points: np.ndarray, maps: list[RegistrationMap], grid: SearchGrid
+) -> list[tuple[float, str, Pose2D]]:
+    """The coarse peaks over every map: (score as a share of points, storey, pose), best first, no
+    two within ``peak_m`` and ``peak_deg`` of each other on one storey. Each heading gives its local
+    maxima (over ``peak_m``), so a second place alike is never crowded out by the best one's
+    neighbours."""
+    turns = np.deg2rad(np.arange(0.0, 360.0, grid.turn_step_deg))
+    found: list[tuple[float, str, Pose2D]] = []
+    for m in maps:
+        r = max(1, int(round(grid.peak_m / m.cell)))
+        kernel = np.ones((2 * r + 1, 2 * r + 1), np.uint8)
+        for a in turns:
+            scores, ry, rx = _placements(points, float(a), m)
+            local = (scores >= cv2.dilate(scores, kernel)) & (scores > 0)
+            flat = np.flatnonzero(local)
+            flat = flat[np.argsort(-scores.ravel()[flat])[: grid.peaks]]
+            i, j = np.divmod(flat, scores.shape[1])
+            for k, row, col in zip(flat, ry[i], rx[j], strict=True):
+                x, y = m.origin[0] + (col + 0.5) * m.cell, m.origin[1] + (row + 0.5) * m.cell
+                pose = Pose2D(float(x), float(y), float(wrap_angle(float(a))))
+                found.append((float(scores.ravel()[k]) / len(points), m.storey, pose))
+    found.sort(key=lambda f: -f[0])
+    peaks: list[tuple[float, str, Pose2D]] = []
+    for f in found:
+        if not any(
+            p[1] == f[1]
+            and p[2].distance_to(f[2]) < grid.peak_m
+            and p[2].yaw_error(f[2]) < math.radians(grid.peak_deg)
+            for p in peaks
+        ):
+            peaks.append(f)
+            if len(peaks) == grid.peaks:
+                break
+    return peaks
+
+
+def register(
+    ends: BeamEnds,
+    maps: list[RegistrationMap],
+    params: RegistrationParams,
+    tolerance: float,
+    grid: SearchGrid = GRID,
+) -> Registration:
+    """Place the submap ``ends`` over ``maps`` (module docstring): the refined peaks, best first,
+    the best's distinct rival second, and whether the best one is unique."""
+    points = thin_points(ends.xy, maps[0].cell / 2.0 if maps else 0.1, grid.max_points)
+    if len(points) < 20 or not maps:
+        return Registration((), False, f"{len(points)} beam ends", len(points))
+    sub = BeamEnds(Pose2D(0.0, 0.0, 0.0), points, np.array([float(len(points))]))
+    fields = {m.storey: m.field_ for m in maps}
+    refined: list[Candidate] = []
+    for coarse, storey, pose in _coarse(points, maps, grid):
+        field_ = fields[storey]
+        step = grid.turn_step_deg
+        # two grids: the coarse cell and turn step searched over 1/8 m and a third of the step, then
+        # 1/32 m and half a degree round the best
+        first = best_scan_alignment(
+            pose, sub, field_, tolerance, 2 * grid.cell, math.radians(step), 9, step / 3.0
+        )
+        assert first is not None
+        fit, moved = (
+            best_scan_alignment(
+                first[1], sub, field_, tolerance, grid.cell / 2, math.radians(step / 3), 9, 0.5
+            )
+            or first
+        )
+        refined.append(Candidate(storey, moved, fit, coarse))
+    refined.sort(key=lambda c: -c.fit)
+    best = refined[0]
+    distinct: list[Candidate] = []  # the places apart from the best one and from each other
+    for c in refined[1:]:
+        if best.apart(c, params) and all(d.apart(c, params) for d in distinct):
+            distinct.append(c)
+    close = tuple(c for c in distinct if best.fit - c.fit < params.margin)
+    ordered = (best, *distinct)
+    if best.fit < params.min_fit:
+        return Registration(ordered, False, f"best fit {best.fit:.2f} < {params.min_fit:.2f}", len(points))
+    if close:
+        rival = close[0]
+        far = best.pose.distance_to(rival.pose)
+        why = (
+            f"{len(close)} place(s) fit within {params.margin:g}, one {far:.1f} m away"
+            f" {rival.fit:.2f} against {best.fit:.2f}"
+        )
+        return Registration(ordered, False, why, len(points), close)
+    next_fit = distinct[0].fit if distinct else 0.0
+    return Registration(ordered, True, f"fit {best.fit:.2f}, the next place {next_fit:.2f}", len(points))

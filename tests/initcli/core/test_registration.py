@@ -1,0 +1,116 @@
+"""The lidar submap registration over the BIM map: finds the pose where the walls single it out,
+refuses where they repeat."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from bimtools.site.records import FREE, OCCUPIED, OccupancyGrid
+from initcli.core.geometry import Pose2D
+from initcli.core.particle_filter import LikelihoodField
+from initcli.core.raycast import ray_segment_distances
+from initcli.core.registration import RegistrationMap, register, thin_points
+from initcli.core.registration_settings import RegistrationParams
+from initcli.core.scan_fit import BeamEnds, ScanSample
+
+RES = 0.05
+# An asymmetric floor: a 30 x 12 m hall, a wall across it with a doorway, a room in one corner and
+# a column (a 1 m square) in the other part.
+FLOOR = np.array(
+    [
+        [0, 0, 30, 0],
+        [30, 0, 30, 12],
+        [30, 12, 0, 12],
+        [0, 12, 0, 0],
+        [12, 0, 12, 5],
+        [12, 7, 12, 12],
+        [0, 8, 5, 8],
+        [5, 8, 5, 10],
+        [22, 4, 23, 4],
+        [23, 4, 23, 5],
+        [23, 5, 22, 5],
+        [22, 5, 22, 4],
+    ],
+    dtype=float,
+)
+# A plain corridor 60 m long and 2.4 m wide: every place along its middle looks alike.
+CORRIDOR = np.array([[0, 0, 60, 0], [60, 0, 60, 2.4], [60, 2.4, 0, 2.4], [0, 2.4, 0, 0]], dtype=float)
+
+
+def grid_of(walls: np.ndarray) -> OccupancyGrid:
+    """The walls drawn one cell thick, free inside their bounding box, 1 m of margin."""
+    x0, y0 = walls[:, [0, 2]].min() - 1.0, walls[:, [1, 3]].min() - 1.0
+    w = int((walls[:, [0, 2]].max() + 1.0 - x0) / RES)
+    h = int((walls[:, [1, 3]].max() + 1.0 - y0) / RES)
+    cells = np.full((h, w), FREE, dtype=np.uint8)
+    for x1, y1, x2, y2 in walls:
+        n = int(max(abs(x2 - x1), abs(y2 - y1)) / RES) + 1
+        cols = np.floor((np.linspace(x1, x2, n) - x0) / RES).astype(int)
+        rows = h - 1 - np.floor((np.linspace(y1, y2, n) - y0) / RES).astype(int)
+        cells[rows, cols] = OCCUPIED
+    return OccupancyGrid(cells, RES, (x0, y0, 0.0))
+
+
+def drive(walls: np.ndarray, path: list[Pose2D], odom_start: Pose2D) -> list[ScanSample]:
+    """Scans cast in the true world at each pose of ``path``, with odometry starting at ``odom_start``
+    (an odometry frame unrelated to the map's)."""
+    angles = np.linspace(-math.pi, math.pi, 180, endpoint=False)
+    to_odom = odom_start * path[0].inverse()
+    scans = []
+    for pose in path:
+        ranges = ray_segment_distances(np.array([pose.x, pose.y]), angles + pose.yaw, walls, 15.0)
+        ranges = np.where(ranges < 15.0, ranges, np.inf)
+        scans.append(ScanSample(to_odom * pose, angles, ranges, 15.0))
+    return scans
+
+
+def line(x0: float, y0: float, x1: float, y1: float, step: float = 0.5) -> list[Pose2D]:
+    n = int(math.hypot(x1 - x0, y1 - y0) / step) + 1
+    yaw = math.atan2(y1 - y0, x1 - x0)
+    return [
+        Pose2D(float(x), float(y), yaw)
+        for x, y in zip(np.linspace(x0, x1, n), np.linspace(y0, y1, n), strict=True)
+    ]
+
+
+def registered(walls: np.ndarray, path: list[Pose2D]) -> tuple[object, Pose2D]:
+    grid = grid_of(walls)
+    scans = drive(walls, path, Pose2D(3.0, -7.0, 1.0))
+    found = register(
+        BeamEnds.of(scans), [RegistrationMap("L1", grid, LikelihoodField(grid))], RegistrationParams(), 0.25
+    )
+    return found, path[-1]
+
+
+def test_the_submap_of_an_asymmetric_floor_registers_at_the_true_pose() -> None:
+    path = line(8.0, 2.5, 8.0, 6.0) + line(8.0, 6.0, 18.0, 6.0)  # up, then east through the doorway
+    found, truth = registered(FLOOR, path)
+    assert found.unique, found.why
+    best = found.best
+    assert best is not None and best.storey == "L1"
+    assert best.pose.distance_to(truth) < 0.2
+    assert math.degrees(best.pose.yaw_error(truth)) < 2.0
+    assert best.fit > 0.95
+
+
+def test_a_plain_corridor_is_refused_where_every_place_looks_alike() -> None:
+    found, truth = registered(CORRIDOR, line(20.0, 1.2, 35.0, 1.2))
+    assert not found.unique
+    assert found.best is not None and found.rival is not None
+    assert found.best.fit > 0.9 and found.rival.fit > found.best.fit - 0.15  # both fit: no pose
+    assert found.contested and "fit within" in found.why
+
+
+def test_a_submap_too_thin_to_judge_is_refused() -> None:
+    grid = grid_of(FLOOR)
+    ends = BeamEnds(Pose2D.identity(), np.array([[1.0, 0.0], [0.0, 1.0]]), np.array([2.0]))
+    found = register(ends, [RegistrationMap("L1", grid, LikelihoodField(grid))], RegistrationParams(), 0.25)
+    assert not found.unique and found.best is None
+
+
+def test_thinning_keeps_one_point_per_cell_and_at_most_the_limit() -> None:
+    xy = np.array([[0.01, 0.01], [0.02, 0.02], [0.5, 0.5], [1.0, 1.0], [1.01, 1.02]])
+    assert len(thin_points(xy, 0.1, 100)) == 3
+    assert len(thin_points(np.random.default_rng(0).uniform(0, 50, (5000, 2)), 0.1, 300)) == 300
