@@ -1,5 +1,5 @@
 """Paths the tests share: the repository root, the bundled samples, the real IFC models in ../shared/ifc;
-how a session's claim replays from its log; the map of a few closed rooms.
+how a session's claim replays from its log; the map of a few closed rooms; walls drawn into a grid.
 
 Test modules import these as ``from tests.helpers import SAMPLES`` (pytest's ``pythonpath`` puts the
 repository root on ``sys.path``); the fixtures built on them live in ``tests/conftest.py``.
@@ -13,6 +13,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from bimtools.site.records import OccupancyGrid
     from initcli.match.pipeline import Hypothesis, MatchReport
 
@@ -77,3 +79,30 @@ def wait_until(predicate: Callable[[], object], timeout: float) -> bool:
             return True
         time.sleep(0.02)
     return False
+
+
+def walls_grid(
+    walls: np.ndarray, res: float = 0.05, bounds: tuple[float, float, float, float] | None = None
+) -> OccupancyGrid:
+    """Wall segments (N x 4: x1, y1, x2, y2) drawn one cell thick into an occupancy grid of ``res`` m
+    cells, free elsewhere, over ``bounds`` (x0, y0, x1, y1; default: the walls' box and 1 m more)."""
+    import numpy as np
+
+    from bimtools.site.records import FREE, OCCUPIED, OccupancyGrid
+
+    if bounds is None:
+        bounds = (
+            walls[:, [0, 2]].min() - 1.0,
+            walls[:, [1, 3]].min() - 1.0,
+            walls[:, [0, 2]].max() + 1.0,
+            walls[:, [1, 3]].max() + 1.0,
+        )
+    x0, y0 = bounds[0], bounds[1]
+    w, h = int(round((bounds[2] - x0) / res)), int(round((bounds[3] - y0) / res))
+    cells = np.full((h, w), FREE, dtype=np.uint8)
+    for x1, y1, x2, y2 in walls:
+        n = int(max(abs(x2 - x1), abs(y2 - y1)) / res) + 1
+        cols = np.floor((np.linspace(x1, x2, n) - x0) / res).astype(int)
+        rows = h - 1 - np.floor((np.linspace(y1, y2, n) - y0) / res).astype(int)
+        cells[rows, cols] = OCCUPIED
+    return OccupancyGrid(cells, res, (x0, y0, 0.0))

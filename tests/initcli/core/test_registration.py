@@ -7,13 +7,14 @@ import math
 
 import numpy as np
 
-from bimtools.site.records import FREE, OCCUPIED, OccupancyGrid
+from bimtools.site.records import OccupancyGrid
 from initcli.core.geometry import Pose2D
 from initcli.core.particle_filter import LikelihoodField
 from initcli.core.raycast import ray_segment_distances
 from initcli.core.registration import RegistrationMap, register, thin_points
 from initcli.core.registration_settings import RegistrationParams
 from initcli.core.scan_fit import BeamEnds, ScanSample
+from tests.helpers import walls_grid
 
 RES = 0.05
 # An asymmetric floor: a 30 x 12 m hall, a wall across it with a doorway, a room in one corner and
@@ -41,16 +42,7 @@ CORRIDOR = np.array([[0, 0, 60, 0], [60, 0, 60, 2.4], [60, 2.4, 0, 2.4], [0, 2.4
 
 def grid_of(walls: np.ndarray) -> OccupancyGrid:
     """The walls drawn one cell thick, free inside their bounding box, 1 m of margin."""
-    x0, y0 = walls[:, [0, 2]].min() - 1.0, walls[:, [1, 3]].min() - 1.0
-    w = int((walls[:, [0, 2]].max() + 1.0 - x0) / RES)
-    h = int((walls[:, [1, 3]].max() + 1.0 - y0) / RES)
-    cells = np.full((h, w), FREE, dtype=np.uint8)
-    for x1, y1, x2, y2 in walls:
-        n = int(max(abs(x2 - x1), abs(y2 - y1)) / RES) + 1
-        cols = np.floor((np.linspace(x1, x2, n) - x0) / RES).astype(int)
-        rows = h - 1 - np.floor((np.linspace(y1, y2, n) - y0) / RES).astype(int)
-        cells[rows, cols] = OCCUPIED
-    return OccupancyGrid(cells, RES, (x0, y0, 0.0))
+    return walls_grid(walls, RES)
 
 
 def drive(walls: np.ndarray, path: list[Pose2D], odom_start: Pose2D) -> list[ScanSample]:

@@ -26,6 +26,7 @@ from initcli.core.verification import (
     tracked_scan_fit,
     verify_hypothesis,
 )
+from tests.helpers import walls_grid
 
 VIEW = CameraView(
     CameraIntrinsics(600.0, 600.0, 320.0, 240.0, 640, 480), CameraMount(0.2, 0.0, 1.0, 0, 0, 0), min_depth=0.5
@@ -281,15 +282,7 @@ ELL = np.array(
 
 
 def ell_grid() -> OccupancyGrid:
-    res = 0.05
-    x0, y0, w, h = -31.0, -1.0, 1500, 640  # x in [-31, 44), y in [-1, 31)
-    cells = np.full((h, w), FREE, dtype=np.uint8)
-    for x1, y1, x2, y2 in ELL:
-        n = int(max(abs(x2 - x1), abs(y2 - y1)) / res) + 1
-        cols = np.floor((np.linspace(x1, x2, n) - x0) / res).astype(int)
-        rows = h - 1 - np.floor((np.linspace(y1, y2, n) - y0) / res).astype(int)
-        cells[rows, cols] = OCCUPIED
-    return OccupancyGrid(cells, res, (x0, y0, 0.0))
+    return walls_grid(ELL, 0.05, bounds=(-31.0, -1.0, 44.0, 31.0))
 
 
 def ell_drive(scale: float = 1.0) -> tuple[list[ScanSample], list[float]]:
