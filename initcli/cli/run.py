@@ -83,6 +83,8 @@ def result_table(doc: dict) -> Table:
     table.add_row("success", "[green]yes[/green]" if doc["success"] else "[red]no[/red]")
     shut = doc.get("shut_in")
     table.add_row("reason", shut["message"] if shut else doc["reason"])
+    if doc.get("decided_by"):
+        table.add_row("decided by", str(doc["decided_by"]))
     table.add_row("storey", str(doc["storey"]))
     for key in ("coarse_pose", "rectified_pose", "pose"):
         p = doc.get(key)

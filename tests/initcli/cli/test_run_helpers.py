@@ -55,7 +55,9 @@ def test_result_table_rows() -> None:
     rectified = next(line for line in text.splitlines() if "rectified pose" in line)
     assert rectified.split("rectified pose")[1].strip(" │|").strip() == "-"
     assert "12.3 m / 20.1 m" in text and "55.0 s (simulated in 4.2 s)" in text
-    assert "error" not in text
+    assert "error" not in text and "decided by" not in text
+    registered = _text(result_table(_doc(decided_by="lidar registration")))
+    assert "decided by" in registered and "lidar registration" in registered
 
 
 def test_result_table_errors_and_failure() -> None:
