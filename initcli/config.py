@@ -300,6 +300,7 @@ def match_options(config: SessionConfig, storey: str | None) -> MatchOptions:
         top=max(m.m_thre, MatchOptions.top),
         d_thre=config.exploration.d_thre,
         score_threshold=config.detector.score_threshold,
+        registration=config.registration.enabled,
     )
 
 

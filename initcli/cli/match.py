@@ -38,10 +38,11 @@ from initcli.cli.bag_options import (
 )
 from initcli.cli.progress import message_progress
 from initcli.core.geometry import Pose2D
+from initcli.core.registration_settings import RegistrationParams
 from initcli.core.verification import TRACK_HYPOTHESES, Verification
 from initcli.match.pipeline import EXIT_BAD_INPUT, MatchOptions, MatchReport, run_match
+from initcli.match.registration import check_and_register
 from initcli.match.report_file import report_to_dict
-from initcli.match.verify import check_hypotheses
 from initcli.ros.convert import log_or_bag
 from initcli.settings import describe, settings_of
 
@@ -108,7 +109,14 @@ def print_report(report: MatchReport, console: Console, checks: Sequence[Verific
             )
         for i, h in enumerate(report.hypotheses):
             matches = " ".join(m if m is not None else "-" for m in h.matches)
-            rect = _fmt_pose(h.rectified_pose) if h.rectified_pose is not None else "(no walls)"
+            # a lidar registration's place matches no feature and is not rectified
+            rect = (
+                _fmt_pose(h.rectified_pose)
+                if h.rectified_pose is not None
+                else "(no walls)"
+                if h.matches
+                else "-"
+            )
             table.add_row(
                 str(h.rank),
                 f"{h.cost:.3f}",
@@ -214,7 +222,8 @@ def match(
             listed = replace(options, top=max(top, TRACK_HYPOTHESES)) if verify else options
             report = run_match(log_path, site, listed, source=log)
             if verify:
-                checks = check_hypotheses(log_path, site, report, options.skip_bad, top)
+                registration = RegistrationParams(enabled=options.registration)
+                checks = check_and_register(log_path, site, report, options.skip_bad, top, registration)
     except InputError as exc:
         raise _fail(str(exc)) from None
 

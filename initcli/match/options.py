@@ -185,6 +185,13 @@ class MatchOptions(MatchingSettings):
     skip_bad: bool = setting(
         False, "skip malformed log lines (with a count) instead of failing", flag="--skip-bad"
     )
+    registration: bool = setting(
+        True,
+        "with no unique verdict, register the lidar submap of the log's last registration.window m over"
+        " the site's maps, as a session does with no camera claim (needs the site folder's maps and the"
+        " log's scans); false: the features and the lidar along the path alone",
+        flag="--registration/--no-registration",
+    )
 
     def outlier_budget(self, features: int) -> int:
         """The most outliers a match of ``features`` confirmed features may declare: max_outliers,

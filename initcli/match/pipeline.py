@@ -127,8 +127,12 @@ class MatchReport:
     site_model: Site | None = field(default=None, repr=False)
     outliers_allowed: int = 0  # the outlier budget the hypotheses were found with (grown: outlier_share)
     overflow: bool = False  # matching stopped at the partial-match cap (far too ambiguous)
-    decided_by: str | None = None  # what made the verdict unique: DECIDED_BY_PAPER or DECIDED_BY_LIDAR
+    decided_by: str | None = None  # what made the verdict unique: DECIDED_BY_PAPER, DECIDED_BY_LIDAR, or
+    # initcli.match.registration's DECIDED_BY_REGISTRATION
     paper_verdict: str | None = None  # Algorithm 1's own verdict where the lidar changed it
+    # a unique lidar registration at the log's end that decided the verdict (initcli.match.registration):
+    # its fit, its best distinct rival's fit and whether the camera's misses counted, as summary.json
+    registration: dict[str, object] | None = None
 
     def _storeys_poses(self) -> tuple[list[str], list[Pose2D], float, float]:
         hs = self.hypotheses

@@ -37,6 +37,7 @@ def report_to_dict(report: MatchReport, verifications: list[Any] | None = None) 
         "exit_code": report.exit_code,
         "decided_by": report.decided_by,
         "paper_verdict": report.paper_verdict or report.verdict,
+        "registration": report.registration,
         "n_hypotheses": report.n_hypotheses,
         "storey": report.storey,
         "storeys_searched": list(report.storeys),

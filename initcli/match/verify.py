@@ -9,9 +9,10 @@ session's verdict replays from its log.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
@@ -58,6 +59,8 @@ __all__ = [
     "TRACK_KEPT_M",
     "TRACK_STEP_M",
     "check_hypotheses",
+    "check_loaded",
+    "claim_params",
     "lidar_unique",
     "path_free_along",
     "path_track",
@@ -78,6 +81,16 @@ PATH_RETRY = 0.2  # ... placed window by window by the lidar along the path when
 TRACK_STEP_M = 0.5  # m of travel between the scans kept for the lidar along the path ...
 TRACK_BEAM_STEP = 2  # ... with every second of their beams
 TRACK_KEPT_M = 100.0  # m of travel whose scans are kept for it (the check reads track_m of them)
+
+P = TypeVar("P", bound=VerificationParams)
+
+
+def claim_params(params: P, blind: bool) -> P:
+    """The checks a claim passes: ``params``, with negative evidence off when the camera is
+    ``blind`` (it took images but saw nothing in any: the camera is off or sees nothing, so a
+    feature predicted in view and missed says nothing of the place, it would be missed anywhere).
+    The session's claims and ``bim-init match``'s replay of a lidar registration both use it."""
+    return replace(params, log_odds=math.inf) if blind else params
 
 
 @dataclass
@@ -167,15 +180,24 @@ class PathEvidence:
     @staticmethod
     def of_log(log: DetectionLog) -> PathEvidence:
         """The images' odom poses and the scans (at the latest odom pose before each) of a log."""
+        *_, (path, _, _) = PathEvidence.growing(log)
+        return path
+
+    @staticmethod
+    def growing(log: DetectionLog) -> Iterator[tuple[PathEvidence, float, float]]:
+        """The path of a log as a session gathered it: before each odom record and at the end, the
+        path so far (one object, growing), its odometry travel in m and the time of its last odom
+        record."""
         out = PathEvidence()
-        travel = 0.0
+        travel, t = 0.0, 0.0
         last: Pose2D | None = None
         for rec in log.records:
             if isinstance(rec, Odom):
+                yield out, travel, t
                 here = Pose2D(rec.x, rec.y, rec.yaw)
                 if last is not None:
                     travel += last.distance_to(here)
-                last = here
+                last, t = here, rec.t
             elif isinstance(rec, Scan) and last is not None:
                 n = len(rec.ranges)
                 angles = rec.angle_min + rec.angle_increment * np.arange(n)
@@ -183,7 +205,7 @@ class PathEvidence:
                 out.add_scan(last, travel, angles, ranges, rec.range_max)
             elif isinstance(rec, Detections):
                 out.add_image(rec.pose, travel)
-        return out
+        yield out, travel, t
 
 
 def verify_transform(
@@ -391,11 +413,13 @@ def check_hypotheses(
     unique (:func:`lidar_unique`), as a session would claim it. ``report`` lists up to
     ``TRACK_HYPOTHESES`` so that the verdict does not depend on ``--top``; it is cut to the
     ``shown`` first here, with the checks."""
-    site = load_site(site_path)
+    return check_loaded(read_log(log_path, skip_bad=skip_bad), load_site(site_path), report, shown)
+
+
+def check_loaded(log: DetectionLog, site: Site, report: MatchReport, shown: int) -> list[Verification | None]:
+    """:func:`check_hypotheses` on a log and a site (with its maps) already read."""
     params = VerificationParams()
-    checks, favoured = verify_and_favour(
-        read_log(log_path, skip_bad=skip_bad), site, report, site_class_map(site), params
-    )
+    checks, favoured = verify_and_favour(log, site, report, site_class_map(site), params)
     if (
         favoured is not None
         and report.weighted_inliers(report.hypotheses[favoured]) >= params.min_claim_inliers

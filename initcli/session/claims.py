@@ -33,9 +33,9 @@ from initcli.core.verification import (
 )
 from initcli.drivers.base import SensorFrame
 from initcli.match.pipeline import Hypothesis, MatchReport
-from initcli.match.verify import StoreyEvidence, track_transform, verify_transform
+from initcli.match.registration import registration_record
+from initcli.match.verify import StoreyEvidence, claim_params, track_transform, verify_transform
 from initcli.session.perception import Perception
-from initcli.session.registration import DECIDED_BY_REGISTRATION
 from initcli.session.result import SessionResult
 from initcli.settings_session import VerificationSection
 
@@ -82,10 +82,7 @@ class ClaimChecks:
         checks = self.checks
         if fine:
             checks = dataclasses.replace(checks, min_scan_fit=checks.min_fine_scan_fit)
-        if self.blind():
-            # No detection at all so far (the camera is off, or sees nothing): a feature predicted in
-            # view and missed says nothing of the place, the camera would have missed it anywhere.
-            checks = dataclasses.replace(checks, log_odds=math.inf)
+        checks = claim_params(checks, self.blind())  # no negative evidence from a camera that saw nothing
         if rival:
             factor = checks.rivals.search_factor
             checks = dataclasses.replace(checks, scan_search_xy=factor * checks.scan_search_xy)
@@ -317,13 +314,7 @@ class ClaimChecks:
         where the recent scans fit best."""
         storey = claim.storey
         check = self.verify(storey, transform)
-        rival = next((c for c in found.candidates if c is not claim), None)
-        extra = {
-            "decided_by": DECIDED_BY_REGISTRATION,
-            "registration_fit": round(claim.fit, 4),
-            "registration_rival_fit": None if rival is None else round(rival.fit, 4),
-            "negative_evidence": not self.blind(),
-        }
+        extra = registration_record(claim, found, self.blind())
         self.record(frame, "coarse", storey, transform * frame.odom, check, **extra)
         if check.passed or not self.checks.enabled:
             return True, check.aligned

@@ -43,13 +43,13 @@ from initcli.drivers.base import RobotDriver, SensorFrame
 from initcli.io.detection_log import Meta, State
 from initcli.match.landmarks import site_tracker
 from initcli.match.pipeline import DECIDED_BY_LIDAR, DECIDED_BY_PAPER, Hypothesis, MatchReport
+from initcli.match.registration import DECIDED_BY_REGISTRATION, SubmapRegistration, registered_hypothesis
 from initcli.session.claims import ClaimChecks
 from initcli.session.escapes import PATH_STRIDE, Escapes
 from initcli.session.exploration import ActiveExploration, unseen_features
 from initcli.session.fine_tuning import FineLost, FineTuning, FineTuningHooks, matched_pairs
 from initcli.session.looks import Looks
 from initcli.session.perception import Perception
-from initcli.session.registration import DECIDED_BY_REGISTRATION, SubmapRegistration, registered_hypothesis
 from initcli.session.result import SHUT_IN, MatchStep, SessionResult, limit_reason
 
 __all__ = ["Observer", "Session"]

@@ -42,6 +42,7 @@ SITE_KEYS = {
     "landmark_window": ("matching", "landmark_window"),
     "landmark_weight": ("matching", "landmark_weight"),
     "landmark_outlier_share": ("matching", "landmark_outlier_share"),
+    "registration": ("registration", "enabled"),  # --no-registration: registration.enabled false
 }
 # Options of ``bim-init match`` that are about input/output, not matching.
 # How a BAG is read (bag2log's options, initcli/cli/bag_options.py): not match settings.

@@ -1,16 +1,22 @@
 """The session's lidar submap registration: with the camera off (every feature missed) a block_b
 session initialises from the lidar alone, and says so; without the registration it cannot; with
-the camera on, a registration claim weighs the doors the camera missed."""
+the camera on, a registration claim weighs the doors the camera missed. ``bim-init match`` replays
+such a claim from the session's log (and not with ``--no-registration``, nor from the log cut
+before the claim)."""
 
 from __future__ import annotations
 
 import dataclasses
+import json
+from pathlib import Path
 
 import pytest
+from typer.testing import CliRunner
 
 from bimtools.site.load import Site
+from initcli.cli.main import app
 from initcli.config import SessionConfig, load_config
-from initcli.session.registration import DECIDED_BY_REGISTRATION
+from initcli.match.registration import DECIDED_BY_REGISTRATION
 from initcli.session.simulated import sim_session
 from initcli.site import prepare_site
 from tests.helpers import SAMPLES
@@ -25,15 +31,22 @@ def camera_off(tmp_path_factory: pytest.TempPathFactory) -> tuple[SessionConfig,
     return config, prepare_site(config, tmp_path_factory.mktemp("block_b"))
 
 
-def _run(config: SessionConfig, site: Site, enabled: bool):
+def _run(config: SessionConfig, site: Site, enabled: bool, log: Path | None = None):
     registration = dataclasses.replace(config.registration, enabled=enabled)
-    built = sim_session(dataclasses.replace(config, registration=registration), site, 1)
+    built = sim_session(dataclasses.replace(config, registration=registration), site, 1, log_path=log)
     return built.session.run()
 
 
-def test_with_the_camera_off_the_lidar_registration_initialises(camera_off) -> None:
+@pytest.fixture(scope="module")
+def camera_off_run(camera_off, tmp_path_factory: pytest.TempPathFactory):
+    """The camera-off session with its detection log: the result and the log's path."""
     config, site = camera_off
-    result = _run(config, site, True)
+    log = tmp_path_factory.mktemp("camera_off_log") / "session.jsonl"
+    return _run(config, site, True, log), log
+
+
+def test_with_the_camera_off_the_lidar_registration_initialises(camera_off_run) -> None:
+    result, _ = camera_off_run
     assert result.success, result.reason
     assert result.features_detected == 0
     assert result.decided_by == DECIDED_BY_REGISTRATION
@@ -69,3 +82,43 @@ def test_with_the_camera_on_a_registration_claim_weighs_the_doors_it_missed(
     assert coarse["negative_evidence"] is True and coarse["passed"]
     assert result.pose is not None and result.truth_pose is not None
     assert result.pose.distance_to(result.truth_pose) < 0.3
+
+
+def _match(log: Path, site: Site, *extra: str) -> tuple[int, dict]:
+    out = CliRunner().invoke(app, ["match", str(log), "--site", str(site.root), "--json", *extra])
+    assert out.exit_code in (0, 3, 4), out.output
+    return out.exit_code, json.loads(out.stdout)
+
+
+def test_the_camera_off_session_log_replays_to_the_registration_claim(camera_off, camera_off_run) -> None:
+    """``bim-init match`` registers the log's submaps where the session did: the same registration
+    (its fit) claimed, at the session's place carried to the log's end; not with --no-registration."""
+    _, site = camera_off
+    result, log = camera_off_run
+    code, doc = _match(log, site)
+    assert code == 0 and doc["verdict"] == "unique match"
+    assert doc["decided_by"] == DECIDED_BY_REGISTRATION and doc["paper_verdict"] == "no consistent match"
+    coarse = result.verifications[0]
+    assert doc["registration"]["registration_fit"] == coarse["registration_fit"]
+    assert doc["registration"]["negative_evidence"] is False
+    best = doc["hypotheses"][0]
+    assert best["matches"] == [] and best["verification"]["passed"]
+    truth = doc["truth"]
+    assert abs(best["pose"]["x"] - truth["x"]) < 0.3 and abs(best["pose"]["y"] - truth["y"]) < 0.3
+    code, doc = _match(log, site, "--no-registration")
+    assert code == 4 and doc["decided_by"] is None and doc["registration"] is None
+    assert not any(h["matches"] == [] for h in doc["hypotheses"])
+
+
+def test_the_log_cut_before_the_claim_claims_nothing(camera_off, camera_off_run, tmp_path: Path) -> None:
+    """The log up to a second before the session's claim: the registrations the session made by
+    then were not unique or failed the checks, so none is claimed offline either."""
+    _, site = camera_off
+    _, log = camera_off_run
+    lines = log.read_text().splitlines()
+    claim_t = next(json.loads(line)["t"] for line in lines if '"state"' in line and '"coarse"' in line)
+    cut = tmp_path / "cut.jsonl"
+    cut.write_text("\n".join(line for line in lines if json.loads(line).get("t", 0.0) < claim_t - 1.0) + "\n")
+    code, doc = _match(cut, site)
+    assert code == 4 and doc["decided_by"] is None
+    assert any("no claim in" in note for note in doc["notes"])
