@@ -17,14 +17,7 @@ import math
 
 import numpy as np
 
-from initcli.core.wall_following import (
-    CROSS_HALF_WIDTH,
-    CROSS_REACH,
-    CROSS_SHORT,
-    CROSS_WALL_M,
-    ScanView,
-    wall_width,
-)
+from initcli.core.wall_following import CROSS_SHORT, CROSS_WALL_M, ScanView, wall_ahead, wall_width
 
 __all__ = [
     "FEATURE_WALL_BEARINGS",
@@ -56,9 +49,9 @@ def toward_feature_wall(
     not yet seen under the most hypotheses; None when no such wall is in the lidar's view.
 
     ``points`` (N x 2) and ``normals`` (N x 2) are the unmatched BIM features of the hypotheses in
-    the robot's frame, ``hypothesis`` (N,) the hypothesis each belongs to. A way counts when it is
-    CROSS_HALF_WIDTH m either side clear as far as a wall the lidar hit within CROSS_REACH +
-    CROSS_SHORT, at least FEATURE_WALL_MIN_REACH m on, and that wall is CROSS_WALL_M or more wide
+    the robot's frame, ``hypothesis`` (N,) the hypothesis each belongs to. A way counts when
+    :func:`wall_ahead` finds a wall along it, at least FEATURE_WALL_MIN_REACH m on, and that wall
+    is CROSS_WALL_M or more wide
     (:func:`wall_width`: not a column, round which the robot would circle on the open floor). A
     feature counts for it when it lies within FEATURE_WALL_HOLD m of that hit, faces the crossing's
     end (its normal toward it), and is FEATURE_WALL_SEEN m or more from the robot and from every
@@ -81,10 +74,11 @@ def toward_feature_wall(
     been = np.asarray(been if been is not None else np.empty((0, 2)), dtype=float).reshape(-1, 2)
     best: tuple[int, float, float] | None = None  # (hypotheses, -reach, bearing)
     for bearing in FEATURE_WALL_BEARINGS:
-        clear, hit = scan.way_along(float(bearing), CROSS_HALF_WIDTH)
-        reach = clear - CROSS_SHORT
-        if hit < 0 or clear > CROSS_REACH + CROSS_SHORT or reach < FEATURE_WALL_MIN_REACH:
+        ahead = wall_ahead(scan, float(bearing))
+        if ahead is None or ahead[0] - CROSS_SHORT < FEATURE_WALL_MIN_REACH:
             continue
+        clear, hit = ahead
+        reach = clear - CROSS_SHORT
         if wall_width(scan, hit) < CROSS_WALL_M:
             continue  # a column or a row of them: no wall to follow on from there
         direction = np.array([math.cos(bearing), math.sin(bearing)])
@@ -106,18 +100,19 @@ def toward_long_wall(scan: ScanView, passed: np.ndarray | None = None) -> tuple[
     any hypothesis says where the features are: on an open floor among columns the wall follower
     goes round a column and the escapes send it to the openings of the floor in the middle, where
     it circles the next one; the doors and stairs are on the walls. A way counts as in
-    :func:`toward_feature_wall` (clear CROSS_HALF_WIDTH m either side, a hit within CROSS_REACH +
-    CROSS_SHORT, LONG_WALL_MIN_REACH m or more on) when the wall it hits is LONG_WALL_M or more wide
+    :func:`toward_feature_wall` (:func:`wall_ahead`, LONG_WALL_MIN_REACH m or more on) when the
+    wall it hits is LONG_WALL_M or more wide
     (:func:`wall_width`) and no point of ``passed`` (K x 2, robot frame: the path so far) came within
     FOLLOWED_M of the hit. The shortest such way; None when there is none."""
     passed = np.asarray(passed if passed is not None else np.empty((0, 2)), dtype=float).reshape(-1, 2)
     x, y = scan.xy
     best: tuple[float, float] | None = None  # (reach, bearing)
     for bearing in FEATURE_WALL_BEARINGS:
-        clear, hit = scan.way_along(float(bearing), CROSS_HALF_WIDTH)
-        reach = clear - CROSS_SHORT
-        if hit < 0 or clear > CROSS_REACH + CROSS_SHORT or reach < LONG_WALL_MIN_REACH:
+        ahead = wall_ahead(scan, float(bearing))
+        if ahead is None or ahead[0] - CROSS_SHORT < LONG_WALL_MIN_REACH:
             continue
+        clear, hit = ahead
+        reach = clear - CROSS_SHORT
         if best is not None and reach >= best[0]:
             continue
         if wall_width(scan, hit) < LONG_WALL_M:

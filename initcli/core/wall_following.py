@@ -31,6 +31,7 @@ __all__ = [
     "WallFollowParams",
     "across_the_floor",
     "open_beside",
+    "wall_ahead",
     "wall_follow",
     "wall_width",
 ]
@@ -150,21 +151,29 @@ def across_the_floor(scan: ScanView, side: int) -> tuple[float, float] | None:
     best: tuple[float, float, float] | None = None  # (progress away from the wall, bearing, clear)
     for degrees in CROSS_BEARINGS:
         bearing = -side * math.radians(degrees)
-        clear, hit = scan.way_along(bearing, CROSS_HALF_WIDTH)
-        if hit < 0:
+        ahead = wall_ahead(scan, bearing)
+        if ahead is None:
             continue
+        clear, hit = ahead
         progress = clear * math.sin(math.radians(degrees))
-        if (
-            clear > CROSS_REACH + CROSS_SHORT
-            or progress <= OPEN_SIDE_M
-            or wall_width(scan, hit) < CROSS_WALL_M
-        ):
+        if progress <= OPEN_SIDE_M or wall_width(scan, hit) < CROSS_WALL_M:
             continue
         if best is None or progress > best[0] + 1e-6:
             best = (progress, bearing, clear)
     if best is None:
         return None
     return best[1], best[2] - CROSS_SHORT
+
+
+def wall_ahead(scan: ScanView, bearing: float) -> tuple[float, int] | None:
+    """(clear m, beam) of a way across the floor along ``bearing`` (rad, robot frame): clear
+    CROSS_HALF_WIDTH m either side as far as a wall the lidar hit (that beam) within CROSS_REACH +
+    CROSS_SHORT; None when the lidar hit nothing there (a beam with no return is not in the scan) or
+    hit it farther."""
+    clear, hit = scan.way_along(bearing, CROSS_HALF_WIDTH)
+    if hit < 0 or clear > CROSS_REACH + CROSS_SHORT:
+        return None
+    return clear, hit
 
 
 def wall_width(scan: ScanView, hit: int) -> float:

@@ -7,10 +7,11 @@ every storey's map (:func:`initcli.core.registration.register`); a unique regist
 hypothesis that the claim checks judge as they judge a camera claim
 (:meth:`initcli.session.claims.ClaimChecks.registered`) before the session fine-tunes it.
 
-``bim-init match`` (:func:`check_and_register`): when the features leave no unique verdict, the
-submap of the log's last ``registration.window`` m is registered once, at the log's end (not at
-every ``registration.every`` m as the session does), and a unique registration that passes the same
-checks is the verdict, ``decided_by`` ``lidar registration``.
+``bim-init match`` (:func:`check_and_register`): when the features leave no unique verdict, the log
+is replayed as a session gathered it and its submap registered where a session registers it (every
+``registration.every`` m from ``registration.min_travel``); the first unique registration that
+passes the same checks is the verdict, ``decided_by`` ``lidar registration``
+(:func:`replay_registration`).
 """
 
 from __future__ import annotations

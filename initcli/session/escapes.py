@@ -39,7 +39,7 @@ from initcli.drivers.base import SensorFrame
 from initcli.session.result import SessionResult, ShutIn
 from initcli.settings_exploration import FrontierSettings, LapSettings, LoopSettings, ShuttleSettings
 
-__all__ = ["Escapes", "LAP_ROUTE_PASS", "LAP_ROUTE_SPACING", "PATH_STRIDE", "open_point"]
+__all__ = ["Escapes", "LAP_ROUTE_PASS", "LAP_ROUTE_SPACING", "PATH_STRIDE", "open_point", "path_points"]
 
 # A route after a lap leads through a doorway barely wider than the robot: waypoints close together,
 # each passed closely, driven at GAP_SPEED with this slack plus this many seconds (turns on the spot).
@@ -57,6 +57,11 @@ LAP_ROUTE_EXTRA_S = 20.0
 # Every this many odometry samples of the path is where the robot was, for exploration.long_walls
 # (at 10 Hz and 0.4 m/s: every 0.4 m).
 PATH_STRIDE = 10
+
+
+def path_points(result: SessionResult) -> np.ndarray:
+    """Where the robot was (odom x, y; K x 2): every PATH_STRIDE-th sample of the session's path."""
+    return np.array(result.odom_path[::PATH_STRIDE], dtype=float).reshape(-1, 3)[:, :2]
 
 
 def open_point(frame: SensorFrame, scan: ScanView | None, loops: LoopSettings) -> np.ndarray:
@@ -173,9 +178,8 @@ class Escapes:
             # Round a column on an open floor: its openings lead to the next column; the features
             # are on the walls (exploration.long_walls).
             s = frame.scan
-            path = np.array(self.result.odom_path[::PATH_STRIDE]).reshape(-1, 3)[:, :2]
             view = ScanView.of(s.angles, s.ranges, s.range_max)
-            way = toward_long_wall(view, frame.odom.apply_inverse(path))
+            way = toward_long_wall(view, frame.odom.apply_inverse(path_points(self.result)))
             if way is not None and self.cross(frame, view, 1, way) is not None:
                 return f"a {lap.length:.0f} m circle without a new feature: heading for the nearest long wall"
         # A doorway barely wider than the robot: the map's cells blur each jamb by up to a cell.

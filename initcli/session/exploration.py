@@ -20,7 +20,7 @@ from bimtools.site.load import Site
 from bimtools.site.records import Feature
 from initcli.config import SessionConfig
 from initcli.core.bug_navigation import BugParams, RouteNavigator
-from initcli.core.geometry import Pose2D
+from initcli.core.geometry import Pose2D, rot2
 from initcli.core.grid_planner import PlanningGrid, with_doors_closed
 from initcli.core.wall_following import ScanView, WallFollowParams
 from initcli.drivers.base import SensorFrame
@@ -238,8 +238,7 @@ def unseen_features(
             if f.id in matched:
                 continue
             points.append(robot.apply_inverse(np.array([f.x, f.y])))
-            c, s = math.cos(robot.yaw), math.sin(robot.yaw)
-            normals.append((c * f.norm_x + s * f.norm_y, -s * f.norm_x + c * f.norm_y))
+            normals.append(rot2(robot.yaw).T @ np.array([f.norm_x, f.norm_y]))
             owner.append(k)
     return (
         np.array(points, dtype=float).reshape(-1, 2),

@@ -45,7 +45,7 @@ from initcli.match.landmarks import site_tracker
 from initcli.match.pipeline import DECIDED_BY_LIDAR, DECIDED_BY_PAPER, Hypothesis, MatchReport
 from initcli.match.registration import DECIDED_BY_REGISTRATION, SubmapRegistration, registered_hypothesis
 from initcli.session.claims import ClaimChecks
-from initcli.session.escapes import PATH_STRIDE, Escapes
+from initcli.session.escapes import Escapes, path_points
 from initcli.session.exploration import ActiveExploration, unseen_features
 from initcli.session.fine_tuning import FineLost, FineTuning, FineTuningHooks, matched_pairs
 from initcli.session.looks import Looks
@@ -269,9 +269,14 @@ class Session:
                 self._set_state(frame.t, "explore", why=why)
                 if self.looks.open_floor and scan is not None:
                     predicted = unseen_features(self.site, self.last_hypotheses, frame.odom)
-                    path = np.array(self.result.odom_path[::PATH_STRIDE])[:, :2]
                     crossing = self.looks.cross(
-                        frame, scan, self.side, self.escapes, self.perception.travel, predicted, path
+                        frame,
+                        scan,
+                        self.side,
+                        self.escapes,
+                        self.perception.travel,
+                        predicted,
+                        path_points(self.result),
                     )
                     if crossing is not None:
                         self._note(frame.t, f"crossing the open floor ({crossing.reach:.1f} m)")
