@@ -130,7 +130,7 @@ class MatchReport:
     decided_by: str | None = None  # what made the verdict unique: DECIDED_BY_PAPER, DECIDED_BY_LIDAR, or
     # initcli.match.registration's DECIDED_BY_REGISTRATION
     paper_verdict: str | None = None  # Algorithm 1's own verdict where the lidar changed it
-    # a unique lidar registration at the log's end that decided the verdict (initcli.match.registration):
+    # the first unique lidar registration along the log that decided the verdict (initcli.match.registration):
     # its fit, its best distinct rival's fit and whether the camera's misses counted, as summary.json
     registration: dict[str, object] | None = None
 
