@@ -94,7 +94,10 @@ if [ -n "$SITES_DIR" ]; then
   while read -r n; do
     case "$n" in ntu_hallway|block_a|block_b) ;; *) [ -f "$SITES_DIR/$n/features.csv" ] && MODELS+=("$n") ;; esac
   done < <(ls "$SITES_DIR" | LC_ALL=C sort)
-  for n in "${MODELS[@]}" block_b; do rm -rf "sites/$n" && cp -r "$SITES_DIR/$n" "sites/$n"; done
+  # The copies replace sites/ in the work folder: never when that is the folder given (the input).
+  if [ "$SITES_DIR" != "$(cd sites && pwd)" ]; then
+    for n in "${MODELS[@]}" block_b; do rm -rf "sites/$n" && cp -r "$SITES_DIR/$n" "sites/$n"; done
+  fi
   echo "== sites from $SITES_DIR: ${MODELS[*]} (block_b held out)"
 else
   echo "== sites (bim-extract, $NPROC processes) -> $WORK/sites"
