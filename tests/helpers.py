@@ -32,18 +32,28 @@ def shared_ifc_files() -> list[Path]:
 def replayed_claim(log_path: Path, site_dir: Path, report: MatchReport) -> Hypothesis:
     """What a session claimed, as ``bim-init match`` finds it in the session's log (``report``, its
     match): the unique match, or of several hypotheses the one the lidar along the path favours
-    (a session checks that one as a unique match)."""
+    (a session checks that one as a unique match), or else the lidar registration's place."""
+    import copy
+
     from bimtools.site.load import load_site
+    from initcli.core.registration_settings import RegistrationParams
     from initcli.io.detection_log import read_log
     from initcli.match.pipeline import site_class_map
+    from initcli.match.registration import DECIDED_BY_REGISTRATION, replay_registration
     from initcli.match.verify import verify_and_favour
 
     if report.verdict == "unique match":
         return report.hypotheses[0]
-    site = load_site(site_dir)
-    _, favoured = verify_and_favour(read_log(log_path), site, report, site_class_map(site))
-    assert favoured is not None, f"{report.verdict}, and the lidar along the path favours none"
-    return report.hypotheses[favoured]
+    site, log = load_site(site_dir), read_log(log_path)
+    checks, favoured = verify_and_favour(log, site, report, site_class_map(site))
+    if favoured is not None:
+        return report.hypotheses[favoured]
+    replayed = copy.deepcopy(report)  # the caller's report stays Algorithm 1's
+    replay_registration(log, site, replayed, list(checks), RegistrationParams(), len(report.hypotheses) + 1)
+    assert replayed.decided_by == DECIDED_BY_REGISTRATION, (
+        f"{report.verdict}, and neither the lidar along the path nor a registration decides"
+    )
+    return replayed.hypotheses[0]
 
 
 def rooms_map(

@@ -15,6 +15,10 @@ skipped): the share of beam ends within a tolerance of a mapped wall.
 * **Unique**: the best fit must reach ``min_fit``, and every refined peak ``distinct_m`` or
   ``distinct_deg`` away from it (a rival) must trail it by ``margin``: a corridor or rooms that
   repeat leave two places alike and no pose is reported.
+* **Through walls**: a rival within ``margin`` is ruled out when more of its beams (by
+  ``see_through``) cross a mapped wall well before their end than the best pose's do, and the best
+  pose's hardly any: beams through an open door or a doorway that the place alike has a wall at (a
+  plan that repeats, or turned half round, but whose doors do not).
 
 Pure numpy (and OpenCV's correlation); the session decides what to do with the result.
 """
@@ -33,7 +37,16 @@ from initcli.core.particle_filter import LikelihoodField
 from initcli.core.registration_settings import RegistrationParams
 from initcli.core.scan_fit import BeamEnds, best_scan_alignment
 
-__all__ = ["Candidate", "GRID", "Registration", "RegistrationMap", "SearchGrid", "register", "thin_points"]
+__all__ = [
+    "Candidate",
+    "GRID",
+    "Registration",
+    "RegistrationMap",
+    "SearchGrid",
+    "register",
+    "thin_points",
+    "wall_crossings",
+]
 
 
 @dataclass(frozen=True)
@@ -47,9 +60,14 @@ class SearchGrid:
     peak_m: float = 1.0  # m: coarse peaks at least this far apart ...
     peak_deg: float = 15.0  # ... or turned this much
     max_points: int = 1500  # beam ends kept (thinned on a grid of cell / 2)
+    through_beams: int = 1000  # beams sampled for the wall-crossing test ...
+    through_short: float = 0.75  # m: ... a wall crossed this far or more before a beam's end ...
+    through_clear: float = 0.5  # m: ... by a beam that then gets this far from every wall counts ...
+    through_best: float = 0.02  # ... and the best pose may have at most this share of such beams
 
 
 GRID = SearchGrid()
+THROUGH_RATIO = 3.0  # a rival ruled out by beams through walls sends this many times the best's through
 
 
 @dataclass(frozen=True)
@@ -78,6 +96,7 @@ class Registration:
     why: str
     points: int
     contested: tuple[Candidate, ...] = ()  # distinct places within margin of a best pose fitting min_fit
+    through: tuple[float, ...] = ()  # share of beams crossing walls: the best pose, then each contested
 
     @property
     def best(self) -> Candidate | None:
@@ -121,6 +140,29 @@ def thin_points(xy: np.ndarray, cell: float, limit: int) -> np.ndarray:
     if len(kept) > limit:
         kept = kept[np.linspace(0, len(kept) - 1, limit).astype(np.intp)]
     return kept
+
+
+def wall_crossings(
+    origins: np.ndarray, ends: np.ndarray, pose: Pose2D, field_: LikelihoodField, short: float, clear: float
+) -> float:
+    """Share of the beams (from ``origins`` to ``ends``, (N, 2) each in the submap's frame, placed
+    by ``pose``) that pass through a wall of the map and on into the open, ``clear`` m or more from
+    any wall, ``short`` m or more before their end: beams the map says could not have got there. A
+    beam along a wall that a pose a little off puts into it never gets ``clear`` of it."""
+    if len(ends) == 0:
+        return 0.0
+    o, e = pose.apply(origins), pose.apply(ends)
+    span = e - o
+    length = np.hypot(span[:, 0], span[:, 1])
+    reach = length - short
+    step = field_.grid.resolution
+    k = int(np.ceil(max(float(reach.max()), 0.0) / step)) + 1
+    f = np.arange(k) * step  # m along each beam
+    unit = span / np.maximum(length, 1e-9)[:, None]
+    d = field_.lookup(o[:, 0:1] + unit[:, 0:1] * f[None, :], o[:, 1:2] + unit[:, 1:2] * f[None, :])
+    inside = f[None, :] <= reach[:, None]
+    walled = np.maximum.accumulate(inside & (d <= 0.0), axis=1)  # a wall cell passed by here
+    return float((walled & inside & (d >= clear)).any(axis=1).mean())
 
 
 def _placements(
@@ -184,6 +226,37 @@ def _coarse(
     return peaks
 
 
+def _crossed(best: float, rival: float, more: float) -> bool:
+    """Does a rival whose beams cross walls ``rival`` of the time (the best pose's ``best``) send
+    ``more`` of them through, and three times as many?"""
+    return rival >= best + more and rival >= THROUGH_RATIO * best
+
+
+def _crossings(
+    ends: BeamEnds,
+    candidates: tuple[Candidate, ...],
+    maps: list[RegistrationMap],
+    grid: SearchGrid,
+    more: float,
+) -> tuple[float, ...]:
+    """:func:`wall_crossings` of ``grid.through_beams`` beams of ``ends`` (evenly picked) for the
+    best candidate, then for each rival while the best has at most ``grid.through_best`` and each
+    rival so far ``more`` than the best (the shares found, stopping at the first that fails)."""
+    origins = ends.beam_origins()
+    pick = np.linspace(0, len(ends.xy) - 1, min(grid.through_beams, len(ends.xy))).astype(np.intp)
+    fields = {m.storey: m.field_ for m in maps}
+    found: list[float] = []
+    for c in candidates:
+        share = wall_crossings(
+            origins[pick], ends.xy[pick], c.pose, fields[c.storey], grid.through_short, grid.through_clear
+        )
+        fails = share > grid.through_best if not found else not _crossed(found[0], share, more)
+        found.append(share)
+        if fails:
+            break
+    return tuple(found)
+
+
 def register(
     ends: BeamEnds,
     maps: list[RegistrationMap],
@@ -225,13 +298,26 @@ def register(
     ordered = (best, *distinct)
     if best.fit < params.min_fit:
         return Registration(ordered, False, f"best fit {best.fit:.2f} < {params.min_fit:.2f}", len(points))
+    through: tuple[float, ...] = ()
+    if close and params.see_through > 0 and ends.origins is not None:
+        through = _crossings(ends, (best, *close), maps, grid, params.see_through)
+        passed = through[0] <= grid.through_best and all(
+            _crossed(through[0], c, params.see_through) for c in through[1:]
+        )
+        if passed and len(through) == len(close) + 1:
+            why = (
+                f"fit {best.fit:.2f}; {len(close)} place(s) alike ruled out by beams through their walls"
+                f" ({min(through[1:]):.3f} or more against {through[0]:.3f})"
+            )
+            return Registration(ordered, True, why, len(points), close, through)
     if close:
         rival = close[0]
         far = best.pose.distance_to(rival.pose)
+        crossed = f"; beams through walls {', '.join(f'{c:.3f}' for c in through)}" if through else ""
         why = (
             f"{len(close)} place(s) fit within {params.margin:g}, one {far:.1f} m away"
-            f" {rival.fit:.2f} against {best.fit:.2f}"
+            f" {rival.fit:.2f} against {best.fit:.2f}{crossed}"
         )
-        return Registration(ordered, False, why, len(points), close)
+        return Registration(ordered, False, why, len(points), close, through)
     next_fit = distinct[0].fit if distinct else 0.0
     return Registration(ordered, True, f"fit {best.fit:.2f}, the next place {next_fit:.2f}", len(points))

@@ -40,3 +40,10 @@ class RegistrationParams:
         2.0, "m: a place this far from the best pose is distinct ...", minimum=0, maximum=100
     )
     distinct_deg: float = setting(20.0, "degrees: ... and so is one turned this much", minimum=0, maximum=180)
+    see_through: float = setting(
+        0.015,
+        "share of beams a place alike (within margin) must send through mapped walls more than the best"
+        " pose, which sends hardly any, to be ruled out (open doors its map has walls at); 0: off",
+        minimum=0,
+        maximum=1,
+    )

@@ -38,6 +38,7 @@ class BeamEnds:
     last: Pose2D  # odom pose of the last scan
     xy: np.ndarray  # (N, 2) end points in the last scan's robot frame, the scans' points one after another
     valid: np.ndarray  # (scans,) valid beams per scan
+    origins: np.ndarray | None = None  # (scans, 2) where each scan was taken, in the same frame
 
     @staticmethod
     def of(scans: list[ScanSample]) -> BeamEnds:
@@ -45,14 +46,21 @@ class BeamEnds:
         back = last.inverse()
         points = []
         valid = np.zeros(len(scans))
+        origins = np.zeros((len(scans), 2))
         for i, scan in enumerate(scans):
             ok = np.isfinite(scan.ranges) & (scan.ranges < scan.range_max) & (scan.ranges > 0.05)
             rel = back * scan.odom
+            origins[i] = rel.x, rel.y
             heading = rel.yaw + scan.angles[ok]
             r = scan.ranges[ok]
             points.append(np.column_stack([rel.x + r * np.cos(heading), rel.y + r * np.sin(heading)]))
             valid[i] = len(r)
-        return BeamEnds(last, np.vstack(points), valid)
+        return BeamEnds(last, np.vstack(points), valid, origins)
+
+    def beam_origins(self) -> np.ndarray:
+        """(N, 2): where the scan of each end point was taken (needs ``origins``)."""
+        assert self.origins is not None
+        return np.repeat(self.origins, self.valid.astype(np.intp), axis=0)
 
     @functools.cached_property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:

@@ -107,15 +107,19 @@ def registered_hypothesis(storey: str, transform: Pose2D, odom: Pose2D) -> Hypot
 
 def registration_record(claim: Candidate, found: Registration, blind: bool) -> dict[str, object]:
     """What a registration claim adds to its coarse verification (summary.json) and to ``bim-init
-    match``'s report: what decided it, its fit, its best distinct rival's fit and whether negative
-    evidence counted (not when the camera is ``blind``)."""
+    match``'s report: what decided it, its fit, its best distinct rival's fit, whether negative
+    evidence counted (not when the camera is ``blind``) and, when places alike were ruled out by
+    their beams through walls, the shares of such beams (the claim's, then theirs)."""
     rival = next((c for c in found.candidates if c is not claim), None)
-    return {
+    record: dict[str, object] = {
         "decided_by": DECIDED_BY_REGISTRATION,
         "registration_fit": round(claim.fit, 4),
         "registration_rival_fit": None if rival is None else round(rival.fit, 4),
         "negative_evidence": not blind,
     }
+    if found.contested and found.through:  # places alike ruled out by their beams through walls
+        record["registration_through"] = [round(share, 4) for share in found.through]
+    return record
 
 
 def check_and_register(

@@ -16,9 +16,18 @@ from initcli.core.geometry import Pose2D
 from initcli.core.raycast import ray_segment_distances
 from initcli.sim.world import Worker
 
-__all__ = ["Circulation", "NoFreeSpace", "STACK_SIZE", "place_clutter", "place_workers", "random_start"]
+__all__ = [
+    "Circulation",
+    "NoFreeSpace",
+    "STACK_SIZE",
+    "WORKER_ROOM_M",
+    "place_clutter",
+    "place_workers",
+    "random_start",
+]
 
 STACK_SIZE = (1.2, 0.5)  # m: a pallet of material against a wall
+WORKER_ROOM_M = 3.0  # m: at most this far past the end of its line a worker giving way walks
 
 
 class NoFreeSpace(InputError, ValueError):
@@ -206,7 +215,19 @@ def place_workers(
         free = float(ray_segment_distances(a, np.array([heading]), world_static, 12.0)[0])
         if free < length or float(np.hypot(*(mid - a))) < 1.0:
             continue  # clutter on the way
+        # the room to step out of its line when giving way: free along the line beyond each end
+        back, past = (
+            float(ray_segment_distances(p, np.array([h]), world_static, WORKER_ROOM_M + 1.0)[0])
+            for p, h in ((a, heading + math.pi), (b, heading))
+        )
         workers.append(
-            Worker(a=a, b=b, speed=float(rng.uniform(0.4, 1.0)), phase=float(rng.uniform(0, 2 * length)))
+            Worker(
+                a=a,
+                b=b,
+                speed=float(rng.uniform(0.4, 1.0)),
+                phase=float(rng.uniform(0, 2 * length)),
+                room_a=float(np.clip(back - 1.0, 0.0, WORKER_ROOM_M)),
+                room_b=float(np.clip(past - 1.0, 0.0, WORKER_ROOM_M)),
+            )
         )
     return workers

@@ -87,18 +87,29 @@ def glass_echoes(origin: np.ndarray, angles: np.ndarray, panes: np.ndarray, max_
 class Worker:
     """A person walking back and forth between two points. When the robot comes close the worker
     stops; after ``patience`` seconds of standing face to face (a narrow corridor) the worker gives
-    way: turns round and walks off for ``give_way`` seconds, as people do."""
+    way: walks off away from the robot for ``give_way`` seconds, as people do, beyond the end of its
+    line where there is room (``room_a`` before ``a``, ``room_b`` past ``b``: a person steps out of
+    the narrow stretch a robot waits at), then walks back to its line."""
 
     a: np.ndarray
     b: np.ndarray
     speed: float = 0.8
     radius: float = 0.25
-    phase: float = 0.0  # metres walked along the back-and-forth loop
+    phase: float = 0.0  # metres walked along the back-and-forth loop at the start
     yield_distance: float = 1.2  # m: closer than this to the robot the worker waits
     patience: float = 1.0  # s standing before giving way
     give_way: float = 5.0  # s walking off, whatever the robot does
+    room_a: float = 0.0  # m free before ``a`` along the line (walked only when giving way)
+    room_b: float = 0.0  # m free past ``b`` along the line (walked only when giving way)
     waited: float = 0.0
     giving_way: float = 0.0
+    s: float = field(init=False)  # m from ``a`` along the line (negative: before ``a``)
+    heading: int = field(init=False)  # +1 toward ``b``, -1 toward ``a``
+
+    def __post_init__(self) -> None:
+        length = self.length
+        p = self.phase % (2 * length)
+        self.s, self.heading = (p, 1) if p <= length else (2 * length - p, -1)
 
     @cached_property
     def length(self) -> float:
@@ -111,31 +122,35 @@ class Worker:
         return ax, ay, float(self.b[0]) - ax, float(self.b[1]) - ay
 
     def xy(self) -> tuple[float, float]:
-        """Where the worker is: ``a + (b - a) * (s / length)`` at the loop's phase, as floats."""
-        length = self.length
-        s = self.phase % (2 * length)
-        s = s if s <= length else 2 * length - s
+        """Where the worker is: ``a + (b - a) * (s / length)``, as floats."""
         ax, ay, dx, dy = self._line
-        f = s / length
+        f = self.s / self.length
         return ax + dx * f, ay + dy * f
 
     def position(self, t: float = 0.0) -> np.ndarray:
         return np.array(self.xy())
 
     def advance(self, dt: float, robot_xy: np.ndarray) -> None:
+        length = self.length
         if self.giving_way > 0:
             self.giving_way -= dt
-            self.phase += self.speed * dt
+            self.s = min(max(self.s + self.heading * self.speed * dt, -self.room_a), length + self.room_b)
             return
         here = self.position()
-        if math.hypot(float(here[0] - robot_xy[0]), float(here[1] - robot_xy[1])) > self.yield_distance:
+        rx, ry = float(here[0] - robot_xy[0]), float(here[1] - robot_xy[1])
+        if math.hypot(rx, ry) > self.yield_distance:
             self.waited = 0.0
-            self.phase += self.speed * dt
+            if self.s <= 0.0:  # back to its line, or round at its end
+                self.heading = 1
+            elif self.s >= length:
+                self.heading = -1
+            self.s += self.heading * self.speed * dt
             return
         self.waited += dt
         if self.waited >= self.patience:
-            # Turn round: the mirrored phase is the same spot walked the other way.
-            self.phase = (2 * self.length - self.phase) % (2 * self.length)
+            # Walk off along the line away from the robot (the side the worker stands on).
+            _, _, dx, dy = self._line
+            self.heading = 1 if rx * dx + ry * dy >= 0.0 else -1
             self.waited, self.giving_way = 0.0, self.give_way
 
 
@@ -226,7 +241,7 @@ class SimWorld:
         period)."""
         if not self.workers:
             return np.zeros((0, 4))
-        key = tuple((w.phase, w.radius) for w in self.workers)  # a worker's a and b never change
+        key = tuple((w.s, w.radius) for w in self.workers)  # a worker's a and b never change
         if self._worker_cache is not None and self._worker_cache[0] == key:
             return self._worker_cache[1]
         rows: list[tuple[float, float, float, float]] = []

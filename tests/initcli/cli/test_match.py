@@ -299,6 +299,7 @@ def symmetric_session(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, P
     tmp_path = tmp_path_factory.mktemp("symmetric")
     doc = yaml.safe_load((SAMPLES / "block_a.site.yaml").read_text())
     doc["site"]["path"] = str(SAMPLES / "block_a.ifc")
+    doc["registration"] = {"enabled": False}  # the lidar along the path decides, not a registration
     config = tmp_path / "block_a.yaml"
     config.write_text(yaml.safe_dump(doc))
     out = tmp_path / "session"

@@ -6,12 +6,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from bimtools.site.records import OccupancyGrid
 from initcli.core.geometry import Pose2D
 from initcli.core.particle_filter import LikelihoodField
 from initcli.core.raycast import ray_segment_distances
-from initcli.core.registration import RegistrationMap, register, thin_points
+from initcli.core.registration import RegistrationMap, register, thin_points, wall_crossings
 from initcli.core.registration_settings import RegistrationParams
 from initcli.core.scan_fit import BeamEnds, ScanSample
 from tests.helpers import walls_grid
@@ -106,3 +107,53 @@ def test_thinning_keeps_one_point_per_cell_and_at_most_the_limit() -> None:
     xy = np.array([[0.01, 0.01], [0.02, 0.02], [0.5, 0.5], [1.0, 1.0], [1.01, 1.02]])
     assert len(thin_points(xy, 0.1, 100)) == 3
     assert len(thin_points(np.random.default_rng(0).uniform(0, 50, (5000, 2)), 0.1, 300)) == 300
+
+
+# A 30 x 2.4 m corridor turned half round is itself, and so are its two rooms (north at x 5-10,
+# south at x 20-25); their doorways are not (north at x 6-7, south at x 21-22, not 23-24).
+HALF_TURN = np.array(
+    [
+        [0, 0, 0, 2.4],
+        [30, 0, 30, 2.4],
+        [0, 2.4, 6, 2.4],
+        [7, 2.4, 30, 2.4],
+        [0, 0, 21, 0],
+        [22, 0, 30, 0],
+        [5, 2.4, 5, 7.4],
+        [5, 7.4, 10, 7.4],
+        [10, 7.4, 10, 2.4],
+        [20, 0, 20, -5],
+        [20, -5, 25, -5],
+        [25, -5, 25, 0],
+    ],
+    dtype=float,
+)
+
+
+def test_beams_through_walls_rule_out_the_place_turned_half_round() -> None:
+    """The walls alone fit the corridor and its half turn alike; the beams through the doorways
+    cross walls only at the half turn, so the registration is unique there, at the true pose."""
+    grid = grid_of(HALF_TURN)
+    maps = [RegistrationMap("L1", grid, LikelihoodField(grid))]
+    path = line(2.0, 1.2, 28.0, 1.2)
+    ends = BeamEnds.of(drive(HALF_TURN, path, Pose2D(3.0, -7.0, 1.0)))
+    walls_only = register(ends, maps, RegistrationParams(see_through=0.0), 0.25)
+    assert not walls_only.unique and walls_only.contested, walls_only.why
+    twin = walls_only.contested[0]
+    assert twin.pose.distance_to(Pose2D(30.0 - path[-1].x, 2.4 - path[-1].y, 0.0)) < 0.5
+    found = register(ends, maps, RegistrationParams(), 0.25)
+    assert found.unique, found.why
+    assert found.best is not None and found.best.pose.distance_to(path[-1]) < 0.3  # the coarse pose
+    assert found.through[1] >= found.through[0] + RegistrationParams().see_through
+    assert "through their walls" in found.why
+
+
+def test_wall_crossings_count_beams_that_pass_a_wall_well_before_their_end() -> None:
+    grid = grid_of(np.array([[5.0, -5.0, 5.0, 5.0]]))
+    origins = np.zeros((3, 2))
+    ends = np.array([[4.9, 0.0], [8.0, 0.0], [5.5, 1.0]])  # short of it, through it, just behind it
+    field_ = LikelihoodField(grid)
+    assert wall_crossings(origins, ends, Pose2D.identity(), field_, 0.75, 0.5) == pytest.approx(1 / 3)
+    assert wall_crossings(origins, ends, Pose2D(0.0, 0.0, math.pi), field_, 0.75, 0.5) == 0.0
+    along = np.array([[4.0, 0.0], [4.8, 4.0]])  # a beam that grazes the wall 0.2 m into it: not through
+    assert wall_crossings(along[:1], along[1:], Pose2D(0.4, 0.0, 0.0), field_, 0.75, 0.5) == 0.0

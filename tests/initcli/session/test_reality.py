@@ -178,13 +178,13 @@ def _notes(session) -> list[str]:
 @pytest.mark.parametrize(
     ("sample", "seed", "note", "failure"),
     [
-        pytest.param("ntu", 6, "or by the lidar along the path", "without a unique match", id="rivals"),
+        pytest.param("ntu", 40, "or by the lidar along the path", "without a unique match", id="rivals"),
         pytest.param(
             "block_b", 51, "the lidar along the path favours hypothesis", "hypotheses", id="several"
         ),
         pytest.param(
             "block_b",
-            55,
+            94,
             "3 hypotheses, 1 pass the checks: the lidar along the path",
             "hypotheses",
             id="alone",
@@ -197,17 +197,18 @@ def test_the_scans_along_the_path_decide_what_the_recent_scans_cannot(
     """Three starts under construction that only the lidar along the path decides; without it each
     drives 150 m and fails.
 
-    - ``rivals``, ntu_hallway seed 6: after 349 s the lidar favours one of 11 hypotheses (7 pass the
-      recent checks), and its 16 rivals one corridor bay or more along the periodic corridors pass
-      them too; the scans of the path back to where the robot came round a corridor end fit only
-      the claim, which outranks them: the session claims the right place.
+    - ``rivals``, ntu_hallway seed 40: after 101 s the lidar favours one of 3 hypotheses (1 passes
+      the recent checks), and of its 14 rivals with an outlier more along the periodic corridors,
+      those that pass them too trail it by an outlier and the scan fit or by the scans along the
+      path: the session claims the right place (0.06 m off).
     - ``several``, block_b seed 51: after 118 s, 8 hypotheses, 2 of which pass the recent checks;
       the scans along the path fit every window of one of them and plainly not the others. It is
       checked as a unique match (rival search included) and claimed, right.
-    - ``alone``, block_b seed 55: for 35 s three hypotheses on 8 features, the right one explaining
-      every detection and alone passing the recent checks, the two others (8.5 m and 40 m off)
-      needing an outlier and failing them. It outranks both by the path's scans (each searched wide
-      first) and is claimed; until two places had to pass the checks, the three stayed undecided.
+    - ``alone``, block_b seed 94: for 29 s three hypotheses on 9 features, the right one alone
+      passing the recent checks. It outranks the two others by the path's scans (each searched wide
+      first) and is claimed (0.02 m off).
+
+    (Seeds picked again when the simulated workers learnt to give way: the worlds changed.)
 
     The lidar registration is off: it would claim some of these sessions before the doors do.
     """
@@ -223,12 +224,12 @@ def test_the_scans_along_the_path_decide_what_the_recent_scans_cannot(
 
 
 def test_hypotheses_left_undecided_are_judged_again_as_the_path_goes_on(ntu_construction) -> None:
-    """ntu_hallway under construction, seed 4: after the 15th feature the unique match is held back
-    by a rival that passes the checks too, and the scans of the path cannot yet tell them apart; no
-    feature follows for 27 s. Matched and judged again every 10 m of travel, the pair is decided
-    once the path has gone on: the right place is claimed on the same 15 features."""
+    """ntu_hallway under construction, seed 2: after the 6th feature the unique match is held back
+    by rivals that pass the checks too, and the scans of the path cannot yet tell them apart; no
+    feature follows for 24 s. Matched and judged again every 10 m of travel, the match is decided
+    once the path has gone on: the right place is claimed on the same 6 features."""
     config, site = ntu_construction
-    built = sim_session(config, site, 4)
+    built = sim_session(config, site, 2)
     result = built.session.run()
     assert result.success, result.reason
     assert_never_wrong(result)
@@ -264,10 +265,11 @@ def test_a_claim_that_explains_every_detection_still_has_its_rivals_checked(bloc
     (a door built off its place) while a place one door along explains every detection (a real
     Revit model, Jesse.1, as built: claimed 3.0 m off with 0 outliers, the true place one outlier
     behind). block_a under construction, seed 6: such a claim meets rivals that pass the checks,
-    is held back, and the session initialises at the right place later."""
+    is held back, and the session initialises at the right place later. The lidar registration is
+    off (it places this robot before the doors do)."""
     config, site = block_a_construction
     assert config.verification.rival_outliers == 1
-    built = sim_session(config, site, 6)
+    built = sim_session(doors_only(config), site, 6)
     result = built.session.run()
     held = [n for n in _notes(built.session) if "1 more outlier(s) allowed (the claim has 0 outlier(s)" in n]
     assert held, _notes(built.session)

@@ -28,6 +28,7 @@ def test_detector_class_mapping_of_site_yaml_reaches_matching(tmp_path: Path, mo
     doc = yaml.safe_load((SAMPLES / "block_a.site.yaml").read_text(encoding="utf-8"))
     doc["site"]["path"] = str(SAMPLES / "block_a.ifc")
     doc["detector"]["classes"] = {"Tür": "Door"}
+    doc["registration"] = {"enabled": False}  # the doors decide, not the lidar
     config = tmp_path / "block_a.yaml"
     config.write_text(yaml.safe_dump(doc, allow_unicode=True), encoding="utf-8")
     out = tmp_path / "out"

@@ -13,6 +13,7 @@ from initcli.config import load_config
 from initcli.core.raycast import ray_segment_distances
 from initcli.sim.build import build_sim
 from initcli.sim.driver import LidarSpec
+from initcli.sim.scenario import WORKER_ROOM_M
 from initcli.sim.world import SimWorld, Worker
 from initcli.site import choose_storey, prepare_site
 from tests.helpers import SAMPLES
@@ -47,6 +48,46 @@ def test_worker_gives_way_after_standing_face_to_face():
     assert w.position()[0] < 2.0 - 0.3
     world = SimWorld.from_obstacles([], workers=[w])
     assert len(world.worker_segments(0.0)) == 4
+
+
+def test_worker_followed_gives_way_ahead_not_into_the_robot():
+    """A worker walking away from a robot behind it that stops it gives way by walking on."""
+    w = Worker(a=np.array([0.0, 0.0]), b=np.array([8.0, 0.0]), speed=1.0, phase=3.0)  # toward b
+    robot = np.array([2.0, 0.0])  # 1 m behind it
+    for _ in range(30):
+        w.advance(0.1, robot)
+    assert w.heading == 1 and w.position()[0] > 3.0 + 1.0
+
+
+def test_worker_giving_way_steps_past_its_line_where_there_is_room():
+    """At the end of its line a worker giving way walks on into the room beyond it (a person
+    steps out of the narrow stretch), at most that far, then walks back to its line."""
+    robot = np.array([6.0, 0.0])
+    for room, reach in ((2.0, 10.0), (0.0, 8.0)):
+        w = Worker(a=np.array([0.0, 0.0]), b=np.array([8.0, 0.0]), speed=1.0, phase=7.0, room_b=room)
+        for _ in range(50):  # 1 m from the robot: waits 1 s, gives way, walks on toward b
+            w.advance(0.1, robot)
+        assert w.position()[0] == pytest.approx(reach)
+    for _ in range(60):
+        w.advance(0.1, np.array([-20.0, 0.0]))  # the robot gone: back along its line
+    assert 0.0 <= w.position()[0] < 8.0
+
+
+def test_workers_room_beyond_their_lines_is_free(storey_world) -> None:
+    """The room place_workers gives a worker past each end of its line is free space it fits in,
+    within WORKER_ROOM_M."""
+    world, _, _ = storey_world
+    static = SimWorld(world.static.copy())  # the walls and stacks, not the workers
+    rooms = []
+    for w in world.workers:
+        u = (w.b - w.a) / w.length
+        for end, step, room in ((w.a, -u, w.room_a), (w.b, u, w.room_b)):
+            assert 0.0 <= room <= WORKER_ROOM_M
+            for k in np.linspace(0.0, room, 7):
+                x, y = end + k * step
+                assert static.clearance(x, y, 0.0) > w.radius
+            rooms.append(room)
+    assert max(rooms) > 1.0  # corridors go on past some worker's line
 
 
 def test_sample_storeys_match_brute_force(storey_world) -> None:

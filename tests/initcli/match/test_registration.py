@@ -1,0 +1,46 @@
+"""What a registration claim records (summary.json's coarse verification, ``bim-init match``'s
+report): the beams through walls only where they ruled out places alike."""
+
+from __future__ import annotations
+
+import json
+
+import jsonschema
+
+from bimkit.schemas import schema_path
+from initcli.core.geometry import Pose2D
+from initcli.core.particle_filter import LikelihoodField
+from initcli.core.registration import RegistrationMap, register
+from initcli.core.registration_settings import RegistrationParams
+from initcli.core.scan_fit import BeamEnds
+from initcli.match.registration import DECIDED_BY_REGISTRATION, registration_record
+from tests.initcli.core.test_registration import FLOOR, HALF_TURN, drive, grid_of, line
+
+
+def _found(walls, path):
+    grid = grid_of(walls)
+    ends = BeamEnds.of(drive(walls, path, Pose2D(3.0, -7.0, 1.0)))
+    return register(ends, [RegistrationMap("L1", grid, LikelihoodField(grid))], RegistrationParams(), 0.25)
+
+
+def _schema() -> dict:
+    schema = json.loads(schema_path("match_result.schema.json").read_text())["properties"]["registration"]
+    return {**schema, "type": "object"}
+
+
+def test_a_claim_that_ruled_out_places_alike_records_their_beams_through_walls() -> None:
+    found = _found(HALF_TURN, line(2.0, 1.2, 28.0, 1.2))
+    assert found.unique and found.best is not None and found.contested
+    record = registration_record(found.best, found, blind=True)
+    jsonschema.validate(record, _schema())
+    assert record["decided_by"] == DECIDED_BY_REGISTRATION and record["negative_evidence"] is False
+    assert record["registration_through"] == [round(s, 4) for s in found.through]
+    assert record["registration_through"][1] > record["registration_through"][0]
+
+
+def test_a_claim_unique_by_its_fit_records_no_beams_through_walls() -> None:
+    found = _found(FLOOR, line(8.0, 2.5, 8.0, 6.0) + line(8.0, 6.0, 18.0, 6.0))
+    assert found.unique and found.best is not None and not found.contested
+    record = registration_record(found.best, found, blind=False)
+    jsonschema.validate(record, _schema())
+    assert "registration_through" not in record and record["negative_evidence"] is True
