@@ -158,13 +158,19 @@ class RosbridgeServer:
     # -- the test's side ------------------------------------------------------------------------------
 
     def send(self, topic: str, msg: dict[str, Any]) -> int:
-        """Publish ``msg`` to every client subscribed to ``topic``; returns how many got it."""
+        """Publish ``msg`` to every client subscribed to ``topic``; returns how many got it (a client
+        that closed its link meanwhile, as an interrupted run does, does not)."""
         data = _frame(json.dumps({"op": "publish", "topic": topic, "msg": msg}).encode(), 1)
         with self._lock:
             targets = list(self.subscriptions.get(topic, []))
+        sent = 0
         for c in targets:
-            c.sendall(data)
-        return len(targets)
+            try:
+                c.sendall(data)
+            except OSError:
+                continue
+            sent += 1
+        return sent
 
     def published(self, topic: str) -> list[dict[str, Any]]:
         with self._lock:
