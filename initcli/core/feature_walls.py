@@ -14,6 +14,7 @@ predictions from its hypotheses and the path from its odometry.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 
 import numpy as np
 
@@ -73,14 +74,8 @@ def toward_feature_wall(
         return None
     been = np.asarray(been if been is not None else np.empty((0, 2)), dtype=float).reshape(-1, 2)
     best: tuple[int, float, float] | None = None  # (hypotheses, -reach, bearing)
-    for bearing in FEATURE_WALL_BEARINGS:
-        ahead = wall_ahead(scan, float(bearing))
-        if ahead is None or ahead[0] - CROSS_SHORT < FEATURE_WALL_MIN_REACH:
-            continue
-        clear, hit = ahead
-        reach = clear - CROSS_SHORT
-        if wall_width(scan, hit) < CROSS_WALL_M:
-            continue  # a column or a row of them: no wall to follow on from there
+    # not a column nor a row of them (under CROSS_WALL_M): no wall to follow on from there
+    for bearing, clear, reach, _ in _ways_to_walls(scan, FEATURE_WALL_MIN_REACH, CROSS_WALL_M):
         direction = np.array([math.cos(bearing), math.sin(bearing)])
         wall, end = clear * direction, reach * direction
         if len(been) and np.hypot(*(been - end).T).min() <= FEATURE_WALL_HOLD:
@@ -107,17 +102,25 @@ def toward_long_wall(scan: ScanView, passed: np.ndarray | None = None) -> tuple[
     passed = np.asarray(passed if passed is not None else np.empty((0, 2)), dtype=float).reshape(-1, 2)
     x, y = scan.xy
     best: tuple[float, float] | None = None  # (reach, bearing)
-    for bearing in FEATURE_WALL_BEARINGS:
-        ahead = wall_ahead(scan, float(bearing))
-        if ahead is None or ahead[0] - CROSS_SHORT < LONG_WALL_MIN_REACH:
-            continue
-        clear, hit = ahead
-        reach = clear - CROSS_SHORT
+    for bearing, _, reach, hit in _ways_to_walls(scan, LONG_WALL_MIN_REACH, LONG_WALL_M):
         if best is not None and reach >= best[0]:
-            continue
-        if wall_width(scan, hit) < LONG_WALL_M:
             continue
         if len(passed) and np.hypot(*(passed - np.array([x[hit], y[hit]])).T).min() <= FOLLOWED_M:
             continue
-        best = (reach, float(bearing))
+        best = (reach, bearing)
     return None if best is None else (best[1], best[0])
+
+
+def _ways_to_walls(
+    scan: ScanView, min_reach: float, min_width: float
+) -> Iterator[tuple[float, float, float, int]]:
+    """The ways of FEATURE_WALL_BEARINGS across the floor to a wall (:func:`wall_ahead`) that reach
+    ``min_reach`` m or more (stopping CROSS_SHORT short of it) and whose wall is ``min_width`` m or
+    more wide (:func:`wall_width`): (bearing rad, clear m, reach m, the beam that hit it)."""
+    for bearing in FEATURE_WALL_BEARINGS:
+        ahead = wall_ahead(scan, float(bearing))
+        if ahead is None or ahead[0] - CROSS_SHORT < min_reach:
+            continue
+        clear, hit = ahead
+        if wall_width(scan, hit) >= min_width:
+            yield float(bearing), clear, clear - CROSS_SHORT, hit

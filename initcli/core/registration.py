@@ -232,16 +232,17 @@ def _crossed(best: float, rival: float, more: float) -> bool:
     return rival >= best + more and rival >= THROUGH_RATIO * best
 
 
-def _crossings(
+def _ruled_out(
     ends: BeamEnds,
     candidates: tuple[Candidate, ...],
     maps: list[RegistrationMap],
     grid: SearchGrid,
     more: float,
-) -> tuple[float, ...]:
-    """:func:`wall_crossings` of ``grid.through_beams`` beams of ``ends`` (evenly picked) for the
-    best candidate, then for each rival while the best has at most ``grid.through_best`` and each
-    rival so far ``more`` than the best (the shares found, stopping at the first that fails)."""
+) -> tuple[bool, tuple[float, ...]]:
+    """Are the rivals (``candidates[1:]``) ruled out by their beams through walls? The best
+    candidate's :func:`wall_crossings` (``grid.through_beams`` beams of ``ends``, evenly picked)
+    must be at most ``grid.through_best`` and each rival's :func:`_crossed` against it; the shares
+    found, stopping at the first that fails."""
     origins = ends.beam_origins()
     pick = np.linspace(0, len(ends.xy) - 1, min(grid.through_beams, len(ends.xy))).astype(np.intp)
     fields = {m.storey: m.field_ for m in maps}
@@ -250,11 +251,11 @@ def _crossings(
         share = wall_crossings(
             origins[pick], ends.xy[pick], c.pose, fields[c.storey], grid.through_short, grid.through_clear
         )
-        fails = share > grid.through_best if not found else not _crossed(found[0], share, more)
+        holds = share <= grid.through_best if not found else _crossed(found[0], share, more)
         found.append(share)
-        if fails:
-            break
-    return tuple(found)
+        if not holds:
+            return False, tuple(found)
+    return True, tuple(found)
 
 
 def register(
@@ -300,11 +301,8 @@ def register(
         return Registration(ordered, False, f"best fit {best.fit:.2f} < {params.min_fit:.2f}", len(points))
     through: tuple[float, ...] = ()
     if close and params.see_through > 0 and ends.origins is not None:
-        through = _crossings(ends, (best, *close), maps, grid, params.see_through)
-        passed = through[0] <= grid.through_best and all(
-            _crossed(through[0], c, params.see_through) for c in through[1:]
-        )
-        if passed and len(through) == len(close) + 1:
+        ruled_out, through = _ruled_out(ends, (best, *close), maps, grid, params.see_through)
+        if ruled_out:
             why = (
                 f"fit {best.fit:.2f}; {len(close)} place(s) alike ruled out by beams through their walls"
                 f" ({min(through[1:]):.3f} or more against {through[0]:.3f})"
