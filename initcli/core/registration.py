@@ -18,7 +18,10 @@ skipped): the share of beam ends within a tolerance of a mapped wall.
 * **Through walls**: a rival within ``margin`` is ruled out when more of its beams (by
   ``see_through``) cross a mapped wall well before their end than the best pose's do, and the best
   pose's hardly any: beams through an open door or a doorway that the place alike has a wall at (a
-  plan that repeats, or turned half round, but whose doors do not).
+  plan that repeats, or turned half round, but whose doors do not). The walls crossed are those of
+  the map as drawn (doors closed) or, when that rules nothing out, of the map with the model's doors
+  open (:func:`open_doorways`): a beam through a door the model has there crosses nothing, as the
+  door may stand open on site.
 
 Pure numpy (and OpenCV's correlation); the session decides what to do with the result.
 """
@@ -26,7 +29,7 @@ Pure numpy (and OpenCV's correlation); the session decides what to do with the r
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -42,6 +45,7 @@ __all__ = [
     "GRID",
     "Registration",
     "RegistrationMap",
+    "open_doorways",
     "SearchGrid",
     "register",
     "thin_points",
@@ -64,6 +68,8 @@ class SearchGrid:
     through_short: float = 0.75  # m: ... a wall crossed this far or more before a beam's end ...
     through_clear: float = 0.5  # m: ... by a beam that then gets this far from every wall counts ...
     through_best: float = 0.02  # ... and the best pose may have at most this share of such beams
+    door_slack: float = 0.3  # m: a door's opening widened by this on each side (built off its place) ...
+    door_depth: float = 0.6  # m: ... and opened this far behind its face (the wall's thickness)
 
 
 GRID = SearchGrid()
@@ -109,10 +115,19 @@ class Registration:
 
 
 class RegistrationMap:
-    """One storey's map prepared for the coarse search (once per map)."""
+    """One storey's map prepared for the coarse search (once per map); ``through`` the field of the
+    map with its doors open (:func:`open_doorways`) that the wall-crossing test reads (None: ``field_``)."""
 
-    def __init__(self, storey: str, grid: OccupancyGrid, field_: LikelihoodField, params: SearchGrid = GRID):
+    def __init__(
+        self,
+        storey: str,
+        grid: OccupancyGrid,
+        field_: LikelihoodField,
+        params: SearchGrid = GRID,
+        through: LikelihoodField | None = None,
+    ):
         self.storey, self.grid, self.field_ = storey, grid, field_
+        self.through = through or field_
         k = max(1, int(round(params.cell / grid.resolution)))
         self.cell = k * grid.resolution
         rows, cols = grid.cells.shape
@@ -127,6 +142,31 @@ class RegistrationMap:
         self.score = pad_s.reshape(h, k, w, k).max(axis=(1, 3))  # max-pooled soft wall map
         self.free = pad_f.reshape(h, k, w, k).max(axis=(1, 3)) > 0
         self.origin = (float(grid.origin[0]), float(grid.origin[1]))
+
+
+def open_doorways(grid: OccupancyGrid, doors: np.ndarray, slack: float, depth: float) -> OccupancyGrid:
+    """``grid`` with the openings of ``doors`` free: (N, 5) rows of a door's face centre x, y, its
+    unit normal (pointing out of the wall) and its width, all m. Each opening is widened by
+    ``slack`` on each side and runs from a cell in front of the face to ``depth`` behind it."""
+    cells = grid.cells.copy()
+    rows, cols = cells.shape
+    res = grid.resolution
+    for x, y, nx, ny, width in np.asarray(doors, dtype=float).reshape(-1, 5):
+        half, front = width / 2.0 + slack, res
+        reach = math.hypot(half, depth) + res
+        top, left = grid.world_to_cell(x - reach, y + reach)
+        bottom, right = grid.world_to_cell(x + reach, y - reach)
+        r0, r1 = max(int(top), 0), min(int(bottom), rows - 1)
+        c0, c1 = max(int(left), 0), min(int(right), cols - 1)
+        if r0 > r1 or c0 > c1:
+            continue
+        rr, cc = np.mgrid[r0 : r1 + 1, c0 : c1 + 1]
+        cx, cy = grid.cell_centre(rr, cc)
+        along = (cx - x) * -ny + (cy - y) * nx
+        out = (cx - x) * nx + (cy - y) * ny
+        inside = (np.abs(along) <= half) & (out >= -depth) & (out <= front)
+        cells[rr[inside], cc[inside]] = FREE
+    return replace(grid, cells=cells)
 
 
 def thin_points(xy: np.ndarray, cell: float, limit: int) -> np.ndarray:
@@ -239,23 +279,30 @@ def _ruled_out(
     grid: SearchGrid,
     more: float,
 ) -> tuple[bool, tuple[float, ...]]:
-    """Are the rivals (``candidates[1:]``) ruled out by their beams through walls? The best
+    """Are the rivals (``candidates[1:]``) ruled out by their beams through walls, on the maps as
+    drawn or else on the maps with their doors open (``RegistrationMap.through``)? The best
     candidate's :func:`wall_crossings` (``grid.through_beams`` beams of ``ends``, evenly picked)
     must be at most ``grid.through_best`` and each rival's :func:`_crossed` against it; the shares
-    found, stopping at the first that fails."""
+    found on the last map tried, stopping at the first that fails."""
     origins = ends.beam_origins()
     pick = np.linspace(0, len(ends.xy) - 1, min(grid.through_beams, len(ends.xy))).astype(np.intp)
-    fields = {m.storey: m.field_ for m in maps}
     found: list[float] = []
-    for c in candidates:
-        share = wall_crossings(
-            origins[pick], ends.xy[pick], c.pose, fields[c.storey], grid.through_short, grid.through_clear
-        )
-        holds = share <= grid.through_best if not found else _crossed(found[0], share, more)
-        found.append(share)
-        if not holds:
-            return False, tuple(found)
-    return True, tuple(found)
+    for doors_open in (False, True):
+        if doors_open and all(m.through is m.field_ for m in maps):
+            break  # no doors to open: the same map again
+        fields = {m.storey: m.through if doors_open else m.field_ for m in maps}
+        found = []
+        for c in candidates:
+            share = wall_crossings(
+                origins[pick], ends.xy[pick], c.pose, fields[c.storey], grid.through_short, grid.through_clear
+            )
+            holds = share <= grid.through_best if not found else _crossed(found[0], share, more)
+            found.append(share)
+            if not holds:
+                break
+        else:
+            return True, tuple(found)
+    return False, tuple(found)
 
 
 def register(

@@ -16,14 +16,19 @@ passes the same checks is the verdict, ``decided_by`` ``lidar registration``
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
+
 from bimtools.site.load import Site, load_site
+from bimtools.site.records import Feature
+from initcli.core.classes import ClassMap
 from initcli.core.geometry import Pose2D
 from initcli.core.hypotheses import verdict_text
 from initcli.core.particle_filter import likelihood_field
-from initcli.core.registration import Candidate, Registration, RegistrationMap, register
+from initcli.core.registration import GRID, Candidate, Registration, RegistrationMap, open_doorways, register
 from initcli.core.registration_settings import RegistrationParams
 from initcli.core.scan_fit import BeamEnds, ScanSample
 from initcli.core.verification import CameraView, Verification
@@ -37,6 +42,7 @@ __all__ = [
     "DECIDED_BY_REGISTRATION",
     "SubmapRegistration",
     "check_and_register",
+    "door_openings",
     "registered_hypothesis",
     "registration_record",
     "replay_registration",
@@ -63,11 +69,17 @@ class SubmapRegistration:
     def maps(self) -> list[RegistrationMap]:
         if self._maps is None:
             names = [self.storey] if self.storey is not None else list(self.site.storeys)
-            self._maps = [
-                RegistrationMap(name, grid, likelihood_field(grid))
-                for name in names
-                if (grid := self.site.storeys[name].grid) is not None
-            ]
+            cmap = site_class_map(self.site)
+            self._maps = []
+            for name in names:
+                storey = self.site.storeys[name]
+                if storey.grid is None:
+                    continue
+                doors = door_openings(storey.features, cmap)
+                opened = open_doorways(storey.grid, doors, GRID.door_slack, GRID.door_depth)
+                field_ = likelihood_field(storey.grid)
+                through = likelihood_field(opened) if len(doors) else field_
+                self._maps.append(RegistrationMap(name, storey.grid, field_, through=through))
         return self._maps
 
     def attempt(self, path: PathEvidence, travel: float) -> tuple[Registration, Pose2D | None]:
@@ -85,6 +97,17 @@ class SubmapRegistration:
             return Registration((), False, "no scans" if not scans else "no map", 0), None
         ends = BeamEnds.of(scans)
         return register(ends, self.maps(), self.params, self.tolerance), ends.last
+
+
+def door_openings(features: Iterable[Feature], cmap: ClassMap) -> np.ndarray:
+    """(N, 5) rows of x, y, normal x, y and width of the storey's doors (IfcDoor, lift landing doors
+    among them, or features of class door), for :func:`initcli.core.registration.open_doorways`."""
+    rows = [
+        (f.x, f.y, f.norm_x, f.norm_y, f.width)
+        for f in features
+        if f.ifc_class == "IfcDoor" or cmap.canonical(f.category) == "door"
+    ]
+    return np.array(rows, dtype=float).reshape(-1, 5)
 
 
 def registered_hypothesis(storey: str, transform: Pose2D, odom: Pose2D) -> Hypothesis:

@@ -12,7 +12,14 @@ from bimtools.site.records import OccupancyGrid
 from initcli.core.geometry import Pose2D
 from initcli.core.particle_filter import LikelihoodField
 from initcli.core.raycast import ray_segment_distances
-from initcli.core.registration import RegistrationMap, register, thin_points, wall_crossings
+from initcli.core.registration import (
+    GRID,
+    RegistrationMap,
+    open_doorways,
+    register,
+    thin_points,
+    wall_crossings,
+)
 from initcli.core.registration_settings import RegistrationParams
 from initcli.core.scan_fit import BeamEnds, ScanSample
 from tests.helpers import walls_grid
@@ -146,6 +153,65 @@ def test_beams_through_walls_rule_out_the_place_turned_half_round() -> None:
     assert found.best is not None and found.best.pose.distance_to(path[-1]) < 0.3  # the coarse pose
     assert found.through[1] >= found.through[0] + RegistrationParams().see_through
     assert "through their walls" in found.why
+
+
+# HALF_TURN as its model draws it: the doors closed, so the map's walls run on across them.
+HALF_TURN_DOORS_CLOSED = np.array(
+    [[0, 0, 0, 2.4], [30, 0, 30, 2.4], [0, 2.4, 30, 2.4], [0, 0, 30, 0], *HALF_TURN[6:].tolist()], dtype=float
+)
+# Its two doors: face centre, normal into the corridor, width (the doorways of HALF_TURN).
+HALF_TURN_DOORS = np.array([[6.5, 2.4, 0.0, -1.0, 1.0], [21.5, 0.0, 0.0, 1.0, 1.0]])
+
+
+def test_open_doorways_frees_each_door_through_its_wall_and_nothing_else() -> None:
+    grid = grid_of(HALF_TURN_DOORS_CLOSED)
+    opened = open_doorways(grid, HALF_TURN_DOORS, slack=0.3, depth=0.6)
+
+    def wall(g: OccupancyGrid, x: float, y: float) -> bool:
+        return bool(g.cells[g.world_to_cell(x, y)] == 0)
+
+    for x in (6.5, 5.8, 7.2):  # the door's middle and its widened edges
+        assert wall(grid, x, 2.4) and not wall(opened, x, 2.4)
+    assert not wall(opened, 21.5, 0.0) and wall(opened, 23.5, 0.0)  # the other door, not its half turn
+    for x in (5.6, 7.4, 15.0):  # beyond the widened door: still wall
+        assert wall(opened, x, 2.4)
+    assert wall(opened, 5.0, 4.0) and wall(opened, 7.0, 7.4)  # the room behind keeps its walls
+    assert open_doorways(grid, np.zeros((0, 5)), 0.3, 0.6).cells.tobytes() == grid.cells.tobytes()
+
+
+def test_beams_through_doors_the_map_draws_closed_rule_out_the_half_turn() -> None:
+    """On site the doors stand open, in the model's map they are walls: through the map's walls the
+    true pose's beams cross them as much as the half turn's, and nothing is ruled out; through the
+    map with the model's doors open only the half turn's beams cross walls, and it is ruled out."""
+    grid = grid_of(HALF_TURN_DOORS_CLOSED)
+    field_ = LikelihoodField(grid)
+    opened = LikelihoodField(open_doorways(grid, HALF_TURN_DOORS, GRID.door_slack, GRID.door_depth))
+    path = line(2.0, 1.2, 28.0, 1.2)
+    ends = BeamEnds.of(drive(HALF_TURN, path, Pose2D(3.0, -7.0, 1.0)))
+    closed = register(ends, [RegistrationMap("L1", grid, field_)], RegistrationParams(), 0.25)
+    assert not closed.unique and closed.contested, closed.why
+    found = register(ends, [RegistrationMap("L1", grid, field_, through=opened)], RegistrationParams(), 0.25)
+    assert found.unique, found.why
+    assert found.best is not None and found.best.pose.distance_to(path[-1]) < 0.3
+    assert found.through[0] <= GRID.through_best < found.through[1]
+
+
+def test_doors_where_the_half_turn_s_beams_cross_leave_the_map_as_drawn_to_rule_it_out() -> None:
+    """The model has doors (shut on site) just where the half turn's beams cross its walls: with
+    them open every beam is excused, but on the map as drawn the half turn is still ruled out."""
+    grid = grid_of(HALF_TURN)
+    field_ = LikelihoodField(grid)
+    twins = np.array(
+        [[23.5, 0.0, 0.0, 1.0, 1.0], [8.5, 2.4, 0.0, -1.0, 1.0]]
+    )  # the doorways turned half round
+    opened = LikelihoodField(open_doorways(grid, twins, GRID.door_slack, GRID.door_depth))
+    path = line(2.0, 1.2, 28.0, 1.2)
+    ends = BeamEnds.of(drive(HALF_TURN, path, Pose2D(3.0, -7.0, 1.0)))
+    only_open = register(ends, [RegistrationMap("L1", grid, opened)], RegistrationParams(), 0.25)
+    assert not only_open.unique, only_open.why  # the doors excuse the half turn's beams
+    found = register(ends, [RegistrationMap("L1", grid, field_, through=opened)], RegistrationParams(), 0.25)
+    assert found.unique, found.why
+    assert found.best is not None and found.best.pose.distance_to(path[-1]) < 0.3
 
 
 def test_wall_crossings_count_beams_that_pass_a_wall_well_before_their_end() -> None:

@@ -8,12 +8,14 @@ import json
 import jsonschema
 
 from bimkit.schemas import schema_path
+from bimtools.site.records import Feature
+from initcli.core.classes import ClassMap
 from initcli.core.geometry import Pose2D
 from initcli.core.particle_filter import LikelihoodField
 from initcli.core.registration import RegistrationMap, register
 from initcli.core.registration_settings import RegistrationParams
 from initcli.core.scan_fit import BeamEnds
-from initcli.match.registration import DECIDED_BY_REGISTRATION, registration_record
+from initcli.match.registration import DECIDED_BY_REGISTRATION, door_openings, registration_record
 from tests.initcli.core.test_registration import FLOOR, HALF_TURN, drive, grid_of, line
 
 
@@ -44,3 +46,20 @@ def test_a_claim_unique_by_its_fit_records_no_beams_through_walls() -> None:
     record = registration_record(found.best, found, blind=False)
     jsonschema.validate(record, _schema())
     assert "registration_through" not in record and record["negative_evidence"] is True
+
+
+def test_the_doors_opened_in_the_map_are_the_model_s_doors_and_lift_doors() -> None:
+    def feature(category: str, ifc_class: str, x: float) -> Feature:
+        return Feature(f"{category}{x}", category, x, 1.0, 0.0, -1.0, 0.9, 2.1, "L1", 0.0, ifc_class)
+
+    rows = [
+        feature("Door", "IfcDoor", 1.0),
+        feature("Lift", "IfcDoor", 2.0),  # a lift's landing door
+        feature("Stairs", "IfcStair", 3.0),
+        feature("Doors", "", 4.0),  # a feature table with no IfcClass column (the paper's Table 1)
+        feature("ConcaveCorner", "", 5.0),
+    ]
+    doors = door_openings(rows, ClassMap())
+    assert doors[:, 0].tolist() == [1.0, 2.0, 4.0]
+    assert doors[0].tolist() == [1.0, 1.0, 0.0, -1.0, 0.9]
+    assert door_openings([], ClassMap()).shape == (0, 5)

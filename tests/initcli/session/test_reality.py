@@ -95,9 +95,10 @@ def test_a_poster_seen_as_a_door_right_beside_a_real_door(block_a) -> None:
 def test_a_claim_with_rivals_sends_the_robot_where_they_disagree(ntu_construction) -> None:
     """ntu_hallway under construction, seed 26 (a start where it happens): a unique match that needed
     an outlier has rivals once more outliers are allowed; instead of wall following on, the session
-    validates the claim and its rivals (§3.3.4's active exploration), and never claims a wrong pose."""
+    validates the claim and its rivals (§3.3.4's active exploration), and never claims a wrong pose.
+    Without the lidar registration, which decides this session first (the open doors tell it)."""
     config, site = ntu_construction
-    config = with_active_exploration(config, True)
+    config = with_active_exploration(doors_only(config), True)
     built = sim_session(config, site, 26)
     result = built.session.run()
     assert_never_wrong(result)
@@ -131,8 +132,10 @@ def test_a_place_the_lidar_picks_out_of_several_gets_the_wide_rival_search(ntu_c
     its scans fit every window as well as the true place would), and with Eq. 8's tolerance as it
     is the true place, its doors built off their place, is not among the claim's rivals. A place
     the lidar picked out of several gets the wider rival search (alpha 1.5x, as claims on few
-    features do): the session fails honestly instead of claiming a pose 27 m off."""
+    features do): the session fails honestly instead of claiming a pose 27 m off. Without the lidar
+    registration, which decides this session first (the open doors tell it)."""
     config, site = ntu_construction
+    config = doors_only(config)
     detector = dataclasses.replace(config.sim.detector, never_seen=0.2)
     built = sim_session(
         dataclasses.replace(config, sim=dataclasses.replace(config.sim, detector=detector)), site, 15
@@ -149,9 +152,10 @@ def test_a_rival_that_passed_the_checks_is_still_looked_for_after_more_features(
     matched features, so alpha is no longer widened for its rival search, and the true place (doors
     built off their place) drops out of it. The claim, 10 m along the periodic corridor, would pass
     every check. Claims within 10 m of one held back by credible rivals get the wide rival search:
-    the session fails honestly instead."""
+    the session fails honestly instead. Without the lidar registration, which decides this session
+    first (the open doors tell it)."""
     config, site = ntu_construction
-    config = with_active_exploration(config, False)
+    config = with_active_exploration(doors_only(config), False)
     built = sim_session(config, site, 97)
     result = built.session.run()
     assert_never_wrong(result)
@@ -227,9 +231,10 @@ def test_hypotheses_left_undecided_are_judged_again_as_the_path_goes_on(ntu_cons
     """ntu_hallway under construction, seed 2: after the 6th feature the unique match is held back
     by rivals that pass the checks too, and the scans of the path cannot yet tell them apart; no
     feature follows for 24 s. Matched and judged again every 10 m of travel, the match is decided
-    once the path has gone on: the right place is claimed on the same 6 features."""
+    once the path has gone on: the right place is claimed on the same 6 features. Without the lidar
+    registration, which decides this session first (the open doors tell it)."""
     config, site = ntu_construction
-    built = sim_session(config, site, 2)
+    built = sim_session(doors_only(config), site, 2)
     result = built.session.run()
     assert result.success, result.reason
     assert_never_wrong(result)

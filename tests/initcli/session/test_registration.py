@@ -122,3 +122,25 @@ def test_the_log_cut_before_the_claim_claims_nothing(camera_off, camera_off_run,
     code, doc = _match(cut, site)
     assert code == 4 and doc["decided_by"] is None
     assert any("no claim in" in note for note in doc["notes"])
+
+
+def test_as_built_the_open_doors_tell_a_repeating_floor_from_its_half_turn(
+    tmp_path_factory: pytest.TempPathFactory,
+) -> None:
+    """ntu_hallway's corridors are the same turned half round but for where the doors are; its map
+    draws the doors shut. As built, with the camera off, the beams through the open doors cross the
+    map's walls at the true place as at every place alike, and only with the model's doors open
+    (:func:`initcli.core.registration.open_doorways`) are the places alike ruled out."""
+    config = load_config(SAMPLES / "ntu_hallway.site.yaml", reality="construction")
+    sim = dataclasses.replace(config.sim, miss_rate=1.0, false_positives_per_minute=0.0)
+    config = dataclasses.replace(
+        config, sim=sim, limits=dataclasses.replace(config.limits, max_distance=60.0)
+    )
+    site = prepare_site(config, tmp_path_factory.mktemp("ntu_hallway"))
+    result = sim_session(config, site, 1).session.run()
+    assert result.success, result.reason
+    assert result.decided_by == DECIDED_BY_REGISTRATION and result.features_detected == 0
+    assert result.pose is not None and result.truth_pose is not None
+    assert result.pose.distance_to(result.truth_pose) < 0.3
+    through = result.verifications[0]["registration_through"]
+    assert through[0] <= 0.02 and min(through[1:]) >= through[0] + config.registration.see_through
