@@ -6,8 +6,10 @@ from __future__ import annotations
 import os
 import signal
 import sys
+import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from types import FrameType
 from typing import Any, NoReturn
 
 import typer
@@ -38,7 +40,25 @@ class Terminated(KeyboardInterrupt):
 _terminated: list[int] = []  # the SIGTERMs received (typer turns the interrupt into exit code 130)
 
 
-def _on_sigterm(signum: int, frame: object) -> None:
+def _in_finaliser(frame: FrameType | None) -> bool:
+    """Is ``frame``, or a frame that called it, an object's ``__del__``?"""
+    while frame is not None:
+        if frame.f_code.co_name == "__del__":
+            return True
+        frame = frame.f_back
+    return False
+
+
+def _on_signal(signum: int, frame: FrameType | None) -> None:
+    """SIGTERM raises :class:`Terminated`, SIGINT ``KeyboardInterrupt``, where the program is. Not
+    inside a finaliser (llvmlite's ``__del__``, in the middle of a numba compile): an exception
+    raised there is swallowed, printed as "Exception ignored" with a traceback, and the command goes
+    on. There the signal is sent again 50 ms later, until the finaliser is done."""
+    if _in_finaliser(frame):
+        threading.Timer(0.05, os.kill, (os.getpid(), signum)).start()
+        return
+    if signum != signal.SIGTERM:
+        raise KeyboardInterrupt
     signal.signal(signal.SIGTERM, signal.SIG_DFL)  # a second SIGTERM ends the process at once
     _terminated.append(signum)
     raise Terminated()
@@ -107,7 +127,8 @@ def run_cli(app: Any, prog: str) -> None:
     except ImportError:  # pragma: no cover - older typer on click
         from click import exceptions as cx  # type: ignore[no-redef]
 
-    signal.signal(signal.SIGTERM, _on_sigterm)
+    signal.signal(signal.SIGTERM, _on_signal)
+    signal.signal(signal.SIGINT, _on_signal)
     reconfigure = getattr(sys.stdout, "reconfigure", None)
     if reconfigure is not None:  # a file name that is not UTF-8 is printed as its bytes, not a crash
         reconfigure(errors="surrogateescape")
