@@ -7,6 +7,7 @@ import os
 import signal
 import sys
 import threading
+import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from types import FrameType
@@ -38,6 +39,10 @@ class Terminated(KeyboardInterrupt):
 
 
 _terminated: list[int] = []  # the SIGTERMs received (typer turns the interrupt into exit code 130)
+DEFER_S = 0.05  # s between two deliveries of a signal held off inside a finaliser ...
+DEFER_MAX_S = 5.0  # ... for at most this long: then it is raised there all the same
+_deferred: dict[int, float] = {}  # signal -> when it was first held off inside a finaliser
+_resend: set[int] = set()  # signals whose delivery again is scheduled
 
 
 def _in_finaliser(frame: FrameType | None) -> bool:
@@ -49,14 +54,28 @@ def _in_finaliser(frame: FrameType | None) -> bool:
     return False
 
 
+def _send_again(signum: int) -> None:
+    _resend.discard(signum)
+    if signum in _deferred:  # not raised in the meantime (by a signal from outside)
+        os.kill(os.getpid(), signum)
+
+
 def _on_signal(signum: int, frame: FrameType | None) -> None:
     """SIGTERM raises :class:`Terminated`, SIGINT ``KeyboardInterrupt``, where the program is. Not
     inside a finaliser (llvmlite's ``__del__``, in the middle of a numba compile): an exception
     raised there is swallowed, printed as "Exception ignored" with a traceback, and the command goes
-    on. There the signal is sent again 50 ms later, until the finaliser is done."""
-    if _in_finaliser(frame):
-        threading.Timer(0.05, os.kill, (os.getpid(), signum)).start()
+    on. There the signal is held off and sent again every ``DEFER_S`` until the finaliser is done
+    (one such delivery at a time; a finaliser still running after ``DEFER_MAX_S`` gets it raised)."""
+    frame = frame if frame is not None else sys._getframe(1)  # called by hand (bimkit.atomic)
+    now = time.monotonic()
+    if _in_finaliser(frame) and now - _deferred.setdefault(signum, now) < DEFER_MAX_S:
+        if signum not in _resend:
+            _resend.add(signum)
+            timer = threading.Timer(DEFER_S, _send_again, (signum,))
+            timer.daemon = True  # a command that ends meanwhile ends (run_cli reads _deferred)
+            timer.start()
         return
+    _deferred.pop(signum, None)
     if signum != signal.SIGTERM:
         raise KeyboardInterrupt
     signal.signal(signal.SIGTERM, signal.SIG_DFL)  # a second SIGTERM ends the process at once
@@ -148,7 +167,9 @@ def run_cli(app: Any, prog: str) -> None:
     except KeyboardInterrupt:
         print(f"{prog}: interrupted", file=sys.stderr)
         sys.exit(EXIT_INTERRUPTED)
-    if _terminated:
+    if signal.SIGINT in _deferred:  # held off in a finaliser, and the command ended before it came
+        sys.exit(EXIT_INTERRUPTED)
+    if _terminated or signal.SIGTERM in _deferred:
         print(f"{prog}: terminated", file=sys.stderr)
         sys.exit(EXIT_TERMINATED)
     sys.exit(code if isinstance(code, int) else 0)

@@ -69,7 +69,8 @@ class SearchGrid:
     through_clear: float = 0.5  # m: ... by a beam that then gets this far from every wall counts ...
     through_best: float = 0.02  # ... and the best pose may have at most this share of such beams
     door_slack: float = 0.3  # m: a door's opening widened by this on each side (built off its place) ...
-    door_depth: float = 0.6  # m: ... and opened this far behind its face (the wall's thickness)
+    door_depth: float = 0.6  # m: ... and opened this far behind its face (the wall's thickness) ...
+    door_front: float = 0.2  # m: ... and this far in front of it (a wall standing proud of the door)
 
 
 GRID = SearchGrid()
@@ -103,6 +104,7 @@ class Registration:
     points: int
     contested: tuple[Candidate, ...] = ()  # distinct places within margin of a best pose fitting min_fit
     through: tuple[float, ...] = ()  # share of beams crossing walls: the best pose, then each contested
+    doors_open: bool = False  # ``through`` measured on the map with its doors open (else as drawn)
 
     @property
     def best(self) -> Candidate | None:
@@ -127,7 +129,7 @@ class RegistrationMap:
         through: LikelihoodField | None = None,
     ):
         self.storey, self.grid, self.field_ = storey, grid, field_
-        self.through = through or field_
+        self.through = through if through is not None else field_
         k = max(1, int(round(params.cell / grid.resolution)))
         self.cell = k * grid.resolution
         rows, cols = grid.cells.shape
@@ -144,16 +146,18 @@ class RegistrationMap:
         self.origin = (float(grid.origin[0]), float(grid.origin[1]))
 
 
-def open_doorways(grid: OccupancyGrid, doors: np.ndarray, slack: float, depth: float) -> OccupancyGrid:
+def open_doorways(
+    grid: OccupancyGrid, doors: np.ndarray, slack: float, depth: float, front: float
+) -> OccupancyGrid:
     """``grid`` with the openings of ``doors`` free: (N, 5) rows of a door's face centre x, y, its
     unit normal (pointing out of the wall) and its width, all m. Each opening is widened by
-    ``slack`` on each side and runs from a cell in front of the face to ``depth`` behind it."""
+    ``slack`` on each side and runs from ``front`` in front of the face to ``depth`` behind it."""
     cells = grid.cells.copy()
     rows, cols = cells.shape
     res = grid.resolution
     for x, y, nx, ny, width in np.asarray(doors, dtype=float).reshape(-1, 5):
-        half, front = width / 2.0 + slack, res
-        reach = math.hypot(half, depth) + res
+        half = width / 2.0 + slack
+        reach = math.hypot(half, max(depth, front)) + res
         top, left = grid.world_to_cell(x - reach, y + reach)
         bottom, right = grid.world_to_cell(x + reach, y - reach)
         r0, r1 = max(int(top), 0), min(int(bottom), rows - 1)
@@ -278,18 +282,18 @@ def _ruled_out(
     maps: list[RegistrationMap],
     grid: SearchGrid,
     more: float,
-) -> tuple[bool, tuple[float, ...]]:
+) -> tuple[bool, tuple[float, ...], bool]:
     """Are the rivals (``candidates[1:]``) ruled out by their beams through walls, on the maps as
     drawn or else on the maps with their doors open (``RegistrationMap.through``)? The best
     candidate's :func:`wall_crossings` (``grid.through_beams`` beams of ``ends``, evenly picked)
     must be at most ``grid.through_best`` and each rival's :func:`_crossed` against it; the shares
-    found on the last map tried, stopping at the first that fails."""
+    found on the last map tried, stopping at the first that fails; whether that map had its doors
+    open."""
     origins = ends.beam_origins()
     pick = np.linspace(0, len(ends.xy) - 1, min(grid.through_beams, len(ends.xy))).astype(np.intp)
     found: list[float] = []
-    for doors_open in (False, True):
-        if doors_open and all(m.through is m.field_ for m in maps):
-            break  # no doors to open: the same map again
+    maps_tried = [False, True] if any(m.through is not m.field_ for m in maps) else [False]  # doors open?
+    for doors_open in maps_tried:
         fields = {m.storey: m.through if doors_open else m.field_ for m in maps}
         found = []
         for c in candidates:
@@ -301,8 +305,8 @@ def _ruled_out(
             if not holds:
                 break
         else:
-            return True, tuple(found)
-    return False, tuple(found)
+            return True, tuple(found), doors_open
+    return False, tuple(found), maps_tried[-1]
 
 
 def register(
@@ -347,14 +351,15 @@ def register(
     if best.fit < params.min_fit:
         return Registration(ordered, False, f"best fit {best.fit:.2f} < {params.min_fit:.2f}", len(points))
     through: tuple[float, ...] = ()
+    doors_open = False
     if close and params.see_through > 0 and ends.origins is not None:
-        ruled_out, through = _ruled_out(ends, (best, *close), maps, grid, params.see_through)
+        ruled_out, through, doors_open = _ruled_out(ends, (best, *close), maps, grid, params.see_through)
         if ruled_out:
             why = (
                 f"fit {best.fit:.2f}; {len(close)} place(s) alike ruled out by beams through their walls"
                 f" ({min(through[1:]):.3f} or more against {through[0]:.3f})"
             )
-            return Registration(ordered, True, why, len(points), close, through)
+            return Registration(ordered, True, why, len(points), close, through, doors_open)
     if close:
         rival = close[0]
         far = best.pose.distance_to(rival.pose)
@@ -363,6 +368,6 @@ def register(
             f"{len(close)} place(s) fit within {params.margin:g}, one {far:.1f} m away"
             f" {rival.fit:.2f} against {best.fit:.2f}{crossed}"
         )
-        return Registration(ordered, False, why, len(points), close, through)
+        return Registration(ordered, False, why, len(points), close, through, doors_open)
     next_fit = distinct[0].fit if distinct else 0.0
     return Registration(ordered, True, f"fit {best.fit:.2f}, the next place {next_fit:.2f}", len(points))

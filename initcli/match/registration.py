@@ -76,7 +76,7 @@ class SubmapRegistration:
                 if storey.grid is None:
                     continue
                 doors = door_openings(storey.features, cmap)
-                opened = open_doorways(storey.grid, doors, GRID.door_slack, GRID.door_depth)
+                opened = open_doorways(storey.grid, doors, GRID.door_slack, GRID.door_depth, GRID.door_front)
                 field_ = likelihood_field(storey.grid)
                 through = likelihood_field(opened) if len(doors) else field_
                 self._maps.append(RegistrationMap(name, storey.grid, field_, through=through))
@@ -100,12 +100,13 @@ class SubmapRegistration:
 
 
 def door_openings(features: Iterable[Feature], cmap: ClassMap) -> np.ndarray:
-    """(N, 5) rows of x, y, normal x, y and width of the storey's doors (IfcDoor, lift landing doors
-    among them, or features of class door), for :func:`initcli.core.registration.open_doorways`."""
+    """(N, 5) rows of x, y, normal x, y and width of the storey's doors (IfcDoor or a subclass, or
+    features of class door or lift: a lift's landing door), for
+    :func:`initcli.core.registration.open_doorways`."""
     rows = [
         (f.x, f.y, f.norm_x, f.norm_y, f.width)
         for f in features
-        if f.ifc_class == "IfcDoor" or cmap.canonical(f.category) == "door"
+        if f.ifc_class.startswith("IfcDoor") or cmap.canonical(f.category) in ("door", "lift")
     ]
     return np.array(rows, dtype=float).reshape(-1, 5)
 
@@ -142,6 +143,7 @@ def registration_record(claim: Candidate, found: Registration, blind: bool) -> d
     }
     if found.contested and found.through:  # places alike ruled out by their beams through walls
         record["registration_through"] = [round(share, 4) for share in found.through]
+        record["registration_doors_open"] = found.doors_open
     return record
 
 

@@ -1,5 +1,6 @@
 """The commands' signal handling: Ctrl-C or SIGTERM that lands while a finaliser runs (llvmlite's
-``__del__`` during a numba compile) stops the command as anywhere else, with no traceback."""
+``__del__`` during a numba compile) stops the command as anywhere else, with no traceback, also
+when the command would have ended right after the finaliser."""
 
 from __future__ import annotations
 
@@ -13,58 +14,74 @@ import pytest
 
 from bimkit.cli import EXIT_INTERRUPTED, EXIT_TERMINATED
 
-# A command that, once, spends a long while in a finaliser (and says when it is in there), then
-# idles; it would print "finished" if the signal were lost.
-SCRIPT = """
+BUSY_S = 3.0  # s the finaliser runs
+# A command that, once, spends BUSY_S in a finaliser (and says when it is in there), then idles 5 s
+# ("idle") or ends at once ("end"); it prints "finished" if it got to its end.
+SCRIPT = f"""
 import sys, time
 import typer
 from bimkit.cli import run_cli
 
 app = typer.Typer()
-state = {"busy": True}
+state = {{"busy": True}}
 
 
 class Finalised:
     def __del__(self):
         if state.pop("busy", False):
             print("in __del__", flush=True)
-            end = time.time() + 20
+            end = time.time() + {BUSY_S}
             while time.time() < end:
                 pass
 
 
 @app.command()
-def main() -> None:
+def main(then: str) -> None:
     Finalised()
-    time.sleep(5)
+    if then == "idle":
+        time.sleep(5)
     print("finished", flush=True)
 
 
 run_cli(app, "demo")
 """
+SIGNALS = [(signal.SIGTERM, EXIT_TERMINATED, "demo: terminated"), (signal.SIGINT, EXIT_INTERRUPTED, "")]
 
 
-@pytest.mark.parametrize(
-    ("sig", "code", "word"),
-    [(signal.SIGTERM, EXIT_TERMINATED, "terminated"), (signal.SIGINT, EXIT_INTERRUPTED, "")],
-    ids=["SIGTERM", "SIGINT"],
-)
-def test_a_signal_inside_a_finaliser_still_stops_the_command(
-    tmp_path: Path, sig: int, code: int, word: str
-) -> None:
+def _interrupted(tmp_path: Path, sig: int, then: str) -> tuple[int, str, str, float]:
+    """Run the command, send ``sig`` while it is in its finaliser: exit code, stdout, stderr, and
+    the seconds from the signal to the end."""
     script = tmp_path / "demo.py"
     script.write_text(SCRIPT)
     process = subprocess.Popen(
-        [sys.executable, str(script)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        [sys.executable, str(script), then], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
     )
     assert process.stdout is not None
     assert process.stdout.readline().strip() == "in __del__"
-    time.sleep(0.2)
-    started = time.monotonic()
+    time.sleep(0.5)
+    sent = time.monotonic()
     process.send_signal(sig)
     out, err = process.communicate(timeout=60)
-    assert process.returncode == code, err
+    return process.returncode, out, err, time.monotonic() - sent
+
+
+@pytest.mark.parametrize(("sig", "code", "word"), SIGNALS, ids=["SIGTERM", "SIGINT"])
+def test_a_signal_inside_a_finaliser_stops_the_command_when_it_is_done(
+    tmp_path: Path, sig: int, code: int, word: str
+) -> None:
+    returncode, out, err, took = _interrupted(tmp_path, sig, "idle")
+    assert returncode == code, err
     assert "finished" not in out  # the command stopped, it did not go on
     assert "Traceback" not in err and "Exception ignored" not in err, err
     assert word in err  # SIGTERM says so; Ctrl-C, as typer has it, only sets the exit code
-    assert time.monotonic() - started < 25  # no later than the finaliser's end
+    assert BUSY_S - 1.0 < took < BUSY_S + 2.0  # held off until the finaliser ended, no later
+
+
+@pytest.mark.parametrize(("sig", "code", "word"), SIGNALS, ids=["SIGTERM", "SIGINT"])
+def test_a_signal_held_off_still_sets_the_exit_code_of_a_command_that_ends_first(
+    tmp_path: Path, sig: int, code: int, word: str
+) -> None:
+    returncode, _, err, _ = _interrupted(tmp_path, sig, "end")
+    assert returncode == code, err
+    assert "Traceback" not in err and "Exception ignored" not in err, err
+    assert word in err

@@ -165,7 +165,7 @@ HALF_TURN_DOORS = np.array([[6.5, 2.4, 0.0, -1.0, 1.0], [21.5, 0.0, 0.0, 1.0, 1.
 
 def test_open_doorways_frees_each_door_through_its_wall_and_nothing_else() -> None:
     grid = grid_of(HALF_TURN_DOORS_CLOSED)
-    opened = open_doorways(grid, HALF_TURN_DOORS, slack=0.3, depth=0.6)
+    opened = open_doorways(grid, HALF_TURN_DOORS, slack=0.3, depth=0.6, front=0.2)
 
     def wall(g: OccupancyGrid, x: float, y: float) -> bool:
         return bool(g.cells[g.world_to_cell(x, y)] == 0)
@@ -176,7 +176,25 @@ def test_open_doorways_frees_each_door_through_its_wall_and_nothing_else() -> No
     for x in (5.6, 7.4, 15.0):  # beyond the widened door: still wall
         assert wall(opened, x, 2.4)
     assert wall(opened, 5.0, 4.0) and wall(opened, 7.0, 7.4)  # the room behind keeps its walls
-    assert open_doorways(grid, np.zeros((0, 5)), 0.3, 0.6).cells.tobytes() == grid.cells.tobytes()
+    assert open_doorways(grid, np.zeros((0, 5)), 0.3, 0.6, 0.2).cells.tobytes() == grid.cells.tobytes()
+
+
+def test_open_doorways_cuts_through_a_thick_wall_from_the_side_its_normal_faces() -> None:
+    """A wall 0.3 m thick between y 2.0 and 2.3 (its faces drawn), a door on its lower face facing
+    down (-y): the opening runs through the wall behind the face, and a door facing the other way
+    from the same point would leave the wall behind it closed."""
+    grid = walls_grid(np.array([[0, 2.0, 10, 2.0], [0, 2.3, 10, 2.3], [0, 0, 0, 5], [10, 0, 10, 5]]), RES)
+    door = np.array([[5.0, 2.0, 0.0, -1.0, 1.0]])
+    opened = open_doorways(grid, door, slack=0.3, depth=0.6, front=0.2)
+
+    def occupied(g: OccupancyGrid, x: float, y: float) -> bool:
+        return bool(g.cells[g.world_to_cell(x, y)] == 0)
+
+    assert occupied(grid, 5.0, 2.0) and occupied(grid, 5.0, 2.3)
+    assert not occupied(opened, 5.0, 2.0) and not occupied(opened, 5.0, 2.3)  # both faces, 0.3 m behind
+    assert not occupied(opened, 5.7, 2.3) and occupied(opened, 5.9, 2.3)  # widened by the slack only
+    backwards = open_doorways(grid, door * [1, 1, 0, -1, 1], slack=0.3, depth=0.6, front=0.2)
+    assert not occupied(backwards, 5.0, 2.0) and occupied(backwards, 5.0, 2.3)  # only 0.2 m in front
 
 
 def test_beams_through_doors_the_map_draws_closed_rule_out_the_half_turn() -> None:
@@ -185,7 +203,9 @@ def test_beams_through_doors_the_map_draws_closed_rule_out_the_half_turn() -> No
     map with the model's doors open only the half turn's beams cross walls, and it is ruled out."""
     grid = grid_of(HALF_TURN_DOORS_CLOSED)
     field_ = LikelihoodField(grid)
-    opened = LikelihoodField(open_doorways(grid, HALF_TURN_DOORS, GRID.door_slack, GRID.door_depth))
+    opened = LikelihoodField(
+        open_doorways(grid, HALF_TURN_DOORS, GRID.door_slack, GRID.door_depth, GRID.door_front)
+    )
     path = line(2.0, 1.2, 28.0, 1.2)
     ends = BeamEnds.of(drive(HALF_TURN, path, Pose2D(3.0, -7.0, 1.0)))
     closed = register(ends, [RegistrationMap("L1", grid, field_)], RegistrationParams(), 0.25)
@@ -193,7 +213,7 @@ def test_beams_through_doors_the_map_draws_closed_rule_out_the_half_turn() -> No
     found = register(ends, [RegistrationMap("L1", grid, field_, through=opened)], RegistrationParams(), 0.25)
     assert found.unique, found.why
     assert found.best is not None and found.best.pose.distance_to(path[-1]) < 0.3
-    assert found.through[0] <= GRID.through_best < found.through[1]
+    assert found.through[0] <= GRID.through_best < found.through[1] and found.doors_open
 
 
 def test_doors_where_the_half_turn_s_beams_cross_leave_the_map_as_drawn_to_rule_it_out() -> None:
@@ -204,7 +224,7 @@ def test_doors_where_the_half_turn_s_beams_cross_leave_the_map_as_drawn_to_rule_
     twins = np.array(
         [[23.5, 0.0, 0.0, 1.0, 1.0], [8.5, 2.4, 0.0, -1.0, 1.0]]
     )  # the doorways turned half round
-    opened = LikelihoodField(open_doorways(grid, twins, GRID.door_slack, GRID.door_depth))
+    opened = LikelihoodField(open_doorways(grid, twins, GRID.door_slack, GRID.door_depth, GRID.door_front))
     path = line(2.0, 1.2, 28.0, 1.2)
     ends = BeamEnds.of(drive(HALF_TURN, path, Pose2D(3.0, -7.0, 1.0)))
     only_open = register(ends, [RegistrationMap("L1", grid, opened)], RegistrationParams(), 0.25)

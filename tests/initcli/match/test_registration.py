@@ -38,6 +38,7 @@ def test_a_claim_that_ruled_out_places_alike_records_their_beams_through_walls()
     assert record["decided_by"] == DECIDED_BY_REGISTRATION and record["negative_evidence"] is False
     assert record["registration_through"] == [round(s, 4) for s in found.through]
     assert record["registration_through"][1] > record["registration_through"][0]
+    assert record["registration_doors_open"] is False  # the map as drawn ruled them out
 
 
 def test_a_claim_unique_by_its_fit_records_no_beams_through_walls() -> None:
@@ -58,8 +59,10 @@ def test_the_doors_opened_in_the_map_are_the_model_s_doors_and_lift_doors() -> N
         feature("Stairs", "IfcStair", 3.0),
         feature("Doors", "", 4.0),  # a feature table with no IfcClass column (the paper's Table 1)
         feature("ConcaveCorner", "", 5.0),
+        feature("Door", "IfcDoorStandardCase", 6.0),
+        feature("Lifts", "", 7.0),
     ]
     doors = door_openings(rows, ClassMap())
-    assert doors[:, 0].tolist() == [1.0, 2.0, 4.0]
+    assert doors[:, 0].tolist() == [1.0, 2.0, 4.0, 6.0, 7.0]
     assert doors[0].tolist() == [1.0, 1.0, 0.0, -1.0, 0.9]
     assert door_openings([], ClassMap()).shape == (0, 5)

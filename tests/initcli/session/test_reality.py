@@ -12,6 +12,7 @@ from bimtools.site.load import Site
 from initcli.config import SessionConfig, load_config
 from initcli.core.geometry import Pose2D
 from initcli.io.detection_log import State
+from initcli.match.registration import DECIDED_BY_REGISTRATION
 from initcli.session.simulated import sim_session
 from initcli.sim.synthetic_log import SimFeature
 from initcli.site import prepare_site
@@ -280,3 +281,29 @@ def test_a_claim_that_explains_every_detection_still_has_its_rivals_checked(bloc
     assert held, _notes(built.session)
     assert result.success and result.pose is not None and result.truth_pose is not None
     assert result.pose.distance_to(result.truth_pose) < 0.5
+
+
+def _never_seen(config: SessionConfig, share: float) -> SessionConfig:
+    detector = dataclasses.replace(config.sim.detector, never_seen=share)
+    return dataclasses.replace(config, sim=dataclasses.replace(config.sim, detector=detector))
+
+
+@pytest.mark.parametrize(
+    ("seed", "variant"),
+    [
+        pytest.param(26, lambda c: with_active_exploration(c, True), id="rivals-sent"),
+        pytest.param(15, lambda c: _never_seen(c, 0.2), id="wide-rival-search"),
+        pytest.param(97, lambda c: with_active_exploration(c, False), id="rival-passed"),
+        pytest.param(2, lambda c: c, id="judged-again"),
+    ],
+)
+def test_the_camera_scenarios_above_with_the_lidar_registration_on(
+    ntu_construction, seed: int, variant
+) -> None:
+    """The ntu_hallway scenarios above run with the registration off, to reach the camera's rules;
+    with it on (as shipped) the lidar claims first, through the open doors, and right."""
+    config, site = ntu_construction
+    result = sim_session(variant(config), site, seed).session.run()
+    assert_never_wrong(result)
+    assert result.success, result.reason
+    assert result.decided_by == DECIDED_BY_REGISTRATION
