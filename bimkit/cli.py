@@ -57,7 +57,9 @@ def _in_finaliser(frame: FrameType | None) -> bool:
 def _send_again(signum: int) -> None:
     _resend.discard(signum)
     if signum in _deferred:  # not raised in the meantime (by a signal from outside)
-        os.kill(os.getpid(), signum)
+        # to the main thread: sent to the process, it may land on this one, and a main thread
+        # asleep in a system call would not wake to run the handler
+        signal.pthread_kill(threading.main_thread().ident or 0, signum)
 
 
 def _on_signal(signum: int, frame: FrameType | None) -> None:
