@@ -184,6 +184,8 @@ def test_staged_directory_leaves_the_target_untouched_on_error(tmp_path):
 
 
 def test_ctrl_c_in_the_middle_of_a_replacement_waits_for_its_end(tmp_path, monkeypatch):
+    # Ctrl-C as Python has it, whatever handler an earlier import or test left in this process
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     target = tmp_path / "site"
     with staged_directory(target) as stage:
         for name in ("a.txt", "b.txt"):
@@ -202,6 +204,7 @@ def test_ctrl_c_in_the_middle_of_a_replacement_waits_for_its_end(tmp_path, monke
         for name in ("a.txt", "b.txt"):
             (stage / name).write_text("new")
     monkeypatch.setattr(os, "replace", real)
+    signal.signal(signal.SIGINT, previous)
     assert sent
     assert [(target / n).read_text() for n in ("a.txt", "b.txt")] == ["new", "new"]  # whole, not half
     assert _listing(target) == [RECORD, "a.txt", "b.txt"]
