@@ -76,9 +76,13 @@ class SubmapRegistration:
                 if storey.grid is None:
                     continue
                 doors = door_openings(storey.features, cmap)
-                opened = open_doorways(storey.grid, doors, GRID.door_slack, GRID.door_depth, GRID.door_front)
                 field_ = likelihood_field(storey.grid)
-                through = likelihood_field(opened) if len(doors) else field_
+                through = field_  # no doors: the map as drawn is the map with its doors open
+                if len(doors):
+                    opened = open_doorways(
+                        storey.grid, doors, GRID.door_slack, GRID.door_depth, GRID.door_front
+                    )
+                    through = likelihood_field(opened)
                 self._maps.append(RegistrationMap(name, storey.grid, field_, through=through))
         return self._maps
 

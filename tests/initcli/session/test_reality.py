@@ -49,6 +49,12 @@ def with_sim(config: SessionConfig, **as_built: float) -> SessionConfig:
     return dataclasses.replace(config, sim=sim)
 
 
+def with_never_seen(config: SessionConfig, share: float) -> SessionConfig:
+    """The same session with ``share`` of the real features never seen by the detector."""
+    detector = dataclasses.replace(config.sim.detector, never_seen=share)
+    return dataclasses.replace(config, sim=dataclasses.replace(config.sim, detector=detector))
+
+
 def with_active_exploration(config: SessionConfig, active: bool) -> SessionConfig:
     return dataclasses.replace(config, exploration=dataclasses.replace(config.exploration, active=active))
 
@@ -137,10 +143,7 @@ def test_a_place_the_lidar_picks_out_of_several_gets_the_wide_rival_search(ntu_c
     registration, which decides this session first (the open doors tell it)."""
     config, site = ntu_construction
     config = doors_only(config)
-    detector = dataclasses.replace(config.sim.detector, never_seen=0.2)
-    built = sim_session(
-        dataclasses.replace(config, sim=dataclasses.replace(config.sim, detector=detector)), site, 15
-    )
+    built = sim_session(with_never_seen(config, 0.2), site, 15)
     assert_never_wrong(built.session.run())
     assert any("the lidar along the path favours" in n for n in _notes(built.session)), (
         "no place picked out by the lidar any more: pick another seed"
@@ -283,16 +286,11 @@ def test_a_claim_that_explains_every_detection_still_has_its_rivals_checked(bloc
     assert result.pose.distance_to(result.truth_pose) < 0.5
 
 
-def _never_seen(config: SessionConfig, share: float) -> SessionConfig:
-    detector = dataclasses.replace(config.sim.detector, never_seen=share)
-    return dataclasses.replace(config, sim=dataclasses.replace(config.sim, detector=detector))
-
-
 @pytest.mark.parametrize(
     ("seed", "variant"),
     [
         pytest.param(26, lambda c: with_active_exploration(c, True), id="rivals-sent"),
-        pytest.param(15, lambda c: _never_seen(c, 0.2), id="wide-rival-search"),
+        pytest.param(15, lambda c: with_never_seen(c, 0.2), id="wide-rival-search"),
         pytest.param(97, lambda c: with_active_exploration(c, False), id="rival-passed"),
         pytest.param(2, lambda c: c, id="judged-again"),
     ],
