@@ -11,7 +11,9 @@ skipped): the share of beam ends within a tolerance of a mapped wall.
   fit) by ``cv2.matchTemplate``; only positions on free cells count (the robot stood there).
 * **Peaks**: the best coarse poses, no two closer than ``peak_m`` and ``peak_deg``.
 * **Fine**: each peak refined by :func:`~initcli.core.scan_fit.best_scan_alignment` (two grids),
-  its fit the share of beams on walls at ``tolerance``.
+  its fit the share of beams on walls at ``tolerance``. The map placed and scored on is the map with
+  the model's doors shut (:func:`shut_doorways`): a section may leave a doorway free where the door
+  stands shut in its frame on site.
 * **Unique**: the best fit must reach ``min_fit``, and every refined peak ``distinct_m`` or
   ``distinct_deg`` away from it (a rival) must trail it by ``margin``: a corridor or rooms that
   repeat leave two places alike and no pose is reported.
@@ -34,7 +36,7 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
-from bimtools.site.records import FREE, OccupancyGrid
+from bimtools.site.records import FREE, OCCUPIED, OccupancyGrid
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.particle_filter import LikelihoodField
 from initcli.core.registration_settings import RegistrationParams
@@ -48,6 +50,7 @@ __all__ = [
     "open_doorways",
     "SearchGrid",
     "register",
+    "shut_doorways",
     "thin_points",
     "wall_crossings",
 ]
@@ -70,7 +73,9 @@ class SearchGrid:
     through_best: float = 0.02  # ... and the best pose may have at most this share of such beams
     door_slack: float = 0.3  # m: a door's opening widened by this on each side (built off its place) ...
     door_depth: float = 0.6  # m: ... and opened this far behind its face (the wall's thickness) ...
-    door_front: float = 0.2  # m: ... and this far in front of it (a wall standing proud of the door)
+    door_front: float = 0.2  # m: ... and this far in front of it (a wall standing proud of the door);
+    # shut_doorways looks for the jambs of a free opening as far (door_slack beyond its half width,
+    # door_depth behind its face, door_front in front of it)
 
 
 GRID = SearchGrid()
@@ -117,8 +122,10 @@ class Registration:
 
 
 class RegistrationMap:
-    """One storey's map prepared for the coarse search (once per map); ``through`` the field of the
-    map with its doors open (:func:`open_doorways`) that the wall-crossing test reads (None: ``field_``)."""
+    """One storey's map prepared for the coarse search (once per map). ``field_`` is the map as
+    drawn, ``through`` the map with its doors open (:func:`open_doorways`; None: ``field_``), the two
+    that the wall-crossing test reads; ``fit`` the map with its doors shut (:func:`shut_doorways`;
+    None: ``field_``), that the submap is placed and scored on."""
 
     def __init__(
         self,
@@ -127,15 +134,17 @@ class RegistrationMap:
         field_: LikelihoodField,
         params: SearchGrid = GRID,
         through: LikelihoodField | None = None,
+        fit: LikelihoodField | None = None,
     ):
         self.storey, self.grid, self.field_ = storey, grid, field_
         self.through = through if through is not None else field_
+        self.fit = fit if fit is not None else field_
         k = max(1, int(round(params.cell / grid.resolution)))
         self.cell = k * grid.resolution
         rows, cols = grid.cells.shape
         h, w = -(-rows // k), -(-cols // k)
         # rows counted up from the map's bottom edge (y grows with the row index here)
-        soft = np.clip(1.0 - field_.distance[::-1] / params.reach, 0.0, 1.0).astype(np.float32)
+        soft = np.clip(1.0 - self.fit.distance[::-1] / params.reach, 0.0, 1.0).astype(np.float32)
         free = (grid.cells[::-1] == FREE).astype(np.uint8)
         pad_s = np.zeros((h * k, w * k), np.float32)
         pad_s[:rows, :cols] = soft
@@ -170,6 +179,44 @@ def open_doorways(
         out = (cx - x) * nx + (cy - y) * ny
         inside = (np.abs(along) <= half) & (out >= -depth) & (out <= front)
         cells[rr[inside], cc[inside]] = FREE
+    return replace(grid, cells=cells)
+
+
+def shut_doorways(
+    grid: OccupancyGrid, doors: np.ndarray, reach: float, depth: float, front: float
+) -> OccupancyGrid:
+    """``grid`` with the openings of ``doors`` (rows as for :func:`open_doorways`) drawn occupied
+    across the wall's thickness: a shut leaf stands somewhere in its frame, and a beam that ends on
+    it then fits. The wall is found at the door, not assumed: each line across the opening, from
+    ``depth`` m behind the face to ``front`` m in front of it, is filled where its free run through
+    the door's centre ends in a wall (a jamb or a frame) on both sides within ``reach`` m beyond the
+    door's half width; in front of the door and in the room behind it the run goes on, and nothing
+    there is filled. A map whose section already shut its doors is unchanged."""
+    cells = grid.cells.copy()
+    rows, cols = cells.shape
+    step = grid.resolution / 2.0
+    for x, y, nx, ny, width in np.asarray(doors, dtype=float).reshape(-1, 5):
+        n = int(math.ceil((width / 2.0 + reach) / step))
+        u = np.arange(-n, n + 1) * step  # m along the wall, the door's centre at index n
+        s = np.arange(-depth, front + step / 2, step)  # m out of the wall
+        px = x + s[:, None] * nx - u[None, :] * ny
+        py = y + s[:, None] * ny + u[None, :] * nx
+        r, c = grid.world_to_cell(px, py)
+        inside = (r >= 0) & (r < rows) & (c >= 0) & (c < cols)
+        free = np.zeros(r.shape, dtype=bool)
+        free[inside] = cells[r[inside], c[inside]] == FREE
+        mid = n
+        for k in range(len(s)):
+            if not free[k, mid]:
+                continue
+            blocked = np.flatnonzero(~free[k])
+            left, right = blocked[blocked < mid], blocked[blocked > mid]
+            if not len(left) or not len(right):
+                continue  # open to one side within reach: the corridor or the room, not the opening
+            run = slice(int(left[-1]) + 1, int(right[0]))
+            if (right[0] - left[-1] - 1) * step < width / 2.0:
+                continue  # a gap narrower than half the door is not its opening
+            cells[r[k, run], c[k, run]] = OCCUPIED
     return replace(grid, cells=cells)
 
 
@@ -322,7 +369,7 @@ def register(
     if len(points) < 20 or not maps:
         return Registration((), False, f"{len(points)} beam ends", len(points))
     sub = BeamEnds(Pose2D(0.0, 0.0, 0.0), points, np.array([float(len(points))]))
-    fields = {m.storey: m.field_ for m in maps}
+    fields = {m.storey: m.fit for m in maps}
     refined: list[Candidate] = []
     for coarse, storey, pose in _coarse(points, maps, grid):
         field_ = fields[storey]

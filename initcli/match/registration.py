@@ -28,7 +28,15 @@ from initcli.core.classes import ClassMap
 from initcli.core.geometry import Pose2D
 from initcli.core.hypotheses import verdict_text
 from initcli.core.particle_filter import likelihood_field
-from initcli.core.registration import GRID, Candidate, Registration, RegistrationMap, open_doorways, register
+from initcli.core.registration import (
+    GRID,
+    Candidate,
+    Registration,
+    RegistrationMap,
+    open_doorways,
+    register,
+    shut_doorways,
+)
 from initcli.core.registration_settings import RegistrationParams
 from initcli.core.scan_fit import BeamEnds, ScanSample
 from initcli.core.verification import CameraView, Verification
@@ -77,13 +85,17 @@ class SubmapRegistration:
                     continue
                 doors = door_openings(storey.features, cmap)
                 field_ = likelihood_field(storey.grid)
-                through = field_  # no doors: the map as drawn is the map with its doors open
+                through = fit = field_  # no doors: the map as drawn, doors open or shut
                 if len(doors):
                     opened = open_doorways(
                         storey.grid, doors, GRID.door_slack, GRID.door_depth, GRID.door_front
                     )
                     through = likelihood_field(opened)
-                self._maps.append(RegistrationMap(name, storey.grid, field_, through=through))
+                    shut = shut_doorways(
+                        storey.grid, doors, GRID.door_slack, GRID.door_depth, GRID.door_front
+                    )
+                    fit = likelihood_field(shut)
+                self._maps.append(RegistrationMap(name, storey.grid, field_, through=through, fit=fit))
         return self._maps
 
     def attempt(self, path: PathEvidence, travel: float) -> tuple[Registration, Pose2D | None]:

@@ -17,6 +17,7 @@ from initcli.core.registration import (
     RegistrationMap,
     open_doorways,
     register,
+    shut_doorways,
     thin_points,
     wall_crossings,
 )
@@ -195,6 +196,63 @@ def test_open_doorways_cuts_through_a_thick_wall_from_the_side_its_normal_faces(
     assert not occupied(opened, 5.7, 2.3) and occupied(opened, 5.9, 2.3)  # widened by the slack only
     backwards = open_doorways(grid, door * [1, 1, 0, -1, 1], slack=0.3, depth=0.6, front=0.2)
     assert not occupied(backwards, 5.0, 2.0) and occupied(backwards, 5.0, 2.3)  # only 0.2 m in front
+
+
+def thick_wall(doorways: list[tuple[float, float]], leaves: bool = False) -> np.ndarray:
+    """A corridor 20 m long below a wall 0.3 m thick (faces at y 2.4 and 2.7), the wall broken by
+    ``doorways`` (x from, x to) with their jambs drawn, rooms' back wall at y 6; ``leaves``: a shut
+    leaf across each doorway in the middle of the wall (y 2.55), where a frame holds it."""
+    walls = [[0, 0, 20, 0], [0, 0, 0, 6], [20, 0, 20, 6], [0, 6, 20, 6]]
+    x = 0.0
+    for a, b in doorways:
+        walls += [[x, 2.4, a, 2.4], [x, 2.7, a, 2.7], [a, 2.4, a, 2.7], [b, 2.4, b, 2.7]]
+        if leaves:
+            walls.append([a, 2.55, b, 2.55])
+        x = b
+    walls += [[x, 2.4, 20, 2.4], [x, 2.7, 20, 2.7]]
+    return np.array(walls, dtype=float)
+
+
+def occupied_at(g: OccupancyGrid, x: float, y: float) -> bool:
+    return bool(g.cells[g.world_to_cell(x, y)] == 0)
+
+
+def test_shut_doorways_fills_each_opening_across_its_wall_and_nothing_else() -> None:
+    """A door placed in the middle of the wall (as an IFC door is), one whose opening is wider than
+    the door (a frame not in the section): each opening filled from face to face, nothing in front
+    of it or behind it; a door with no wall round it and a map that shows its doors shut are left."""
+    grid = walls_grid(thick_wall([(4.5, 5.5), (7.4, 8.6)]), RES)
+    doors = np.array([[5.0, 2.55, 0.0, -1.0, 1.0], [8.0, 2.55, 0.0, -1.0, 1.0], [14.0, 1.2, 0.0, 1.0, 1.0]])
+    shut = shut_doorways(grid, doors, GRID.door_slack, GRID.door_depth, GRID.door_front)
+    for x in (4.6, 5.0, 5.4, 7.5, 8.0, 8.5):
+        for y in (2.42, 2.55, 2.68):  # the doorway, face to face
+            assert not occupied_at(grid, x, y) and occupied_at(shut, x, y), (x, y)
+        assert not occupied_at(shut, x, 2.2) and not occupied_at(shut, x, 2.9)  # in front, behind
+    changed = shut.cells != grid.cells
+    assert changed.sum() <= 1.1 * (1.0 + 1.2) * 0.3 / RES**2 + 2 * 2.2 / RES  # the two openings only
+    assert not changed[grid.world_to_cell(14.0, 1.2)]  # the door in the open corridor: nothing
+    assert shut_doorways(shut, doors, GRID.door_slack, GRID.door_depth, GRID.door_front).cells.tobytes() == (
+        shut.cells.tobytes()
+    )  # drawn shut already: unchanged
+
+
+def test_shut_leaves_fit_the_map_with_its_doors_shut() -> None:
+    """On site the doors are shut, their leaves set in the middle of the wall; the model's map leaves
+    the doorways free. The beams that end on the leaves miss the map as drawn and fit the map with
+    its doors shut, at the true pose."""
+    doorways = [(2.0, 3.0), (6.5, 7.5), (12.0, 13.0), (16.0, 17.0)]
+    grid = walls_grid(thick_wall(doorways), RES)
+    doors = np.array([[(a + b) / 2, 2.55, 0.0, -1.0, b - a] for a, b in doorways])
+    shut = LikelihoodField(shut_doorways(grid, doors, GRID.door_slack, GRID.door_depth, GRID.door_front))
+    path = line(1.0, 1.2, 19.0, 1.2)
+    ends = BeamEnds.of(drive(thick_wall(doorways, leaves=True), path, Pose2D(3.0, -7.0, 1.0)))
+    drawn = register(ends, [RegistrationMap("L1", grid, LikelihoodField(grid))], RegistrationParams(), 0.1)
+    fits = register(
+        ends, [RegistrationMap("L1", grid, LikelihoodField(grid), fit=shut)], RegistrationParams(), 0.1
+    )
+    assert drawn.best is not None and fits.best is not None
+    assert fits.best.pose.distance_to(path[-1]) < 0.1, fits.why
+    assert fits.best.fit >= 0.98 and drawn.best.fit < fits.best.fit - 0.03, (drawn.why, fits.why)
 
 
 def test_beams_through_doors_the_map_draws_closed_rule_out_the_half_turn() -> None:

@@ -4,10 +4,13 @@ report): the beams through walls only where they ruled out places alike."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import jsonschema
+import numpy as np
 
 from bimkit.schemas import schema_path
+from bimtools.site.load import Site, StoreyModel
 from bimtools.site.records import Feature
 from initcli.core.classes import ClassMap
 from initcli.core.geometry import Pose2D
@@ -15,8 +18,14 @@ from initcli.core.particle_filter import LikelihoodField
 from initcli.core.registration import RegistrationMap, register
 from initcli.core.registration_settings import RegistrationParams
 from initcli.core.scan_fit import BeamEnds
-from initcli.match.registration import DECIDED_BY_REGISTRATION, door_openings, registration_record
-from tests.initcli.core.test_registration import FLOOR, HALF_TURN, drive, grid_of, line
+from initcli.match.registration import (
+    DECIDED_BY_REGISTRATION,
+    SubmapRegistration,
+    door_openings,
+    registration_record,
+)
+from tests.helpers import walls_grid
+from tests.initcli.core.test_registration import FLOOR, HALF_TURN, RES, drive, grid_of, line, thick_wall
 
 
 def _found(walls, path):
@@ -66,3 +75,23 @@ def test_the_doors_opened_in_the_map_are_the_model_s_doors_and_lift_doors() -> N
     assert doors[:, 0].tolist() == [1.0, 2.0, 4.0, 6.0, 7.0]
     assert doors[0].tolist() == [1.0, 1.0, 0.0, -1.0, 0.9]
     assert door_openings([], ClassMap()).shape == (0, 5)
+
+
+def test_the_storey_s_maps_place_the_submap_with_the_doors_shut_and_cross_walls_with_them_open() -> None:
+    """A model whose section leaves its doorway free (a door in the middle of a 0.3 m wall): the
+    submap is placed on the map with the door shut (a beam ending on its leaf fits), the first
+    wall-crossing test reads the map as drawn and the second the map with the door open."""
+    grid = walls_grid(thick_wall([(4.5, 5.5)]), RES)
+    door = Feature("d1", "Door", 5.0, 2.55, 0.0, -1.0, 1.0, 2.1, "L1", 0.0, "IfcDoor")
+    site = Site(Path("site"), {"L1": StoreyModel("L1", 0.0, [door], grid=grid)})
+    [m] = SubmapRegistration(RegistrationParams(), site, None, 0.25).maps()
+
+    def d(f: LikelihoodField, x: float, y: float) -> float:  # m to the nearest wall
+        return float(f.lookup(np.array([x]), np.array([y]))[0])
+
+    assert d(m.fit, 5.0, 2.55) == 0.0 and d(m.field_, 5.0, 2.55) > 0.3  # on the leaf
+    assert abs(d(m.fit, 5.0, 2.2) - 0.2) < 0.01 < 0.5 < d(m.field_, 5.0, 2.2)  # 0.2 m before the shut face
+    assert d(m.through, 4.4, 2.4) > 0.0 and d(m.field_, 4.4, 2.4) == 0.0  # the jamb opened
+    bare = Site(Path("site"), {"L1": StoreyModel("L1", 0.0, [], grid=grid)})
+    [plain] = SubmapRegistration(RegistrationParams(), bare, None, 0.25).maps()
+    assert plain.fit is plain.field_ is plain.through  # no doors: one map
