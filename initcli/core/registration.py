@@ -191,11 +191,14 @@ def shut_doorways(
     ``depth`` m behind the face to ``front`` m in front of it, is filled where its free run through
     the door's centre ends in a wall (a jamb or a frame) on both sides within ``reach`` m beyond the
     door's half width; in front of the door and in the room behind it the run goes on, and nothing
-    there is filled. A map whose section already shut its doors is unchanged."""
+    there is filled. A map whose section already shut its doors is unchanged; a door of no width, or
+    wider than the map, is left as it is."""
     cells = grid.cells.copy()
     rows, cols = cells.shape
     step = grid.resolution / 2.0
     for x, y, nx, ny, width in np.asarray(doors, dtype=float).reshape(-1, 5):
+        if not 0.0 < width <= max(rows, cols) * grid.resolution:
+            continue
         n = int(math.ceil((width / 2.0 + reach) / step))
         u = np.arange(-n, n + 1) * step  # m along the wall, the door's centre at index n
         s = np.arange(-depth, front + step / 2, step)  # m out of the wall

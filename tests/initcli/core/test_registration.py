@@ -231,6 +231,10 @@ def test_shut_doorways_fills_each_opening_across_its_wall_and_nothing_else() -> 
     changed = shut.cells != grid.cells
     assert changed.sum() <= 1.1 * (1.0 + 1.2) * 0.3 / RES**2 + 2 * 2.2 / RES  # the two openings only
     assert not changed[grid.world_to_cell(14.0, 1.2)]  # the door in the open corridor: nothing
+    odd = np.array([[5.0, 2.55, 0.0, -1.0, w] for w in (0.0, -1.0, 1e6)])  # a features.csv allows them
+    assert shut_doorways(grid, odd, GRID.door_slack, GRID.door_depth, GRID.door_front).cells.tobytes() == (
+        grid.cells.tobytes()
+    )
     assert shut_doorways(shut, doors, GRID.door_slack, GRID.door_depth, GRID.door_front).cells.tobytes() == (
         shut.cells.tobytes()
     )  # drawn shut already: unchanged
