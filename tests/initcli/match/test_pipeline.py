@@ -326,3 +326,17 @@ def test_the_outlier_budget_grows_with_the_sequence(tmp_path, distinct_csv) -> N
     assert h.n_outliers == 3 and grown.outliers_allowed == 3
     assert h.pose.distance_to(truth) < 1e-3
     assert any("matched with 3" in n for n in grown.notes)
+
+
+def test_a_revisited_feature_counts_once_toward_a_claim(tmp_path, distinct_csv) -> None:
+    # Out along the corridor and back, heading drift (no distance error) keeping the filter from
+    # merging the second sighting of each door with the first: the doors are matched again
+    # (revisits), but a claim weighs each BIM feature once.
+    waypoints = [(1.0, 1.0), (30.0, 1.0), (30.5, 1.4), (2.0, 1.4)]
+    params = SyntheticParams(odom_noise=(0.0, 0.06))
+    report, _ = run(tmp_path, distinct_csv, corridor(), waypoints, params=params, seed=5)
+    assert report.verdict == "unique match"
+    (h,) = report.hypotheses
+    matched = [m for m in h.matches if m is not None]
+    assert len(matched) > len(set(matched))  # revisits among the matches
+    assert report.weighted_inliers(h) == len(set(matched)) < h.n_inliers
