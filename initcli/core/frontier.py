@@ -130,9 +130,12 @@ class LocalMap:
         """Clusters of free cells that border unknown cells (4-neighbourhood)."""
         grid, _ = self.occupancy()
         cells = np.flipud(grid.cells)  # row 0 = lowest y again
-        free = cells == FREE
+        # Free space narrower than three cells is no way on: a beam through a glass pane or past a
+        # door leaf's edge clears a line of cells into the room behind a wall (a morphological opening).
+        square = np.ones((3, 3), np.uint8)
+        free = cv2.morphologyEx((cells == FREE).astype(np.uint8), cv2.MORPH_OPEN, square) > 0
         # Unknown cells right beside a wall are gaps between sparse beam end points, not openings.
-        walls = cv2.dilate((cells == OCCUPIED).astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
+        walls = cv2.dilate((cells == OCCUPIED).astype(np.uint8), square) > 0
         unknown = (cells == UNKNOWN) & ~walls
         cross = np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], np.uint8)
         near_unknown = cv2.dilate(unknown.astype(np.uint8), cross)
