@@ -85,7 +85,11 @@ class VerificationParams:
         0.3, "m: a path point this close to a free cell counts as free", minimum=0, maximum=5
     )
     min_claim_inliers: int = setting(
-        4, "matched features a unique match needs before it is claimed", minimum=2, maximum=100
+        4,
+        "matched BIM features a unique match needs before it is claimed (a feature matched again by a"
+        " revisit counts once)",
+        minimum=2,
+        maximum=100,
     )
     rival_outliers: int = setting(
         1,
