@@ -4,6 +4,7 @@ refuses where they repeat."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -154,6 +155,21 @@ def test_beams_through_walls_rule_out_the_place_turned_half_round() -> None:
     assert found.best is not None and found.best.pose.distance_to(path[-1]) < 0.3  # the coarse pose
     assert found.through[1] >= found.through[0] + RegistrationParams().see_through
     assert "through their walls" in found.why
+
+
+def test_a_few_beams_through_walls_rule_out_nothing() -> None:
+    """One scan in HALF_TURN's corridor: its places alike differ by three beams through a doorway
+    (of 176), a share above ``see_through`` yet a few beams that an as-built site's door the model
+    lacks also sends through; ``through_min_beams`` leaves the scan undecided."""
+    grid = grid_of(HALF_TURN)
+    maps = [RegistrationMap("L1", grid, LikelihoodField(grid))]
+    ends = BeamEnds.of(drive(HALF_TURN, [Pose2D(24.0, 1.8, 0.3)], Pose2D(3.0, -7.0, 1.0)))
+    one_beam = register(ends, maps, RegistrationParams(), 0.25, replace(GRID, through_min_beams=1))
+    assert one_beam.unique and "through their walls" in one_beam.why  # decided by three beams
+    beams = round((min(one_beam.through[1:]) - one_beam.through[0]) * len(ends.xy))
+    assert 1 <= beams < GRID.through_min_beams
+    found = register(ends, maps, RegistrationParams(), 0.25)
+    assert not found.unique and "fit within" in found.why, found.why
 
 
 # HALF_TURN as its model draws it: the doors closed, so the map's walls run on across them.
