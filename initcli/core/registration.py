@@ -18,12 +18,13 @@ skipped): the share of beam ends within a tolerance of a mapped wall.
   ``distinct_deg`` away from it (a rival) must trail it by ``margin``: a corridor or rooms that
   repeat leave two places alike and no pose is reported.
 * **Through walls**: a rival within ``margin`` is ruled out when more of its beams (by
-  ``see_through``, and at least ``through_min_beams`` beams) cross a mapped wall well before their
-  end than the best pose's do, and the best pose's hardly any: beams through an open door or a doorway that the place alike has a wall at (a
-  plan that repeats, or turned half round, but whose doors do not). The walls crossed are those of
-  the map as drawn (doors closed) or, when that rules nothing out, of the map with the model's doors
-  open (:func:`open_doorways`): a beam through a door the model has there crosses nothing, as the
-  door may stand open on site.
+  ``see_through``) cross a mapped wall well before their end than the best pose's do, and the best
+  pose's hardly any: beams through an open door or a doorway that the place alike has a wall at (a
+  plan that repeats, or turned half round, but whose doors do not); only on a submap of at least
+  ``through_min_sampled`` beams, where a door the model lacks is no large share. The walls crossed
+  are those of the map as drawn (doors closed) or, when that rules nothing out, of the map with the
+  model's doors open (:func:`open_doorways`): a beam through a door the model has there crosses
+  nothing, as the door may stand open on site.
 
 Pure numpy (and OpenCV's correlation); the session decides what to do with the result.
 """
@@ -71,9 +72,9 @@ class SearchGrid:
     through_short: float = 0.75  # m: ... a wall crossed this far or more before a beam's end ...
     through_clear: float = 0.5  # m: ... by a beam that then gets this far from every wall counts ...
     through_best: float = 0.02  # ... and the best pose may have at most this share of such beams
-    through_min_beams: int = 5  # a rival is ruled out by at least this many more such beams than the
-    # best's (with few beams sampled one beam is a share: a single scan's 59 beams, one through a
-    # wall, ruled out 17 places alike and claimed a pose 33 m off; CHANGELOG, registration at 0 m)
+    through_min_sampled: int = 500  # beams a submap needs for the test at all: on a single scan's 59
+    # one beam through a wall ruled out 17 places alike (a pose 33 m off), and six beams through a
+    # door the model lacks the true place (CHANGELOG, the first registration at 0 m)
     door_slack: float = 0.3  # m: a door's opening widened by this on each side (built off its place) ...
     door_depth: float = 0.6  # m: ... and opened this far behind its face (the wall's thickness) ...
     door_front: float = 0.2  # m: ... and this far in front of it (a wall standing proud of the door);
@@ -323,12 +324,10 @@ def _coarse(
     return peaks
 
 
-def _crossed(best: float, rival: float, more: float, beams: int, min_beams: int) -> bool:
-    """Does a rival whose beams cross walls ``rival`` of the time (the best pose's ``best``, of
-    ``beams`` beams) send ``more`` of them through, three times as many, and ``min_beams`` beams
-    more?"""
-    extra = round((rival - best) * beams)
-    return rival >= best + more and rival >= THROUGH_RATIO * best and extra >= min_beams
+def _crossed(best: float, rival: float, more: float) -> bool:
+    """Does a rival whose beams cross walls ``rival`` of the time (the best pose's ``best``) send
+    ``more`` of them through, and three times as many?"""
+    return rival >= best + more and rival >= THROUGH_RATIO * best
 
 
 def _ruled_out(
@@ -341,10 +340,11 @@ def _ruled_out(
     """Are the rivals (``candidates[1:]``) ruled out by their beams through walls, on the maps as
     drawn or else on the maps with their doors open (``RegistrationMap.through``)? The best
     candidate's :func:`wall_crossings` (``grid.through_beams`` beams of ``ends``, evenly picked)
-    must be at most ``grid.through_best`` and each rival's :func:`_crossed` against it (at least
-    ``grid.through_min_beams`` beams more); the shares
+    must be at most ``grid.through_best`` and each rival's :func:`_crossed` against it; the shares
     found on the last map tried, stopping at the first that fails; whether that map had its doors
-    open."""
+    open. Nothing is ruled out on fewer than ``grid.through_min_sampled`` beams."""
+    if len(ends.xy) < grid.through_min_sampled:
+        return False, (), False
     origins = ends.beam_origins()
     pick = np.linspace(0, len(ends.xy) - 1, min(grid.through_beams, len(ends.xy))).astype(np.intp)
     found: list[float] = []
@@ -356,11 +356,7 @@ def _ruled_out(
             share = wall_crossings(
                 origins[pick], ends.xy[pick], c.pose, fields[c.storey], grid.through_short, grid.through_clear
             )
-            holds = (
-                share <= grid.through_best
-                if not found
-                else _crossed(found[0], share, more, len(pick), grid.through_min_beams)
-            )
+            holds = share <= grid.through_best if not found else _crossed(found[0], share, more)
             found.append(share)
             if not holds:
                 break

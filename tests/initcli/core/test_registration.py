@@ -157,19 +157,20 @@ def test_beams_through_walls_rule_out_the_place_turned_half_round() -> None:
     assert "through their walls" in found.why
 
 
-def test_a_few_beams_through_walls_rule_out_nothing() -> None:
+def test_a_submap_of_few_beams_rules_out_nothing_by_beams_through_walls() -> None:
     """One scan in HALF_TURN's corridor: its places alike differ by three beams through a doorway
-    (of 176), a share above ``see_through`` yet a few beams that an as-built site's door the model
-    lacks also sends through; ``through_min_beams`` leaves the scan undecided."""
+    (of 176, a share above ``see_through``), as few as a door the model lacks sends through on site;
+    under ``through_min_sampled`` beams the scan stays undecided."""
     grid = grid_of(HALF_TURN)
     maps = [RegistrationMap("L1", grid, LikelihoodField(grid))]
     ends = BeamEnds.of(drive(HALF_TURN, [Pose2D(24.0, 1.8, 0.3)], Pose2D(3.0, -7.0, 1.0)))
-    one_beam = register(ends, maps, RegistrationParams(), 0.25, replace(GRID, through_min_beams=1))
-    assert one_beam.unique and "through their walls" in one_beam.why  # decided by three beams
-    beams = round((min(one_beam.through[1:]) - one_beam.through[0]) * len(ends.xy))
-    assert 1 <= beams < GRID.through_min_beams
+    assert len(ends.xy) < GRID.through_min_sampled
+    any_size = register(ends, maps, RegistrationParams(), 0.25, replace(GRID, through_min_sampled=0))
+    assert any_size.unique and "through their walls" in any_size.why  # decided by three beams
+    assert round((min(any_size.through[1:]) - any_size.through[0]) * len(ends.xy)) == 3
     found = register(ends, maps, RegistrationParams(), 0.25)
     assert not found.unique and "fit within" in found.why, found.why
+    assert found.through == ()
 
 
 # HALF_TURN as its model draws it: the doors closed, so the map's walls run on across them.
