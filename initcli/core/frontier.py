@@ -4,9 +4,10 @@ The paper explores by following a wall, which works in corridors. In an open-pla
 restaurant no wall is within reach and a wall follower circles; in a room it circles the room. A
 frontier explorer (Yamauchi 1997) leaves such places: every scan is integrated into a log-odds grid in
 the odometry frame (free along each beam, occupied at its end point), the *frontiers* are free cells
-next to unknown ones, and the robot drives to the nearest large frontier cluster along the grid's free
-cells (Dijkstra on :class:`~initcli.core.grid_planner.PlanningGrid`). Frontiers that were targeted and
-not reached are not chosen again.
+next to unknown ones, in free space three cells across or more (a beam through a glass pane clears a
+line of cells, no way on), and the robot drives to the nearest large frontier cluster along the
+grid's free cells (Dijkstra on :class:`~initcli.core.grid_planner.PlanningGrid`). Frontiers that
+were targeted and not reached are not chosen again.
 """
 
 from __future__ import annotations
@@ -127,7 +128,8 @@ class LocalMap:
         return float((self.logodds < FREE_BELOW).sum()) * self.params.resolution**2
 
     def frontiers(self) -> list[Frontier]:
-        """Clusters of free cells that border unknown cells (4-neighbourhood)."""
+        """Clusters of free cells that border unknown cells (4-neighbourhood), in free space at least
+        three cells across (a way the robot could go on)."""
         grid, _ = self.occupancy()
         cells = np.flipud(grid.cells)  # row 0 = lowest y again
         # Free space narrower than three cells is no way on: a beam through a glass pane or past a
