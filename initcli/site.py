@@ -6,12 +6,26 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from bimkit.errors import InputError
 from bimtools.site.load import Site, StoreyModel, load_site
 from initcli.config import SessionConfig
 from initcli.config_checks import profile_path
+from initcli.core.symmetry import TOLERANCE, Turn, self_similar_turn
 
-__all__ = ["choose_storey", "input_paths", "prepare_site", "prepare_world", "world_path", "world_storey"]
+__all__ = [
+    "choose_storey",
+    "input_paths",
+    "prepare_site",
+    "prepare_world",
+    "self_similar",
+    "twin_reason",
+    "world_path",
+    "world_storey",
+]
+
+SELF_SIMILAR = "self-similar storey"  # the first words of its reason (a stable phrase of summary.json)
 
 
 def prepare_site(config: SessionConfig, workdir: Path) -> Site:
@@ -75,3 +89,48 @@ def world_storey(site: Site, world: Site | None, storey: str) -> StoreyModel:
         return world.storeys[storey]
     elevation = site.storeys[storey].elevation
     return min(world.storeys.values(), key=lambda s: abs(s.elevation - elevation))
+
+
+_TURNS: dict[tuple[object, ...], Turn | None] = {}  # by what the storey holds: an evaluation asks often
+
+
+def self_similar(storey: StoreyModel) -> Turn | None:
+    """The turn that maps the storey's map (walls, columns, closed glazing: every occupied cell)
+    and its features (every category, landmarks too) onto themselves, or None
+    (:mod:`initcli.core.symmetry`; tolerance two map cells, 0.1 m or more)."""
+    grid = storey.grid
+    if grid is None:
+        return None
+    features = tuple((f.category, f.x, f.y, f.norm_x, f.norm_y) for f in storey.features)
+    key = (grid.content_key(), features)
+    if key not in _TURNS:
+        rows, cols = np.nonzero(grid.occupancy() == 1)
+        x, y = grid.cell_centre(rows, cols)
+        _TURNS[key] = self_similar_turn(
+            np.column_stack([x, y]),
+            np.array([f[1:3] for f in features], dtype=float).reshape(-1, 2),
+            np.array([f[3:5] for f in features], dtype=float).reshape(-1, 2),
+            np.array([f[0] for f in features], dtype=object),
+            tolerance=max(TOLERANCE, 2.0 * grid.resolution),
+        )
+    return _TURNS[key]
+
+
+def twin_reason(site: Site, storey: str | None) -> str | None:
+    """Why no session can initialise on ``storey`` (None: on any storey with a map) from the model
+    alone, every storey there being self-similar (:func:`self_similar`), or None."""
+    names = [storey] if storey is not None else [n for n, s in site.storeys.items() if s.grid is not None]
+    turns = [(name, self_similar(site.storeys[name])) for name in names]
+    if not turns or any(turn is None for _, turn in turns):
+        return None
+    tolerance = max(turn.tolerance for _, turn in turns if turn is not None)
+    alike = "; ".join(
+        f"{name!r} turned {turn.degrees:.0f} deg about ({turn.centre[0]:.2f}, {turn.centre[1]:.2f})"
+        for name, turn in turns
+        if turn is not None
+    )
+    return (
+        f"{SELF_SIMILAR}: the model is the same {alike} (walls and features alike within "
+        f"{tolerance:.2f} m), so every pose has a twin that no reading tells apart; set the pose by "
+        "hand or start on another storey"
+    )

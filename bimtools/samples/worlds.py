@@ -9,6 +9,8 @@
 - ``house``: a Renga-like house, 12 x 10 m: a 2 m hallway between a living room and a 5 x 6 m
   bedroom, a kitchen and a staircase; every room behind a door; spaces per room.
 - ``house_open``: the same house with the bedroom's door left out (an open doorway).
+- ``semi_detached``: two 8 x 10 m homes side by side, the east one the west one turned half round
+  (a duplex): the storey is the same turned 180 degrees about its centre, walls and doors alike.
 
 :func:`as_built_plan` writes a variant of any plan as built: doors removed (their opening left
 free), walled up (no opening at all) or shifted along their wall; :func:`sample_as_built` those of
@@ -33,6 +35,7 @@ __all__ = [
     "house_open",
     "open_hall",
     "sample_as_built",
+    "semi_detached",
     "world",
     "write_plan",
 ]
@@ -164,7 +167,44 @@ def house_open() -> FloorPlan:
     return house(bedroom_door=False)
 
 
-WORLDS = {"crane_hall": crane_hall, "open_hall": open_hall, "house": house, "house_open": house_open}
+def semi_detached() -> FloorPlan:
+    """Two 8 x 10 m homes (a hallway x 3-5 between a living room and kitchen west and a bedroom
+    east), the east home the west one turned 180 degrees about (8, 5): point-symmetric."""
+    west = [
+        ("Hallway", "corridor", 3.0, 0.0, 5.0, 10.0),
+        ("Living", "room", 0.0, 0.0, 3.0, 6.0),
+        ("Kitchen", "room", 0.0, 6.0, 3.0, 10.0),
+        ("Bedroom", "room", 5.0, 0.0, 8.0, 10.0),
+    ]
+    turned = [(f"{n} East", k, 16.0 - x1, 10.0 - y1, 16.0 - x0, 10.0 - y0) for n, k, x0, y0, x1, y1 in west]
+    cells = [Cell(n, k, x0, y0, x1, y1, n) for n, k, x0, y0, x1, y1 in [*west, *turned]]  # type: ignore[arg-type]
+    d = DoorMaker(cells)
+    d.into("Living", "E", 2.0, "room", "Living room door")
+    d.into("Kitchen", "E", 8.5, "room", "Kitchen door")
+    d.into("Bedroom", "W", 4.5, "room", "Bedroom door")
+    d.exit("Hallway", "S", 4.0, "Entrance")
+    d.into("Living East", "W", 10.0 - 2.0, "room", "Living room door")  # the same, turned
+    d.into("Kitchen East", "W", 10.0 - 8.5, "room", "Kitchen door")
+    d.into("Bedroom East", "E", 10.0 - 4.5, "room", "Bedroom door")
+    d.exit("Hallway East", "N", 16.0 - 4.0, "Entrance")
+    return FloorPlan(
+        name="semi_detached",
+        title="Semi-detached houses",
+        building="Two homes, one turned half round",
+        cells=tuple(cells),
+        doors=tuple(d.doors),
+        with_spaces=True,
+        description="two 8 x 10 m homes, the east one the west one turned 180 degrees (a duplex)",
+    )
+
+
+WORLDS = {
+    "crane_hall": crane_hall,
+    "open_hall": open_hall,
+    "house": house,
+    "house_open": house_open,
+    "semi_detached": semi_detached,
+}
 
 
 def world(name: str) -> FloorPlan:

@@ -93,7 +93,8 @@ def result_table(doc: dict) -> Table:
             "-" if p is None else f"x {p['x']:.3f}  y {p['y']:.3f}  yaw {p['yaw_deg']:.2f} deg",
         )
     table.add_row("features detected", str(doc["features_detected"]))
-    table.add_row("distance to coarse / total", f"{doc['distance_coarse_m']} m / {doc['distance_total_m']} m")
+    coarse = "-" if doc["distance_coarse_m"] is None else f"{doc['distance_coarse_m']} m"
+    table.add_row("distance to coarse / total", f"{coarse} / {doc['distance_total_m']} m")
     table.add_row("session time", f"{doc['duration_s']} s (simulated in {doc['wall_clock_s']} s)")
     if "error_translation_m" in doc:
         for stage in ("coarse", "rectified", "fine"):
@@ -184,6 +185,8 @@ def run(
         print(target / "summary.json")
         if doc.get("shut_in"):
             print(doc["shut_in"]["message"], file=sys.stderr)
+        elif not doc["success"]:
+            print(doc["reason"], file=sys.stderr)
     else:
         console.print(result_table(doc))
         console.print(f"wrote {target}/session.jsonl, summary.json, report.png")

@@ -51,6 +51,7 @@ from initcli.session.fine_tuning import FineLost, FineTuning, FineTuningHooks, m
 from initcli.session.looks import Looks
 from initcli.session.perception import Perception
 from initcli.session.result import SHUT_IN, MatchStep, SessionResult, limit_reason
+from initcli.site import twin_reason
 
 __all__ = ["Observer", "Session"]
 
@@ -106,6 +107,8 @@ class Session:
         self.claims = ClaimChecks(self.checks, site, self.perception, view, self.result, self._note)
         self.registration = SubmapRegistration(config.registration, site, storey, self.checks.scan_tolerance)
         self.cannot_leave: str | None = None  # set when the start is known to be closed in
+        # every storey matched maps onto itself turned: no reading tells a pose from its twin
+        self.twins = twin_reason(site, storey)
         self.fine_failures = 0  # fine stages that failed
         self.fine_failed_why = ""  # why the last one failed
         self.resume_from: SensorFrame | None = None  # the last frame of a fine stage that failed
@@ -165,6 +168,9 @@ class Session:
         self.looks.begin()
         if self.cannot_leave is not None:
             self._fail(frame, self.cannot_leave)
+            return
+        if self.twins is not None:
+            self._fail(frame, self.twins)
             return
         while True:
             v, w = self._command(frame)

@@ -141,9 +141,14 @@ def survey_png(
     scatters = []
     for ax, (res, title, lms) in zip(flat, panels, strict=True):
         mean = float(res.position_distance.mean()) if len(res.position_distance) else float("nan")
+        twin = res.plan.twin
+        turned = "" if twin is None else f"the same turned {twin.degrees:.0f} deg (+)"
+        alike = f"\nself-similar, {turned}: no start initialises" if turned else ""
         scatters.append(
-            _panel(ax, res, f"{res.plan.name}: {title} (mean {mean:.1f} m)", lms, norm, points_per_m)
+            _panel(ax, res, f"{res.plan.name}: {title} (mean {mean:.1f} m){alike}", lms, norm, points_per_m)
         )
+        if twin is not None:
+            ax.plot(*twin.centre, marker="+", markersize=10, color="crimson", zorder=7)
     fig.colorbar(scatters[-1], ax=flat, label="m driven to a unique match\n(mean over headings)", shrink=0.9)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)

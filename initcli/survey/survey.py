@@ -18,12 +18,14 @@ import numpy as np
 
 from bimtools.site.load import StoreyModel
 from initcli.core.classes import ClassMap
+from initcli.core.symmetry import Turn
 from initcli.core.visibility import CameraModel, FeatureArrays, visible
 from initcli.executor import Executor, LocalExecutor, map_unordered
 from initcli.sim.as_built import closed_doors, door_ids
 from initcli.sim.scenario import Circulation
 from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT, sim_features_from_bim
 from initcli.sim.world import polygon_edges
+from initcli.site import self_similar
 from initcli.survey.exploration import Entry, Loop, follow_loops, join_loop, look_round
 from initcli.survey.uniqueness import UniquenessParams, first_unique
 
@@ -107,6 +109,7 @@ class StoreyPlan:
     positions: np.ndarray  # (M, 2)
     shut_in: list[ShutInRoom] = field(default_factory=list)
     shut_in_cells: np.ndarray | None = None  # bool mask over the grid: where shut_in rooms lie
+    twin: Turn | None = None  # the turn that maps the storey onto itself: no start initialises
 
 
 def storey_features(storey: StoreyModel, cmap: ClassMap | None = None) -> FeatureArrays:
@@ -180,6 +183,7 @@ def plan_storey(storey: StoreyModel, params: SurveyParams, cmap: ClassMap | None
         positions,
         rooms,
         cells,
+        self_similar(storey),
     )
 
 
@@ -394,6 +398,7 @@ def summarise(result: StoreySurvey) -> dict[str, object]:
     cell = result.params.spacing**2
     finite = d[np.isfinite(d)]
     median = float(np.median(d)) if n else math.inf
+    twin = result.plan.twin
     return {
         "storey": result.plan.name,
         "samples": n,
@@ -410,6 +415,15 @@ def summarise(result: StoreySurvey) -> dict[str, object]:
         # rooms closed off by their doors: a robot there is shut in (cannot initialise from here)
         "shut_in_area_m2": round(sum(r.area_m2 for r in result.plan.shut_in), 1),
         "shut_in_rooms": [{"x": r.x, "y": r.y, "area_m2": r.area_m2} for r in result.plan.shut_in],
+        # the storey is itself turned: every start has a twin (a session fails at once there)
+        "self_similar": None
+        if twin is None
+        else {
+            "turn_deg": round(twin.degrees, 1),
+            "x": round(twin.centre[0], 3),
+            "y": round(twin.centre[1], 3),
+            "tolerance_m": round(twin.tolerance, 3),
+        },
     }
 
 

@@ -149,3 +149,37 @@ def test_a_room_with_an_open_doorway_is_left(tmp_path, seed):
     assert doc is not None and doc["reason"] != "shut in" and "shut_in" not in doc
     assert min(x for x, _ in truth_path(tmp_path / "out")) < 6.5  # out of the bedroom (x >= 7)
     assert doc["success"] and doc["error_translation_m"]["fine"] <= 0.3
+
+
+def test_a_self_similar_storey_fails_at_once_and_the_survey_says_why(tmp_path):
+    """Two homes, one turned half round: every pose has a twin no reading tells apart, so the session
+    fails at 0 m with the reason on stderr (not after its 150 m), and the survey marks the storey."""
+    config = world_config(tmp_path, "semi_detached")
+    result, doc = run(tmp_path, config, "--seed", "1")
+    assert result.exit_code == EXIT_FAILED and "Traceback" not in result.output
+    assert doc is not None and not doc["success"] and doc["distance_total_m"] == 0
+    assert doc["reason"].startswith("self-similar storey: the model is the same 'Level 1' turned 180 deg")
+    assert result.output.splitlines()[-1] == doc["reason"]  # the one line, on stderr
+    jsonschema.validate(doc, json.loads((SCHEMAS / "summary.schema.json").read_text()))
+    assert (tmp_path / "out" / "session.jsonl").exists()  # the log is kept, the failure in it
+    result = runner.invoke(
+        app,
+        [
+            "survey",
+            str(tmp_path / "out" / "site"),
+            "--out",
+            str(tmp_path / "sv"),
+            "--spacing",
+            "2",
+            "--headings",
+            "1",
+            "--workers",
+            "1",
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    survey = json.loads((tmp_path / "sv" / "survey.json").read_text())
+    jsonschema.validate(survey, json.loads((SCHEMAS / "survey.schema.json").read_text()))
+    (storey,) = survey["storeys"]
+    assert storey["self_similar"]["turn_deg"] == 180.0 and storey["never_unique_share"] == 1.0
+    assert (storey["self_similar"]["x"], storey["self_similar"]["y"]) == pytest.approx((8.0, 5.0), abs=0.01)

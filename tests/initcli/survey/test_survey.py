@@ -144,7 +144,7 @@ def test_a_room_with_one_door_is_never_unique() -> None:
 
 def _fake(distance: list[float], position: list[int], positions: int, headings: int) -> StoreySurvey:
     plan = SimpleNamespace(
-        name="L9", position=np.array(position), positions=np.zeros((positions, 2)), shut_in=[]
+        name="L9", position=np.array(position), positions=np.zeros((positions, 2)), shut_in=[], twin=None
     )
     params = SurveyParams(spacing=2.0, headings=headings, limit_m=30.0)
     return StoreySurvey(plan, np.array(distance, dtype=float), params)  # type: ignore[arg-type]
@@ -166,6 +166,7 @@ def test_summarise_numbers() -> None:
     assert doc["mean_distance_m"] == 8.0
     assert doc["never_unique_share"] == 0.25
     assert doc["never_unique_area_m2"] == 2.0  # half the headings of one 4 m^2 position
+    assert doc["self_similar"] is None
 
 
 def test_summarise_all_never_has_no_median() -> None:
