@@ -19,7 +19,7 @@ class RegistrationParams:
         "register the lidar submap of the recent path over every storey's map when no camera claim"
         " exists (beyond the paper: a pose with the camera off; false: the paper's pipeline)",
     )
-    min_travel: float = setting(10.0, "m of travel before the first registration", minimum=0, maximum=1000)
+    min_travel: float = setting(0.0, "m of travel before the first registration", minimum=0, maximum=1000)
     every: float = setting(5.0, "m of travel between two registrations", above=0, maximum=1000)
     window: float = setting(20.0, "m of the latest path whose scans make the submap", above=0, maximum=200)
     min_fit: float = setting(

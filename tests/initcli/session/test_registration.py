@@ -144,3 +144,26 @@ def test_as_built_the_open_doors_tell_a_repeating_floor_from_its_half_turn(
     assert result.pose.distance_to(result.truth_pose) < 0.3
     through = result.verifications[0]["registration_through"]
     assert through[0] <= 0.02 and min(through[1:]) >= through[0] + config.registration.see_through
+
+
+def test_a_start_unlike_any_other_place_is_registered_before_the_robot_drives(
+    tmp_path_factory: pytest.TempPathFactory,
+) -> None:
+    """block_a, camera off, seed 72: the first registration at 0 m (``registration.min_travel``)
+    places the robot from the scans of its first look; at 10 m, as before, not before 10 m."""
+    config = load_config(SAMPLES / "block_a.site.yaml")
+    sim = dataclasses.replace(config.sim, miss_rate=1.0, false_positives_per_minute=0.0)
+    config = dataclasses.replace(
+        config, sim=sim, limits=dataclasses.replace(config.limits, max_distance=30.0)
+    )
+    site = prepare_site(config, tmp_path_factory.mktemp("block_a"))
+    assert config.registration.min_travel == 0.0
+    result = sim_session(config, site, 72).session.run()
+    assert result.success and result.decided_by == DECIDED_BY_REGISTRATION, result.reason
+    assert result.distance_coarse_m is not None and result.distance_coarse_m < 2.0
+    assert result.pose is not None and result.truth_pose is not None
+    assert result.pose.distance_to(result.truth_pose) < 0.3
+    later = dataclasses.replace(config.registration, min_travel=10.0)
+    result = sim_session(dataclasses.replace(config, registration=later), site, 72).session.run()
+    # (10 m of odometry travel, the distance is the true path's)
+    assert result.distance_coarse_m is None or result.distance_coarse_m >= 9.5
