@@ -150,7 +150,7 @@ def test_a_start_unlike_any_other_place_is_registered_before_the_robot_drives(
     tmp_path_factory: pytest.TempPathFactory,
 ) -> None:
     """block_a, camera off, seed 72: the first registration at 0 m (``registration.min_travel``)
-    places the robot from the scans of its first look; at 10 m, as before, not before 10 m."""
+    places the robot from its first scan; at 10 m, as before, not before 10 m."""
     config = load_config(SAMPLES / "block_a.site.yaml")
     sim = dataclasses.replace(config.sim, miss_rate=1.0, false_positives_per_minute=0.0)
     config = dataclasses.replace(
