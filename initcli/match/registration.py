@@ -45,6 +45,7 @@ from initcli.io.detection_log import DetectionLog, Scan, read_log
 from initcli.match.pipeline import EXIT_UNIQUE, Hypothesis, MatchReport, site_class_map
 from initcli.match.sightings import sightings_from_log
 from initcli.match.verify import PathEvidence, StoreyEvidence, check_loaded, claim_params, verify_transform
+from initcli.site import twin_reason
 
 __all__ = [
     "DECIDED_BY_REGISTRATION",
@@ -206,6 +207,10 @@ def replay_registration(
         return checks
     verification = verification or VerificationParams()
     storey = None if report.options.storey in (None, "auto") else report.options.storey
+    twins = twin_reason(site, storey)
+    if twins is not None:  # as a session, which fails at 0 m there: a registration is a coin toss
+        report.notes.append(f"lidar registration: not replayed, {twins}")
+        return checks
     registration = SubmapRegistration(params, site, storey, verification.scan_tolerance)
     cmap = site_class_map(site)
     seen = sightings_from_log(log, cmap, report.options.edge_margin)

@@ -162,6 +162,22 @@ def test_a_self_similar_storey_fails_at_once_and_the_survey_says_why(tmp_path):
     assert result.output.splitlines()[-1] == doc["reason"]  # the one line, on stderr
     jsonschema.validate(doc, json.loads((SCHEMAS / "summary.schema.json").read_text()))
     assert (tmp_path / "out" / "session.jsonl").exists()  # the log is kept, the failure in it
+    # bim-init match on the log does as the session did: no registration replayed, and says why
+    result = runner.invoke(
+        app,
+        [
+            "match",
+            str(tmp_path / "out" / "session.jsonl"),
+            "--site",
+            str(tmp_path / "out" / "site"),
+            "--json",
+        ],
+    )
+    matched = json.loads(result.stdout)
+    assert result.exit_code != 0 and matched["decided_by"] is None
+    assert any(
+        n.startswith("lidar registration: not replayed, self-similar storey: ") for n in matched["notes"]
+    )
     result = runner.invoke(
         app,
         [
