@@ -119,6 +119,12 @@ class LocalExecutor:
             process.terminate()
         for process in processes:
             process.join(timeout=5)
+        # Let the pool's manager thread see its workers gone and close its wake-up pipe now: left to
+        # the interpreter's exit, the exit hook may write to that pipe as the thread closes it
+        # (Python 3.11: "Exception ignored ... Bad file descriptor" after an interrupt).
+        manager = getattr(pool, "_executor_manager_thread", None)
+        if manager is not None:
+            manager.join(timeout=5)
 
 
 class RayExecutor:

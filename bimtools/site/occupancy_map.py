@@ -101,8 +101,17 @@ def read_map(yaml_path: Path) -> OccupancyGrid:
     for key, value in thresholds.items():
         check_number(value, f"{yaml_path}: {key}", minimum=0, maximum=1)
     image = yaml_path.parent / meta["image"]
-    if not image.exists():
-        raise InputError(f"{yaml_path}: image {meta['image']!r} not found")
+    name = (
+        meta["image"]
+        if len(meta["image"]) <= 80
+        else f"{meta['image'][:60]}... ({len(meta['image'])} characters)"
+    )
+    try:
+        found = image.exists()
+    except OSError as exc:  # a name too long for the file system, say: Path.exists raises those
+        raise InputError(f"{yaml_path}: image {name!r}: {exc.strerror or exc}") from None
+    if not found:
+        raise InputError(f"{yaml_path}: image {name!r} not found")
     return OccupancyGrid(
         cells=_read_pgm(image),
         resolution=float(resolution),

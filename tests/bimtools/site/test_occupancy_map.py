@@ -34,3 +34,16 @@ def test_truncated_pgm_is_reported(tmp_path):
     (tmp_path / "m.pgm").write_bytes(data[:-5])
     with pytest.raises(InputError, match="truncated"):
         read_map(tmp_path / "m.yaml")
+
+
+@pytest.mark.parametrize(
+    ("name", "says"), [("missing.pgm", "not found"), ("9" * 5000 + ".pgm", "(5004 characters)")]
+)
+def test_an_image_name_that_names_no_file_is_one_line(tmp_path, name, says):
+    """A name too long for the file system (found by the fuzz test: ``Path.exists`` raises on it)
+    is refused like a missing file, in one short line."""
+    yaml_path = tmp_path / "map.yaml"
+    yaml_path.write_text(f"image: {name}\nresolution: 0.05\norigin: [0, 0, 0]\n")
+    with pytest.raises(InputError) as caught:
+        read_map(yaml_path)
+    assert says in str(caught.value) and len(str(caught.value)) < 250
