@@ -46,9 +46,12 @@ _resend: set[int] = set()  # signals whose delivery again is scheduled
 
 
 def _in_finaliser(frame: FrameType | None) -> bool:
-    """Is ``frame``, or a frame that called it, an object's ``__del__``?"""
+    """Is ``frame``, or a frame that called it, an object's ``__del__`` or llvmlite's (a numba
+    compile calls back into Python from C there: an exception raised in such a ctypes callback is
+    printed as "Exception ignored" and the C code goes on with no result, a segmentation fault)?"""
     while frame is not None:
-        if frame.f_code.co_name == "__del__":
+        code = frame.f_code
+        if code.co_name == "__del__" or f"{os.sep}llvmlite{os.sep}" in code.co_filename:
             return True
         frame = frame.f_back
     return False
@@ -64,10 +67,11 @@ def _send_again(signum: int) -> None:
 
 def _on_signal(signum: int, frame: FrameType | None) -> None:
     """SIGTERM raises :class:`Terminated`, SIGINT ``KeyboardInterrupt``, where the program is. Not
-    inside a finaliser (llvmlite's ``__del__``, in the middle of a numba compile): an exception
-    raised there is swallowed, printed as "Exception ignored" with a traceback, and the command goes
-    on. There the signal is held off and sent again every ``DEFER_S`` until the finaliser is done
-    (one such delivery at a time; a finaliser still running after ``DEFER_MAX_S`` gets it raised)."""
+    inside a finaliser (llvmlite's ``__del__``, in the middle of a numba compile) or an llvmlite
+    callback: an exception raised there is swallowed, printed as "Exception ignored" with a
+    traceback, and the command goes on (or, from a callback, crashes). There the signal is held off
+    and sent again every ``DEFER_S`` until the finaliser is done (one such delivery at a time; a
+    finaliser still running after ``DEFER_MAX_S`` gets it raised)."""
     frame = frame if frame is not None else sys._getframe(1)  # called by hand (bimkit.atomic)
     now = time.monotonic()
     if _in_finaliser(frame) and now - _deferred.setdefault(signum, now) < DEFER_MAX_S:

@@ -79,3 +79,18 @@ def test_a_signal_inside_a_finaliser_stops_the_command_when_it_is_done(
     if then == "idle":
         assert "finished" not in out  # the command stopped, it did not go on
         assert BUSY_S - 1.0 < took < BUSY_S + 2.0  # held off until the finaliser ended, no later
+
+
+def test_a_signal_in_an_llvmlite_callback_is_held_off_like_one_in_a_finaliser() -> None:
+    """A numba compile calls back into llvmlite's Python from C (the object cache): an exception
+    raised there is ignored and the C code goes on with no result (a segmentation fault, seen once
+    in the signal tests), so a signal is held off there as inside a ``__del__``; elsewhere it is not."""
+    from bimkit.cli import _in_finaliser
+
+    where = {}
+    for name, path in (
+        ("callback", f"{Path('site-packages') / 'llvmlite' / 'binding' / 'executionengine.py'}"),
+        ("plain", f"{Path('site-packages') / 'initcli' / 'core' / 'raycast.py'}"),
+    ):
+        exec(compile("def here():\n    return sys._getframe()\n", path, "exec"), {"sys": sys}, where)
+        assert _in_finaliser(where["here"]()) is (name == "callback")
