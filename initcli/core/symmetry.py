@@ -30,6 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from initcli.core.geometry import Pose2D, rot2, wrap_angle
+
 __all__ = ["TURN_ANGLES_DEG", "Turn", "self_similar_turn"]
 
 # Candidate turns (degrees): a storey the same after a turn of 360/n degrees is the same after any
@@ -47,8 +49,6 @@ class Turn:
     angle: float
     centre: tuple[float, float]
     tolerance: float  # m: how alike (walls and features)
-    walls: int  # wall cells tested
-    features: int  # features tested
 
     @property
     def degrees(self) -> float:
@@ -56,8 +56,7 @@ class Turn:
 
     def twin(self, x: float, y: float, yaw: float) -> tuple[float, float, float]:
         """The pose every reading fits as well as (x, y, yaw)."""
-        ((tx, ty),) = _turned(np.array([[x, y]]), self.angle, self.centre)
-        return float(tx), float(ty), math.remainder(yaw + self.angle, math.tau)
+        return (_turn(self.angle, self.centre) * Pose2D(x, y, yaw)).as_tuple()
 
 
 def self_similar_turn(
@@ -75,6 +74,7 @@ def self_similar_turn(
     category (any comparable labels). A storey with no walls is never self-similar here.
     """
     walls = np.asarray(walls, dtype=float).reshape(-1, 2)
+    xy = np.asarray(features, dtype=float).reshape(-1, 2)
     if len(walls) < 3:
         return None
     centre = (float(walls[:, 0].mean()), float(walls[:, 1].mean()))
@@ -83,24 +83,23 @@ def self_similar_turn(
     sample = walls[rng.choice(len(walls), size=min(PRECHECK, len(walls)), replace=False)]
     for degrees in TURN_ANGLES_DEG:
         angle = math.radians(degrees)
-        if not _lands_on(tree, _turned(sample, angle, centre), tolerance):
+        if not _lands_on(tree, _turn(angle, centre).apply(sample), tolerance):
             continue
-        if not _lands_on(tree, _turned(walls, angle, centre), tolerance):
+        if not _lands_on(tree, _turn(angle, centre).apply(walls), tolerance):
             continue
         # the cells' centroid is off the true centre by a fraction of a cell: refine it on the walls
         at = _refined_centre(tree, walls, angle, centre)
-        if not _lands_on(tree, _turned(walls, angle, at), tolerance):
+        if not _lands_on(tree, _turn(angle, at).apply(walls), tolerance):
             at = centre
         # The features' own centroid is the centre of any turn that maps them onto themselves, exact
         # where the map's cells are off by a fraction of one: test them about it, near the walls'.
-        xy = np.asarray(features, dtype=float).reshape(-1, 2)
         if len(xy):
             own = (float(xy[:, 0].mean()), float(xy[:, 1].mean()))
             if math.dist(own, at) > tolerance:
                 continue
             at = own
         if _features_alike(xy, normals, kinds, angle, at, tolerance, normal_tolerance):
-            return Turn(angle, at, tolerance, len(walls), len(xy))
+            return Turn(angle, at, tolerance)
     return None
 
 
@@ -110,20 +109,19 @@ def _refined_centre(
     """The centre that brings the turned walls closest to the walls: each round moves it by the
     least-squares step for the mean offset to the nearest wall cells. A turn about ``c`` maps ``p``
     to ``R p + (I - R) c``, so an offset ``r`` of the turned points is undone by ``(I - R)^-1 r``."""
-    c, s = math.cos(angle), math.sin(angle)
-    step = np.linalg.inv(np.eye(2) - np.array([[c, -s], [s, c]]))
+    step = np.linalg.inv(np.eye(2) - rot2(angle))
     at = np.asarray(centre, dtype=float)
     for _ in range(rounds):
-        moved = _turned(walls, angle, (float(at[0]), float(at[1])))
+        moved = _turn(angle, (float(at[0]), float(at[1]))).apply(walls)
         _, nearest = tree.query(moved, k=1)
         at = at + step @ (walls[nearest] - moved).mean(axis=0)
     return float(at[0]), float(at[1])
 
 
-def _turned(points: np.ndarray, angle: float, centre: tuple[float, float]) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    d = np.asarray(points, dtype=float) - centre
-    return np.column_stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]]) + centre
+def _turn(angle: float, centre: tuple[float, float]) -> Pose2D:
+    """The turn by ``angle`` about ``centre`` as a rigid transform (Eq. 11): ``R p + (I - R) c``."""
+    x, y = np.asarray(centre) - rot2(angle) @ np.asarray(centre)
+    return Pose2D(float(x), float(y), angle)
 
 
 def _lands_on(tree: cKDTree, points: np.ndarray, tolerance: float) -> bool:
@@ -141,18 +139,17 @@ def _features_alike(
     tolerance: float,
     normal_tolerance: float,
 ) -> bool:
-    """Does every feature, turned, land on one of its kind facing the same way?"""
-    xy = np.asarray(features, dtype=float).reshape(-1, 2)
-    if len(xy) == 0:
+    """Does every feature (``features`` (M, 2)), turned, land on one of its kind facing the same way?"""
+    if len(features) == 0:
         return True
     n = np.asarray(normals, dtype=float).reshape(-1, 2)
     labels = np.asarray(kinds)
-    moved = _turned(xy, angle, centre)
+    moved = _turn(angle, centre).apply(features)
     heading = np.arctan2(n[:, 1], n[:, 0])
-    for i in range(len(xy)):
-        near = np.hypot(*(xy - moved[i]).T) <= tolerance
+    for i in range(len(features)):
+        near = np.hypot(*(features - moved[i]).T) <= tolerance
         same = labels == labels[i]
-        facing = np.abs(np.remainder(heading - heading[i] - angle + math.pi, math.tau) - math.pi)
+        facing = np.abs(wrap_angle(heading - heading[i] - angle))
         if not np.any(near & same & (facing <= normal_tolerance)):
             return False
     return True

@@ -142,8 +142,11 @@ def survey_png(
     for ax, (res, title, lms) in zip(flat, panels, strict=True):
         mean = float(res.position_distance.mean()) if len(res.position_distance) else float("nan")
         twin = res.plan.twin
-        turned = "" if twin is None else f"the same turned {twin.degrees:.0f} deg (+)"
-        alike = f"\nself-similar, {turned}: no start initialises" if turned else ""
+        alike = (
+            ""
+            if twin is None
+            else f"\nself-similar, the same turned {twin.degrees:.0f} deg (+): no start initialises"
+        )
         scatters.append(
             _panel(ax, res, f"{res.plan.name}: {title} (mean {mean:.1f} m){alike}", lms, norm, points_per_m)
         )
