@@ -17,6 +17,12 @@ have seen but did not, nor whether the lidar agrees with the walls. Two checks:
   (the last ``PATH_CHECK`` metres, as the images' poses) lies on free cells of the BIM map, within
   ``path_margin`` of one (odometry drift, as-built offsets). A hypothesis that puts the path through
   walls or outside the building is wrong.
+* **Lidar landmarks missed** (beyond the paper) -- the same binomial rule for the storey's wall
+  corners, column corners and openings: a landmark within ``landmark_range`` of ``landmark_min_views``
+  of the path's scan poses, seen from within ``landmark_view_angle_deg`` of its normal (a corner's
+  bisector: both its faces in sight) with no wall across, yet no confirmed lidar landmark of its
+  category within ``landmark_match_radius``, is a miss, at ``landmark_p_right`` / ``landmark_p_wrong``.
+  The camera's misses say nothing when the camera is blind; the lidar's still do.
 * **Scan fit** -- the share of lidar beam end points of the recent scans, put into the BIM frame with
   ``T``, that land within ``scan_tolerance`` of an occupied map cell (the beam end-point model of the
   fine-tuning filter, Eq. 18, with no beam skipped). As-built deviations move walls by centimetres;
@@ -40,11 +46,13 @@ from initcli.core.particle_filter import LikelihoodField
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.core.scan_fit import BeamEnds, ScanSample, best_scan_alignment
 from initcli.core.verification_settings import VerificationParams
-from initcli.core.visibility import CameraModel, FeatureArrays, visible
+from initcli.core.visibility import PAIR_CHUNK, CameraModel, FeatureArrays, crossing, visible
 
 __all__ = [
     "CameraView",
     "FreeSpace",
+    "LandmarkEvidence",
+    "LandmarkView",
     "PathTrack",
     "RIVAL_MARGIN",
     "TRACK_HYPOTHESES",
@@ -52,9 +60,11 @@ __all__ = [
     "explained",
     "frames_in_view",
     "judge",
+    "landmark_misses",
     "misses_reject",
     "outranks",
     "rival_search",
+    "scans_in_view",
     "track_favoured",
     "track_outranks",
     "tracked_scan_fit",
@@ -66,6 +76,7 @@ RIVAL_MARGIN = 2  # more outliers than a noisy claim was found with that its riv
 # several hypotheses are compared by the lidar along the path (track_favoured) up to this many
 TRACK_HYPOTHESES = 12
 WIDE_STEP_M, WIDE_STEP_DEG = 0.5, 5.0  # grid of tracked_scan_fit's widened first search
+LANDMARK_FRONT = 0.1  # m: a landmark's sight line ends this far in front of it, along its normal
 
 
 @dataclass(frozen=True)
@@ -76,6 +87,28 @@ class CameraView:
     camera: CameraIntrinsics
     mount: CameraMount
     min_depth: float  # m
+
+
+@dataclass(frozen=True)
+class LandmarkView:
+    """A storey's lidar landmarks (beyond the paper), BIM frame: ids, positions (L, 2), unit normals
+    into free space (L, 2; a corner's bisector) and canonical categories."""
+
+    ids: tuple[str, ...]
+    xy: np.ndarray
+    normals: np.ndarray
+    categories: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class LandmarkEvidence:
+    """The lidar's side of the landmark check: the storey's landmarks, the odom poses of the path's
+    scans and the confirmed lidar landmarks (odom frame positions (N, 2), canonical categories)."""
+
+    landmarks: LandmarkView
+    scan_poses: list[Pose2D]
+    seen_xy: np.ndarray
+    seen_categories: tuple[str, ...]
 
 
 @dataclass(frozen=True)
@@ -91,6 +124,8 @@ class Verification:
     reasons: tuple[str, ...] = field(default_factory=tuple)
     aligned: Pose2D | None = None  # the hypothesis (odom -> BIM) moved to where the scans fit best
     track_fit: tuple[float, ...] | None = None  # the lidar along the path, newest window first
+    landmarks_predicted: int = 0  # BIM lidar landmarks predicted in the lidar's view ...
+    landmarks_missed: int = 0  # ... of which no confirmed lidar landmark was near
 
     def aligned_or(self, transform: Pose2D) -> Pose2D:
         """Where the recent scans fit best (``aligned``), or ``transform`` when they were not fitted:
@@ -104,6 +139,8 @@ class Verification:
             "missed_ids": list(self.missed_ids),
             "scan_fit": None if self.scan_fit is None else round(self.scan_fit, 4),
             "path_free": None if self.path_free is None else round(self.path_free, 4),
+            "landmarks_predicted": self.landmarks_predicted,
+            "landmarks_missed": self.landmarks_missed,
             "passed": self.passed,
             "reasons": list(self.reasons),
         }
@@ -168,14 +205,70 @@ def explained(
     return np.asarray(((d <= radius) & same).any(axis=1))
 
 
-def misses_reject(missed: int, predicted: int, params: VerificationParams) -> bool:
+def misses_reject(missed: int, predicted: int, params: VerificationParams, lidar: bool = False) -> bool:
     """The binomial likelihood-ratio test of the module docstring: do ``missed`` of ``predicted``
-    favour a wrong place by more than ``exp(log_odds)`` to one?"""
+    favour a wrong place by more than ``exp(log_odds)`` to one (``lidar``: the landmarks' rates and
+    odds)?"""
     if predicted <= 0:
         return False
-    pr, pw = params.p_right, params.p_wrong
+    pr, pw = (params.landmark_p_right, params.landmark_p_wrong) if lidar else (params.p_right, params.p_wrong)
+    odds = params.landmark_log_odds if lidar else params.log_odds
     llr = missed * math.log(pw / pr) + (predicted - missed) * math.log((1.0 - pw) / (1.0 - pr))
-    return llr > params.log_odds
+    return llr > odds
+
+
+def scans_in_view(
+    xy: np.ndarray,
+    normals: np.ndarray,
+    poses: np.ndarray,
+    walls: np.ndarray,
+    max_range: float,
+    max_view_angle_deg: float,
+) -> np.ndarray:
+    """Per landmark (L,), the number of robot ``poses`` ((P, 3) rows x, y, yaw, BIM frame; the lidar
+    at the robot's centre, all round) from which the lidar sees it: within ``max_range``, from within
+    ``max_view_angle_deg`` of its normal, with no wall across the sight line to a point
+    ``LANDMARK_FRONT`` in front of it (a corner lies on the walls' faces)."""
+    xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+    normals = np.asarray(normals, dtype=float).reshape(-1, 2)
+    poses = np.asarray(poses, dtype=float).reshape(-1, 3)
+    if len(xy) == 0 or len(poses) == 0:
+        return np.zeros(len(xy), dtype=int)
+    to_robot = poses[:, None, 0:2] - xy[None, :, :]  # (P, L, 2)
+    dist = np.hypot(to_robot[..., 0], to_robot[..., 1])
+    cos_view = np.einsum("plk,lk->pl", to_robot, normals) / np.maximum(dist, 1e-12)
+    facing = cos_view >= math.cos(math.radians(max_view_angle_deg))
+    ok = (dist <= max_range) & (dist >= LANDMARK_FRONT) & facing
+    pp, ll = np.nonzero(ok)
+    walls = np.asarray(walls, dtype=float).reshape(-1, 4)
+    if len(pp) and len(walls):
+        targets = xy[ll] + LANDMARK_FRONT * normals[ll]
+        eyes = poses[pp, 0:2]
+        blocked = np.zeros(len(pp), dtype=bool)
+        for lo in range(0, len(pp), PAIR_CHUNK):
+            hi = min(lo + PAIR_CHUNK, len(pp))
+            blocked[lo:hi] = crossing(eyes[lo:hi], targets[lo:hi], walls)
+        ok[pp[blocked], ll[blocked]] = False
+    return np.asarray(ok.sum(axis=0))
+
+
+def landmark_misses(
+    transform: Pose2D, evidence: LandmarkEvidence, walls: np.ndarray, params: VerificationParams
+) -> tuple[int, int]:
+    """(predicted, missed): the storey's landmarks in the lidar's view from ``landmark_min_views``
+    of the path's scan poses under ``transform`` (odom -> BIM; :func:`scans_in_view`), and those of
+    them with no confirmed lidar landmark of their category within ``landmark_match_radius``."""
+    lm = evidence.landmarks
+    poses = transform_poses(transform, poses_to_array(evidence.scan_poses))
+    views = scans_in_view(
+        lm.xy, lm.normals, poses, walls, params.landmark_range, params.landmark_view_angle_deg
+    )
+    predicted = views >= params.landmark_min_views
+    seen_bim = transform.apply(np.asarray(evidence.seen_xy, dtype=float).reshape(-1, 2))
+    seen = explained(
+        lm.xy, list(lm.categories), seen_bim, list(evidence.seen_categories), params.landmark_match_radius
+    )
+    return int(predicted.sum()), int((predicted & ~seen).sum())
 
 
 class FreeSpace:
@@ -415,6 +508,7 @@ def verify_hypothesis(
     params: VerificationParams,
     free: FreeSpace | None = None,
     path_odom: list[Pose2D] | None = None,
+    landmarks: LandmarkEvidence | None = None,
 ) -> Verification:
     """Both checks for the hypothesis ``transform`` (odom -> BIM) on one storey's BIM features.
 
@@ -443,6 +537,7 @@ def verify_hypothesis(
     path_free = None
     if free is not None and path_odom:
         path_free = free.share_free(transform.apply(np.array([[p.x, p.y] for p in path_odom])))
+    lm_pred, lm_miss = (0, 0) if landmarks is None else landmark_misses(transform, landmarks, walls, params)
     return judge(
         Verification(
             predicted=n_pred,
@@ -451,6 +546,8 @@ def verify_hypothesis(
             scan_fit=fit,
             path_free=path_free,
             aligned=aligned,
+            landmarks_predicted=lm_pred,
+            landmarks_missed=lm_miss,
         ),
         params,
     )
@@ -471,6 +568,10 @@ def judge(check: Verification, params: VerificationParams) -> Verification:
         reasons.append(f"the path runs through walls or outside ({path_free:.2f} of it on free space)")
     if misses_reject(n_miss, n_pred, params):
         reasons.append(f"{n_miss} of {n_pred} BIM features in view were never detected")
+    if misses_reject(check.landmarks_missed, check.landmarks_predicted, params, lidar=True):
+        reasons.append(
+            f"{check.landmarks_missed} of {check.landmarks_predicted} lidar landmarks in view were never seen"
+        )
     if fit is not None and fit < params.min_scan_fit:
         reasons.append(f"lidar fits the BIM walls poorly ({fit:.2f} < {params.min_scan_fit:.2f})")
     return replace(check, passed=not reasons or not params.enabled, reasons=tuple(reasons))

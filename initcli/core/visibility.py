@@ -20,7 +20,7 @@ from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount, odom_to_pixel
 from initcli.core.raycast import sight_blocked
 
-__all__ = ["CameraModel", "FeatureArrays", "PAIR_CHUNK", "visible"]
+__all__ = ["CameraModel", "FeatureArrays", "PAIR_CHUNK", "crossing", "visible"]
 
 PAIR_CHUNK = 20_000  # (pose, feature) pairs tested against the walls at once
 
@@ -100,12 +100,12 @@ def visible(poses: np.ndarray, features: FeatureArrays, walls: np.ndarray, model
         blocked = np.zeros(len(pp), dtype=bool)
         for lo in range(0, len(pp), PAIR_CHUNK):
             hi = min(lo + PAIR_CHUNK, len(pp))
-            blocked[lo:hi] = _crossing(eye[pp[lo:hi]], targets[lo:hi], walls)
+            blocked[lo:hi] = crossing(eye[pp[lo:hi]], targets[lo:hi], walls)
         ok[pp[blocked], ff[blocked]] = False
     return ok
 
 
-def _crossing(a: np.ndarray, b: np.ndarray, walls: np.ndarray) -> np.ndarray:
+def crossing(a: np.ndarray, b: np.ndarray, walls: np.ndarray) -> np.ndarray:
     """sight_blocked restricted to the walls near each segment's bounding box (same answer, faster)."""
     lo = np.minimum(a, b).min(axis=0)
     hi = np.maximum(a, b).max(axis=0)
@@ -121,7 +121,7 @@ def _crossing(a: np.ndarray, b: np.ndarray, walls: np.ndarray) -> np.ndarray:
         order = np.argsort(a[:, 0])
         half = len(a) // 2
         out = np.zeros(len(a), dtype=bool)
-        out[order[:half]] = _crossing(a[order[:half]], b[order[:half]], w[near])
-        out[order[half:]] = _crossing(a[order[half:]], b[order[half:]], w[near])
+        out[order[:half]] = crossing(a[order[:half]], b[order[:half]], w[near])
+        out[order[half:]] = crossing(a[order[half:]], b[order[half:]], w[near])
         return out
     return sight_blocked(a, b, w[near])

@@ -12,7 +12,7 @@ import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TypeVar
+from typing import Protocol, TypeVar
 
 import numpy as np
 
@@ -27,6 +27,8 @@ from initcli.core.verification import (
     TRACK_HYPOTHESES,
     CameraView,
     FreeSpace,
+    LandmarkEvidence,
+    LandmarkView,
     PathTrack,
     Verification,
     judge,
@@ -36,6 +38,7 @@ from initcli.core.verification import (
 )
 from initcli.core.verification_settings import VerificationParams
 from initcli.io.detection_log import DetectionLog, Detections, Odom, Scan, read_log
+from initcli.match.landmarks import log_landmarks
 from initcli.match.pipeline import (
     DECIDED_BY_LIDAR,
     DECIDED_BY_PAPER,
@@ -47,6 +50,7 @@ from initcli.match.pipeline import (
 from initcli.match.sightings import sightings_from_log
 
 __all__ = [
+    "LANDMARK_WINDOW_M",
     "MAX_SCANS",
     "PATH_CHECK_M",
     "PATH_RETRY",
@@ -65,6 +69,7 @@ __all__ = [
     "path_free_along",
     "path_track",
     "refuse_unique",
+    "without_landmark_misses",
     "track_transform",
     "verify_and_favour",
     "verify_report",
@@ -75,6 +80,8 @@ SCAN_BEAM_STEP = 3  # every third beam is enough for a fit share
 RECENT_SCANS_M = 8.0  # m of the latest travel whose scans are fitted (older ones carry odometry drift)
 MAX_SCANS = 16  # scans fitted at most, the latest first
 PATH_WINDOW_M = 60.0  # m of the latest travel whose images predict features
+LANDMARK_WINDOW_M = 20.0  # m of the latest travel whose scans predict lidar landmarks (older
+# landmarks carry odometry drift: a room passed 40 m before was confirmed a metre off its corners)
 PATH_CHECK_M = 30.0  # m of the latest travel that must lie in the BIM's free space ...
 PATH_RETRY = 0.2  # ... placed window by window by the lidar along the path when one transform leaves
 # it at most this much short
@@ -83,6 +90,18 @@ TRACK_BEAM_STEP = 2  # ... with every second of their beams
 TRACK_KEPT_M = 100.0  # m of travel whose scans are kept for it (the check reads track_m of them)
 
 P = TypeVar("P", bound=VerificationParams)
+LANDMARK_CLASSES = ClassMap()  # the landmark categories' canonical names (LandmarkMatching's)
+
+
+class Located(Protocol):
+    """A confirmed feature or a feature record: its class and odom position."""
+
+    @property
+    def cls(self) -> str: ...
+    @property
+    def x(self) -> float: ...
+    @property
+    def y(self) -> float: ...
 
 
 def claim_params(params: P, blind: bool) -> P:
@@ -91,6 +110,14 @@ def claim_params(params: P, blind: bool) -> P:
     feature predicted in view and missed says nothing of the place, it would be missed anywhere).
     The session's claims and ``bim-init match``'s replay of a lidar registration both use it."""
     return replace(params, log_odds=math.inf) if blind else params
+
+
+def without_landmark_misses(params: P) -> P:
+    """``params`` with the lidar landmarks' misses left out: the checks of a rival, of one of several
+    places, of a fine pose. The misses may hold back a coarse claim, never rule out a rival (a rival
+    ruled out lets a claim through): at the true place a quarter to a third of the predicted corners
+    go unseen (furniture and stacks hide them, several at once)."""
+    return replace(params, landmark_log_odds=math.inf)
 
 
 @dataclass
@@ -105,11 +132,23 @@ class StoreyEvidence:
     walls: np.ndarray
     field_: LikelihoodField | None
     free: FreeSpace | None = None
+    landmarks: LandmarkView | None = None  # the lidar landmarks (None: the storey has none)
 
     @staticmethod
     def of(storey: StoreyModel, cmap: ClassMap) -> StoreyEvidence:
         f = storey.camera_features  # what the camera must see (the lidar landmarks are not its)
         walls = np.array([[w.x1, w.y1, w.x2, w.y2] for w in storey.walls], dtype=float).reshape(-1, 4)
+        lm = storey.lidar_landmarks
+        landmarks = (
+            LandmarkView(
+                tuple(x.id for x in lm),
+                np.array([[x.x, x.y] for x in lm], dtype=float),
+                np.array([[x.norm_x, x.norm_y] for x in lm], dtype=float),
+                tuple(LANDMARK_CLASSES.canonical(x.category) for x in lm),
+            )
+            if lm
+            else None
+        )
         return StoreyEvidence(
             [x.id for x in f],
             np.array([[x.x, x.y] for x in f], dtype=float).reshape(-1, 2),
@@ -119,6 +158,7 @@ class StoreyEvidence:
             walls,
             likelihood_field(storey.grid) if storey.grid is not None else None,
             FreeSpace(storey.grid, VerificationParams().path_margin) if storey.grid is not None else None,
+            landmarks,
         )
 
 
@@ -215,12 +255,23 @@ def verify_transform(
     sightings: Sequence[Sighting],
     view: CameraView,
     params: VerificationParams,
+    seen_landmarks: Sequence[Located] = (),
 ) -> Verification:
     """The checks of :func:`initcli.core.verification.verify_hypothesis` for ``transform`` (odom ->
     BIM) on ``storey``, with the images of the last ``PATH_WINDOW_M`` m and the scans of the last
-    ``RECENT_SCANS_M`` m."""
+    ``RECENT_SCANS_M`` m; the storey's lidar landmarks predicted from the path's scans of the last
+    ``LANDMARK_WINDOW_M`` m against ``seen_landmarks``, the confirmed ones (odom frame)."""
     poses, scans = path.recent(PATH_WINDOW_M, RECENT_SCANS_M)
     recent_path, _ = path.recent(PATH_CHECK_M, 0.0)
+    landmarks = None
+    if storey.landmarks is not None:
+        swept, _ = path.along(LANDMARK_WINDOW_M)
+        landmarks = LandmarkEvidence(
+            storey.landmarks,
+            [s.odom for s in swept],
+            np.array([[f.x, f.y] for f in seen_landmarks], dtype=float).reshape(-1, 2),
+            tuple(LANDMARK_CLASSES.canonical(f.cls) for f in seen_landmarks),
+        )
     check = verify_hypothesis(
         transform,
         storey.ids,
@@ -238,6 +289,7 @@ def verify_transform(
         params,
         storey.free,
         recent_path,
+        landmarks,
     )
     free = check.path_free
     if (
@@ -351,8 +403,10 @@ def _check_report(
     made from (no path without an odom pose)."""
     if report.odom_pose is None:
         return [None for _ in report.hypotheses], None, {}
+    params = without_landmark_misses(params)  # check_loaded judges the claim with the landmarks' misses
     path = PathEvidence.of_log(log)
     sightings = sightings_from_log(log, cmap, report.options.edge_margin)
+    landmarks = log_landmarks(log, site, [])
     view = CameraView(log.meta.camera, log.meta.camera_pose, report.options.min_depth)
     storeys: dict[str, StoreyEvidence] = {}
     out: list[Verification | None] = []
@@ -364,7 +418,7 @@ def _check_report(
         if h.storey not in storeys:
             storeys[h.storey] = StoreyEvidence.of(model, cmap)
         transform = h.reported_pose * report.odom_pose.inverse()
-        check = verify_transform(transform, storeys[h.storey], path, sightings, view, params)
+        check = verify_transform(transform, storeys[h.storey], path, sightings, view, params, landmarks)
         track = track_transform(check.aligned_or(transform), storeys[h.storey], path, params)
         out.append(replace(check, track_fit=tuple(float(f) for f in track)) if len(track) else check)
     return out, path, storeys
@@ -420,9 +474,13 @@ def check_loaded(log: DetectionLog, site: Site, report: MatchReport, shown: int)
     """:func:`check_hypotheses` on a log and a site (with its maps) already read."""
     params = VerificationParams()
     checks, favoured = verify_and_favour(log, site, report, site_class_map(site), params)
+    claim = favoured if favoured is not None else 0 if report.decided_by == DECIDED_BY_PAPER else None
+    if claim is not None and (check := checks[claim]) is not None:
+        checks[claim] = judge(check, params)  # as a claim: its lidar landmarks' misses count now
     if (
         favoured is not None
         and report.weighted_inliers(report.hypotheses[favoured]) >= params.min_claim_inliers
+        and ((c := checks[favoured]) is None or c.passed)
     ):
         checks = lidar_unique(report, checks, favoured)
     elif report.decided_by == DECIDED_BY_PAPER and checks and checks[0] is not None and not checks[0].passed:

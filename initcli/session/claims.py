@@ -34,7 +34,13 @@ from initcli.core.verification import (
 from initcli.drivers.base import SensorFrame
 from initcli.match.pipeline import Hypothesis, MatchReport
 from initcli.match.registration import registration_record
-from initcli.match.verify import StoreyEvidence, claim_params, track_transform, verify_transform
+from initcli.match.verify import (
+    StoreyEvidence,
+    claim_params,
+    track_transform,
+    verify_transform,
+    without_landmark_misses,
+)
 from initcli.session.perception import Perception
 from initcli.session.result import SessionResult
 from initcli.settings_session import VerificationSection
@@ -78,7 +84,8 @@ class ClaimChecks:
     def verify(self, storey: str, transform: Pose2D, fine: bool = False, rival: bool = False) -> Verification:
         """The checks of the odom -> BIM ``transform`` on ``storey`` (``fine``: the fine pose, with the
         fine-tuning filter's own scan-fit rule; ``rival``: a rival found with wider tolerances, so less
-        exact, whose scans may move it ``rivals.search_factor`` times farther)."""
+        exact, whose scans may move it ``rivals.search_factor`` times farther). The lidar landmarks'
+        misses judge a coarse claim only (:func:`without_landmark_misses`)."""
         checks = self.checks
         if fine:
             checks = dataclasses.replace(checks, min_scan_fit=checks.min_fine_scan_fit)
@@ -86,6 +93,8 @@ class ClaimChecks:
         if rival:
             factor = checks.rivals.search_factor
             checks = dataclasses.replace(checks, scan_search_xy=factor * checks.scan_search_xy)
+        if rival or fine:
+            checks = without_landmark_misses(checks)
         return verify_transform(
             transform,
             self.evidence_of(storey),
@@ -93,6 +102,7 @@ class ClaimChecks:
             self.perception.sightings,
             self.view,
             checks,
+            self.perception.lidar,
         )
 
     def blind(self) -> bool:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -14,13 +15,17 @@ from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.core.scan_fit import ScanSample, best_scan_alignment
 from initcli.core.verification import (
     CameraView,
+    LandmarkEvidence,
+    LandmarkView,
     Verification,
     VerificationParams,
     explained,
     frames_in_view,
+    landmark_misses,
     misses_reject,
     outranks,
     rival_search,
+    scans_in_view,
     track_favoured,
     track_outranks,
     tracked_scan_fit,
@@ -102,6 +107,76 @@ def test_negative_evidence_rejects_the_place_where_doors_should_have_been_seen()
     assert not wrong.passed
     assert wrong.missed_predictions == wrong.predicted >= 4
     assert "never detected" in wrong.reasons[0]
+
+
+# Niches on the north wall of the corridor every 4 m: each a concave corner pair at its mouth's ends
+# (bisectors into the corridor, turned 45 degrees) -- the lidar landmarks of a plan that repeats.
+NICHE_X = np.arange(4.0, 40.0, 4.0)
+CORNER_XY = np.vstack([np.column_stack([NICHE_X + dx, np.full(len(NICHE_X), 2.0)]) for dx in (-0.5, 0.5)])
+CORNER_N = np.vstack([np.tile([s * math.sqrt(0.5), -math.sqrt(0.5)], (len(NICHE_X), 1)) for s in (1.0, -1.0)])
+CORNERS = LandmarkView(
+    tuple(f"c{i}" for i in range(len(CORNER_XY))), CORNER_XY, CORNER_N, ("concavecorner",) * len(CORNER_XY)
+)
+
+
+def landmark_evidence(seen: np.ndarray, path: list[Pose2D]) -> LandmarkEvidence:
+    return LandmarkEvidence(CORNERS, path, seen, ("concavecorner",) * len(seen))
+
+
+def test_a_landmark_is_in_the_lidars_view_in_range_facing_and_unblocked() -> None:
+    poses = poses_to_array([Pose2D(x, 1.0, 0.0) for x in np.arange(0.0, 12.0, 0.5)])
+    views = scans_in_view(CORNER_XY, CORNER_N, poses, WALLS, 5.0, 40.0)
+    first = int(np.flatnonzero(NICHE_X == 4.0)[0])
+    assert views[first] > 0  # the niche at x = 4, passed
+    assert views[int(np.flatnonzero(NICHE_X == 36.0)[0])] == 0  # out of range
+    assert scans_in_view(CORNER_XY, -CORNER_N, poses, WALLS, 5.0, 40.0).sum() == 0  # behind the wall
+    screen = np.vstack([WALLS, [[-1.0, 1.6, 18.0, 1.6]]])  # a hoarding along the north wall
+    assert scans_in_view(CORNER_XY, CORNER_N, poses, screen, 5.0, 40.0).sum() == 0
+    narrow = scans_in_view(CORNER_XY, CORNER_N, poses, WALLS, 5.0, 10.0)
+    assert narrow[first] < views[first]  # fewer poses within 10 degrees of the bisector
+
+
+def test_landmarks_missed_reject_a_place_a_bay_off_however_blind_the_camera() -> None:
+    path = [Pose2D(float(x), 1.0, 0.0) for x in np.arange(0.0, 20.0, 0.5)]
+    seen = CORNER_XY[CORNER_XY[:, 0] < 22.0] + 0.05  # every corner passed was confirmed
+    params = VerificationParams()
+    predicted, missed = landmark_misses(Pose2D.identity(), landmark_evidence(seen, path), WALLS, params)
+    assert predicted >= 6 and missed == 0
+    # 2 m along: every corner predicted lies half a bay from the confirmed ones
+    predicted, missed = landmark_misses(Pose2D(2.0, 0.0, 0.0), landmark_evidence(seen, path), WALLS, params)
+    assert missed == predicted >= 6
+    args = dict(
+        feature_ids=[],
+        feature_xy=np.zeros((0, 2)),
+        feature_normals=np.zeros((0, 2)),
+        feature_heights=np.zeros(0),
+        feature_categories=[],
+        camera_odom_poses=path,
+        sighting_odom_xy=np.zeros((0, 2)),
+        sighting_categories=[],
+        view=VIEW,
+        walls=WALLS,
+        scans=[],
+        field_=None,
+        params=dataclasses.replace(params, log_odds=math.inf),  # a blind camera's claim_params
+    )
+    right = verify_hypothesis(Pose2D.identity(), landmarks=landmark_evidence(seen, path), **args)  # type: ignore[arg-type]
+    wrong = verify_hypothesis(Pose2D(2.0, 0.0, 0.0), landmarks=landmark_evidence(seen, path), **args)  # type: ignore[arg-type]
+    assert right.passed and right.landmarks_predicted >= 6
+    assert not wrong.passed and "lidar landmarks in view were never seen" in wrong.reasons[0]
+    assert wrong.as_dict()["landmarks_missed"] == wrong.landmarks_missed
+    # the same category only: corners confirmed as openings explain nothing
+    other = LandmarkEvidence(CORNERS, path, seen, ("opening",) * len(seen))
+    assert landmark_misses(Pose2D.identity(), other, WALLS, params)[1] >= 6
+
+
+def test_the_landmark_rule_has_its_own_rates() -> None:
+    p = VerificationParams()
+    assert not misses_reject(4, 10, p, lidar=True)  # clutter hides corners at the right place too
+    assert misses_reject(10, 10, p, lidar=True)
+    assert misses_reject(3, 3, p) and not misses_reject(3, 3, p, lidar=True)  # corners: more misses
+    loose = dataclasses.replace(p, landmark_log_odds=50.0)
+    assert not misses_reject(10, 10, loose, lidar=True) and misses_reject(10, 10, loose)
 
 
 def corridor_grid() -> OccupancyGrid:

@@ -17,10 +17,12 @@ from initcli.core.classes import ClassMap
 from initcli.core.geometry import Pose2D
 from initcli.core.landmark_tracks import LandmarkTracker, ScanInput
 from initcli.core.scan_landmarks import ScanLandmarkParams
+from initcli.core.verification import CameraView, VerificationParams
 from initcli.drivers.base import LaserScan, SensorFrame
 from initcli.io.detection_log import DetectionLog, FeatureRecord, Meta, Odom, Record, Scan, read_log
 from initcli.match.landmarks import feature_records, log_landmarks, site_tracker, travel_at
 from initcli.match.pipeline import MatchOptions, match_log
+from initcli.match.verify import PathEvidence, StoreyEvidence, verify_transform, without_landmark_misses
 from initcli.session.perception import Perception
 from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
 from tests.landmark_worlds import RANGE_MAX, SETTINGS, walled
@@ -148,3 +150,28 @@ def test_landmarks_the_bim_lacks_never_cost_the_camera_its_match(tmp_path) -> No
     assert any("matched the camera's 5 feature(s) alone" in n for n in report.notes)
     assert report.hypotheses[0].pose.distance_to(START) < 0.05
     assert [f.cls for f in report.features] == ["door"] * 5
+
+
+def test_a_claim_is_held_back_by_the_corners_the_lidar_should_have_confirmed(tmp_path) -> None:
+    site = _site(tmp_path)
+    scans, _ = _scans()
+    log = _log(scans)
+    confirmed = log_landmarks(log, site, [])
+    path = PathEvidence.of_log(log)
+    storey = StoreyEvidence.of(site.storeys["L"], ClassMap())
+    view = CameraView(DEFAULT_CAMERA, DEFAULT_MOUNT, 0.1)
+    params = VerificationParams()
+    right = verify_transform(START, storey, path, [], view, params, confirmed)
+    assert right.passed and right.landmarks_predicted >= 5
+    assert right.landmarks_missed <= right.landmarks_predicted // 3
+    assert right.as_dict()["landmarks_predicted"] == right.landmarks_predicted
+    # nothing confirmed: every corner in view is a miss, and the claim is held back ...
+    blind_lidar = verify_transform(START, storey, path, [], view, params, [])
+    assert blind_lidar.landmarks_missed == blind_lidar.landmarks_predicted == right.landmarks_predicted
+    assert not blind_lidar.passed and "lidar landmarks in view were never seen" in blind_lidar.reasons[-1]
+    # ... though never a rival ruled out by them, nor a fine pose failed
+    assert verify_transform(START, storey, path, [], view, without_landmark_misses(params), []).passed
+    # a place turned half round predicts corners where none was confirmed
+    turned = START.compose(Pose2D(4.0, 2.0, math.pi))
+    wrong = verify_transform(turned, storey, path, [], view, params, confirmed)
+    assert wrong.landmarks_missed > right.landmarks_missed
