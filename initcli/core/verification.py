@@ -3,7 +3,7 @@
 A hypothesis is the transform ``T = pose_BIM * odom^-1`` that puts the robot's odometry frame into the
 BIM frame (Eq. 10-13 give it at the last odom pose). Algorithm 1 only checks that the features that
 *were* detected fit the BIM; it never asks about the features the hypothesis says the camera must
-have seen but did not, nor whether the lidar agrees with the walls. Two checks:
+have seen but did not, nor whether the lidar agrees with the walls. The checks:
 
 * **Negative evidence** -- every BIM feature that, under ``T``, stood in the camera's view (inside the
   image, within ``predict_range``, seen from its front side within ``predict_view_angle_deg`` of its

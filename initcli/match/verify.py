@@ -69,11 +69,11 @@ __all__ = [
     "path_free_along",
     "path_track",
     "refuse_unique",
-    "without_landmark_misses",
     "track_transform",
     "verify_and_favour",
     "verify_report",
     "verify_transform",
+    "without_landmark_misses",
 ]
 
 SCAN_BEAM_STEP = 3  # every third beam is enough for a fit share
