@@ -46,7 +46,7 @@ from initcli.core.particle_filter import LikelihoodField
 from initcli.core.projection import CameraIntrinsics, CameraMount
 from initcli.core.scan_fit import BeamEnds, ScanSample, best_scan_alignment
 from initcli.core.verification_settings import VerificationParams
-from initcli.core.visibility import PAIR_CHUNK, CameraModel, FeatureArrays, crossing, visible
+from initcli.core.visibility import CameraModel, FeatureArrays, sight_lines_blocked, visible
 
 __all__ = [
     "CameraView",
@@ -91,10 +91,9 @@ class CameraView:
 
 @dataclass(frozen=True)
 class LandmarkView:
-    """A storey's lidar landmarks (beyond the paper), BIM frame: ids, positions (L, 2), unit normals
-    into free space (L, 2; a corner's bisector) and canonical categories."""
+    """A storey's lidar landmarks (beyond the paper), BIM frame: positions (L, 2), unit normals into
+    free space (L, 2; a corner's bisector) and canonical categories."""
 
-    ids: tuple[str, ...]
     xy: np.ndarray
     normals: np.ndarray
     categories: tuple[str, ...]
@@ -242,12 +241,7 @@ def scans_in_view(
     pp, ll = np.nonzero(ok)
     walls = np.asarray(walls, dtype=float).reshape(-1, 4)
     if len(pp) and len(walls):
-        targets = xy[ll] + LANDMARK_FRONT * normals[ll]
-        eyes = poses[pp, 0:2]
-        blocked = np.zeros(len(pp), dtype=bool)
-        for lo in range(0, len(pp), PAIR_CHUNK):
-            hi = min(lo + PAIR_CHUNK, len(pp))
-            blocked[lo:hi] = crossing(eyes[lo:hi], targets[lo:hi], walls)
+        blocked = sight_lines_blocked(poses[pp, 0:2], xy[ll] + LANDMARK_FRONT * normals[ll], walls)
         ok[pp[blocked], ll[blocked]] = False
     return np.asarray(ok.sum(axis=0))
 

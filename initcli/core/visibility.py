@@ -20,7 +20,7 @@ from initcli.core.geometry import Pose2D
 from initcli.core.projection import CameraIntrinsics, CameraMount, odom_to_pixel
 from initcli.core.raycast import sight_blocked
 
-__all__ = ["CameraModel", "FeatureArrays", "PAIR_CHUNK", "crossing", "visible"]
+__all__ = ["CameraModel", "FeatureArrays", "PAIR_CHUNK", "sight_lines_blocked", "visible"]
 
 PAIR_CHUNK = 20_000  # (pose, feature) pairs tested against the walls at once
 
@@ -97,15 +97,22 @@ def visible(poses: np.ndarray, features: FeatureArrays, walls: np.ndarray, model
     pp, ff = np.nonzero(ok)
     if len(pp) and len(walls):
         targets = features.xy[ff] + 0.05 * features.normal[ff]  # just in front of the wall surface
-        blocked = np.zeros(len(pp), dtype=bool)
-        for lo in range(0, len(pp), PAIR_CHUNK):
-            hi = min(lo + PAIR_CHUNK, len(pp))
-            blocked[lo:hi] = crossing(eye[pp[lo:hi]], targets[lo:hi], walls)
+        blocked = sight_lines_blocked(eye[pp], targets, walls)
         ok[pp[blocked], ff[blocked]] = False
     return ok
 
 
-def crossing(a: np.ndarray, b: np.ndarray, walls: np.ndarray) -> np.ndarray:
+def sight_lines_blocked(eyes: np.ndarray, targets: np.ndarray, walls: np.ndarray) -> np.ndarray:
+    """For each pair (``eyes`` and ``targets`` (n, 2) each), does a wall (x1, y1, x2, y2) cross the
+    sight line ``eye -> target``? ``PAIR_CHUNK`` pairs at a time."""
+    blocked = np.zeros(len(eyes), dtype=bool)
+    for lo in range(0, len(eyes), PAIR_CHUNK):
+        hi = min(lo + PAIR_CHUNK, len(eyes))
+        blocked[lo:hi] = _crossing(eyes[lo:hi], targets[lo:hi], walls)
+    return blocked
+
+
+def _crossing(a: np.ndarray, b: np.ndarray, walls: np.ndarray) -> np.ndarray:
     """sight_blocked restricted to the walls near each segment's bounding box (same answer, faster)."""
     lo = np.minimum(a, b).min(axis=0)
     hi = np.maximum(a, b).max(axis=0)
@@ -121,7 +128,7 @@ def crossing(a: np.ndarray, b: np.ndarray, walls: np.ndarray) -> np.ndarray:
         order = np.argsort(a[:, 0])
         half = len(a) // 2
         out = np.zeros(len(a), dtype=bool)
-        out[order[:half]] = crossing(a[order[:half]], b[order[:half]], w[near])
-        out[order[half:]] = crossing(a[order[half:]], b[order[half:]], w[near])
+        out[order[:half]] = _crossing(a[order[:half]], b[order[:half]], w[near])
+        out[order[half:]] = _crossing(a[order[half:]], b[order[half:]], w[near])
         return out
     return sight_blocked(a, b, w[near])

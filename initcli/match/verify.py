@@ -141,7 +141,6 @@ class StoreyEvidence:
         lm = storey.lidar_landmarks
         landmarks = (
             LandmarkView(
-                tuple(x.id for x in lm),
                 np.array([[x.x, x.y] for x in lm], dtype=float),
                 np.array([[x.norm_x, x.norm_y] for x in lm], dtype=float),
                 tuple(LANDMARK_CLASSES.canonical(x.category) for x in lm),

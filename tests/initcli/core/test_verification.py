@@ -114,9 +114,7 @@ def test_negative_evidence_rejects_the_place_where_doors_should_have_been_seen()
 NICHE_X = np.arange(4.0, 40.0, 4.0)
 CORNER_XY = np.vstack([np.column_stack([NICHE_X + dx, np.full(len(NICHE_X), 2.0)]) for dx in (-0.5, 0.5)])
 CORNER_N = np.vstack([np.tile([s * math.sqrt(0.5), -math.sqrt(0.5)], (len(NICHE_X), 1)) for s in (1.0, -1.0)])
-CORNERS = LandmarkView(
-    tuple(f"c{i}" for i in range(len(CORNER_XY))), CORNER_XY, CORNER_N, ("concavecorner",) * len(CORNER_XY)
-)
+CORNERS = LandmarkView(CORNER_XY, CORNER_N, ("concavecorner",) * len(CORNER_XY))
 
 
 def landmark_evidence(seen: np.ndarray, path: list[Pose2D]) -> LandmarkEvidence:
