@@ -133,6 +133,9 @@ class MatchReport:
     # the first unique lidar registration along the log that decided the verdict (initcli.match.registration):
     # its fit, its best distinct rival's fit and whether the camera's misses counted, as summary.json
     registration: dict[str, object] | None = None
+    # every lidar landmark of the log, its records or those found in its scans (the verification's
+    # negative evidence compares them with the storey's); None: not tracked (matching.landmarks off)
+    landmarks: list[FeatureRecord] | None = None
 
     def _storeys_poses(self) -> tuple[list[str], list[Pose2D], float, float]:
         hs = self.hypotheses
@@ -335,7 +338,9 @@ def match_log(
     check_classes(log, cmap, site)
     warnings = list(log.warnings)
     notes: list[str] = []
-    features, odom_pose, odom_path = _confirmed_features(log, site, opts, cmap, sightings, warnings, notes)
+    features, landmarks, odom_pose, odom_path = _confirmed_features(
+        log, site, opts, cmap, sightings, warnings, notes
+    )
     if not log.detections and not log.features:
         notes.append("the log has no detections records")
     storey_names = _storeys_searched(site, opts)
@@ -356,6 +361,7 @@ def match_log(
         notes=notes,
         truth=log.truth[-1].pose if log.truth else None,
         site_model=site,
+        landmarks=landmarks,
     )
     if len(features) < opts.min_inliers:
         notes.append(
@@ -441,15 +447,16 @@ def _confirmed_features(
     sightings: Sequence[Sighting] | None,
     warnings: list[str],
     notes: list[str],
-) -> tuple[list[ConfirmedFeature], Pose2D, np.ndarray]:
+) -> tuple[list[ConfirmedFeature], list[FeatureRecord] | None, Pose2D, np.ndarray]:
     """Steps 1-2: Eq. 1-2 and the detection filter, the lidar landmarks joined in
-    (:mod:`initcli.match.landmarks`) and all within the drift window when one is set; the robot's
-    odom pose now and its odom path."""
+    (:mod:`initcli.match.landmarks`) and all within the drift window when one is set; every lidar
+    landmark of the log (None: ``opts.landmarks`` off); the robot's odom pose now and its odom path."""
     if sightings is None:
         sightings = sightings_from_log(log, cmap, opts.edge_margin)
     given = [GivenFeature(f.t, cmap.canonical(f.cls), f.x, f.y) for f in log.features if f.source != LIDAR]
     filtered = filter_detections(sightings, opts.filter_params(), given)
     lidar: list[FeatureRecord] = []
+    found: list[FeatureRecord] | None = None
     if opts.landmarks:
         found = log_landmarks(log, site, notes)
         lidar = recent_landmarks(found, log.odom, opts.landmark_window, site, cmap)
@@ -470,7 +477,7 @@ def _confirmed_features(
                 f"travel; {len(features) - len(recent)} older one(s) left out (odometry drift)"
             )
             features = recent
-    return features, odom_pose, odom_path
+    return features, found, odom_pose, odom_path
 
 
 def _storeys_searched(site: Site, opts: MatchOptions) -> list[str]:

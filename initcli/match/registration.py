@@ -42,7 +42,6 @@ from initcli.core.scan_fit import BeamEnds, ScanSample
 from initcli.core.verification import CameraView, Verification
 from initcli.core.verification_settings import VerificationParams
 from initcli.io.detection_log import DetectionLog, Scan, read_log
-from initcli.match.landmarks import log_landmarks
 from initcli.match.pipeline import EXIT_UNIQUE, Hypothesis, MatchReport, site_class_map
 from initcli.match.sightings import sightings_from_log
 from initcli.match.verify import PathEvidence, StoreyEvidence, check_loaded, claim_params, verify_transform
@@ -215,7 +214,6 @@ def replay_registration(
     registration = SubmapRegistration(params, site, storey, verification.scan_tolerance)
     cmap = site_class_map(site)
     seen = sightings_from_log(log, cmap, report.options.edge_margin)
-    landmarks = log_landmarks(log, site, [])
     view = CameraView(log.meta.camera, log.meta.camera_pose, report.options.min_depth)
     why = f"{params.min_travel:g} m of travel (registration.min_travel) not reached"
     for path, travel, t in PathEvidence.growing(log):
@@ -229,7 +227,7 @@ def replay_registration(
         blind = bool(path.image_poses) and not sightings  # as the session's ClaimChecks.blind
         transform = best.pose * last.inverse()
         evidence = StoreyEvidence.of(site.storeys[best.storey], cmap)
-        confirmed = [f for f in landmarks if f.t <= t]
+        confirmed = None if report.landmarks is None else [f for f in report.landmarks if f.t <= t]
         check = verify_transform(
             transform, evidence, path, sightings, view, claim_params(verification, blind), confirmed
         )

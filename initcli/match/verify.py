@@ -38,7 +38,6 @@ from initcli.core.verification import (
 )
 from initcli.core.verification_settings import VerificationParams
 from initcli.io.detection_log import DetectionLog, Detections, Odom, Scan, read_log
-from initcli.match.landmarks import log_landmarks
 from initcli.match.pipeline import (
     DECIDED_BY_LIDAR,
     DECIDED_BY_PAPER,
@@ -254,16 +253,17 @@ def verify_transform(
     sightings: Sequence[Sighting],
     view: CameraView,
     params: VerificationParams,
-    seen_landmarks: Sequence[Located] = (),
+    seen_landmarks: Sequence[Located] | None = None,
 ) -> Verification:
     """The checks of :func:`initcli.core.verification.verify_hypothesis` for ``transform`` (odom ->
     BIM) on ``storey``, with the images of the last ``PATH_WINDOW_M`` m and the scans of the last
     ``RECENT_SCANS_M`` m; the storey's lidar landmarks predicted from the path's scans of the last
-    ``LANDMARK_WINDOW_M`` m against ``seen_landmarks``, the confirmed ones (odom frame)."""
+    ``LANDMARK_WINDOW_M`` m against ``seen_landmarks``, the confirmed ones (odom frame; None: the
+    lidar's landmarks are not tracked, so none is predicted either)."""
     poses, scans = path.recent(PATH_WINDOW_M, RECENT_SCANS_M)
     recent_path, _ = path.recent(PATH_CHECK_M, 0.0)
     landmarks = None
-    if storey.landmarks is not None:
+    if storey.landmarks is not None and seen_landmarks is not None:
         swept, _ = path.along(LANDMARK_WINDOW_M)
         landmarks = LandmarkEvidence(
             storey.landmarks,
@@ -405,7 +405,6 @@ def _check_report(
     params = without_landmark_misses(params)  # check_loaded judges the claim with the landmarks' misses
     path = PathEvidence.of_log(log)
     sightings = sightings_from_log(log, cmap, report.options.edge_margin)
-    landmarks = log_landmarks(log, site, [])
     view = CameraView(log.meta.camera, log.meta.camera_pose, report.options.min_depth)
     storeys: dict[str, StoreyEvidence] = {}
     out: list[Verification | None] = []
@@ -417,7 +416,9 @@ def _check_report(
         if h.storey not in storeys:
             storeys[h.storey] = StoreyEvidence.of(model, cmap)
         transform = h.reported_pose * report.odom_pose.inverse()
-        check = verify_transform(transform, storeys[h.storey], path, sightings, view, params, landmarks)
+        check = verify_transform(
+            transform, storeys[h.storey], path, sightings, view, params, report.landmarks
+        )
         track = track_transform(check.aligned_or(transform), storeys[h.storey], path, params)
         out.append(replace(check, track_fit=tuple(float(f) for f in track)) if len(track) else check)
     return out, path, storeys

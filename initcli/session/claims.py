@@ -102,7 +102,7 @@ class ClaimChecks:
             self.perception.sightings,
             self.view,
             checks,
-            self.perception.lidar,
+            self.perception.lidar if self.perception.landmarks is not None else None,  # None: untracked
         )
 
     def blind(self) -> bool:

@@ -23,7 +23,10 @@ from initcli.io.detection_log import DetectionLog, FeatureRecord, Meta, Odom, Re
 from initcli.match.landmarks import feature_records, log_landmarks, site_tracker, travel_at
 from initcli.match.pipeline import MatchOptions, match_log
 from initcli.match.verify import PathEvidence, StoreyEvidence, verify_transform, without_landmark_misses
+from initcli.session.claims import ClaimChecks
 from initcli.session.perception import Perception
+from initcli.session.result import SessionResult
+from initcli.settings_session import VerificationSection
 from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
 from tests.landmark_worlds import RANGE_MAX, SETTINGS, walled
 
@@ -175,3 +178,32 @@ def test_a_claim_is_held_back_by_the_corners_the_lidar_should_have_confirmed(tmp
     turned = START.compose(Pose2D(4.0, 2.0, math.pi))
     wrong = verify_transform(turned, storey, path, [], view, params, confirmed)
     assert wrong.landmarks_missed > right.landmarks_missed
+
+
+def test_no_landmark_evidence_where_the_lidars_landmarks_are_not_tracked(tmp_path) -> None:
+    site = _site(tmp_path)
+    scans, _ = _scans()
+    log = _log(scans)
+    path = PathEvidence.of_log(log)
+    storey = StoreyEvidence.of(site.storeys["L"], ClassMap())
+    view = CameraView(DEFAULT_CAMERA, DEFAULT_MOUNT, 0.1)
+    untracked = verify_transform(START, storey, path, [], view, VerificationParams(), None)
+    assert untracked.passed and untracked.landmarks_predicted == untracked.landmarks_missed == 0
+    # bim-init match: the landmarks the report was matched with are those the checks compare ...
+    on = match_log(log, site, MatchOptions(), ClassMap())
+    assert on.landmarks == log_landmarks(log, site, []) and on.landmarks
+    # ... and with matching.landmarks off none is tracked, so none counts as missed
+    assert match_log(log, site, MatchOptions(landmarks=False), ClassMap()).landmarks is None
+    # the session: a perception with no landmark tracker gives its claims no landmark evidence
+    predicted = []
+    for tracker in (None, site_tracker(site)):
+        perception = Perception(
+            Meta(DEFAULT_CAMERA, DEFAULT_MOUNT), None, ClassMap(), MatchOptions(), 0.0, 1, tracker
+        )
+        for step, s in enumerate(scans):
+            scan = LaserScan(s.angle_min, s.angle_increment, s.range_max, s.ranges)
+            perception.record_frame(SensorFrame(s.t, s.pose, scan, []), step)
+        result = SessionResult(False, "", None)
+        claims = ClaimChecks(VerificationSection(), site, perception, view, result, lambda t, why: None)
+        predicted.append(claims.verify("L", START).landmarks_predicted)
+    assert predicted[0] == 0 < predicted[1]
