@@ -276,7 +276,7 @@ def place_markers(
     walls.sort(key=lambda w: (-round(w.length, 6), round(w.x1, 6), round(w.y1, 6), round(w.x2, 6), w.element))
     sections = _spread(_sections(walls, circulation), (count + 1) // 2)
     static = SimWorld.from_obstacles(storey.obstacles).static
-    features = np.array([[f.x, f.y, f.width] for f in storey.features]).reshape(-1, 3)
+    features = np.array([[f.x, f.y, f.width] for f in storey.camera_features]).reshape(-1, 3)
 
     def jitter() -> float:
         return float(rng.uniform(-0.3, 0.3)) if rng is not None else 0.0

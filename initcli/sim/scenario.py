@@ -37,7 +37,7 @@ class NoFreeSpace(InputError, ValueError):
 
 @dataclass
 class Circulation:
-    """Free cells of the connected region that most features face (corridors, lobbies)."""
+    """Free cells of the connected region that most camera features face (corridors, lobbies)."""
 
     grid: OccupancyGrid
     label: np.ndarray  # bool mask of the region
@@ -61,7 +61,8 @@ class Circulation:
         footprint: float = 0.0,
         min_votes: int = 0,
     ) -> Circulation:
-        """The region of the storey map that most features face. ``closed``: obstacles of the simulated
+        """The region of the storey map that most camera features (doors, lifts, stairs; a lidar
+        landmark faces rooms as often as corridors) face. ``closed``: obstacles of the simulated
         world that the map leaves open (closed door leaves, hoardings) and ``boxes``: closed (n, 2)
         rings of material stacks, burnt in first; ``footprint``: the robot's radius (m), by which the
         free space is shrunk before it is split into connected regions. The region is then the one a
@@ -87,7 +88,7 @@ class Circulation:
         passable = free if footprint <= 0 else (clearance >= footprint).astype(np.uint8)
         _, labels = cv2.connectedComponents(passable, connectivity=4)
         votes: dict[int, int] = {}
-        for f in storey.features:
+        for f in storey.camera_features:  # doors, lifts, stairs: a wall corner faces rooms too
             for out in (0.6, 0.9, 1.2):  # m in front of the feature: the first passable cell votes
                 row, col = grid.world_to_cell(f.x + out * f.norm_x, f.y + out * f.norm_y)
                 if 0 <= row < labels.shape[0] and 0 <= col < labels.shape[1] and labels[row, col]:
@@ -154,7 +155,7 @@ def place_clutter(
         return []
     lengths = np.array([w.length for w in walls])
     count = int(rng.poisson(density * lengths.sum()))
-    features = np.array([[f.x, f.y] for f in storey.features]).reshape(-1, 2)
+    features = np.array([[f.x, f.y] for f in storey.camera_features]).reshape(-1, 2)
     boxes: list[np.ndarray] = []
     for _ in range(count * 5):
         if len(boxes) >= count:
