@@ -36,9 +36,13 @@ wall corners and openings of the scans join S with their own labels. Between two
 and Eq. 9 use the landmarks' alpha plus a drift allowance per metre of odometry travel between
 their confirmations (at most the camera's alpha); a landmark inlier counts ``weight`` toward
 ``min_inliers``; landmark outliers (geometry the BIM lacks) have their own budget, a share of the
-landmarks so far (at least one), declared before a partial match's first inlier or once it holds
-a triangle (a pair must be the next landmark: the search stays small with thousands of corners).
-``n_out`` counts the camera's outliers only.
+landmarks so far (at least one), declared at any point of a partial match (a row of one or two
+inliers too: a stack's corner right after the first matched corner must not end the true place).
+``n_out`` counts the camera's outliers only. In a sequence with camera features
+(:meth:`initcli.match.options.MatchingSettings.landmark_matching` with ``camera=True``) every
+landmark may be an outlier, and a landmark joins a candidate only once it holds two camera
+features: most corners a lidar sees in a corridor are clutter, and a budget would rule out the true
+place while a chance fit survives.
 """
 
 from __future__ import annotations
@@ -78,6 +82,10 @@ class LandmarkMatching:
     drift: float  # m per m of odometry travel between the two confirmations, added to alpha
     weight: float  # what one landmark counts toward min_inliers (a camera feature counts 1)
     outlier_share: float  # of the first k landmarks, floor(share * k) (at least 1) may be outliers
+    # True (a sequence with camera features): a landmark joins a candidate only once it holds two
+    # camera features (its pose fixed, so Eq. 9 places the landmark within centimetres) and never
+    # starts one; the search stays small with every landmark allowed to be an outlier
+    anchored: bool = False
 
     def budget(self, k: int) -> int:
         """Landmark outliers a partial match of the first ``k`` landmarks may declare (0 if share is 0)."""
@@ -320,8 +328,16 @@ class Matcher:
         s_new = s_xy[n]
         parts: list[dict[str, np.ndarray]] = []
 
+        assert state.n_lm is not None
+        # rows a landmark may join (anchored: those holding two camera features)
+        open_rows = (
+            (state.n_in - state.n_lm >= 2)
+            if lidar and p.landmarks is not None and p.landmarks.anchored
+            else True
+        )
+
         # -- rows with >= 2 inliers: the triple criteria of Eq. 9 (Algorithm 1, lines 7-12) ------
-        tri = np.flatnonzero(state.n_in >= 2)
+        tri = np.flatnonzero((state.n_in >= 2) & open_rows)
         if len(tri):
             keys = state.last2[tri] * (n + 1) + state.last1[tri]
             for key in np.unique(keys):
@@ -334,7 +350,7 @@ class Matcher:
                     parts.append(part)
 
         # -- rows with 1 inlier: the pair criterion of Eq. 7 (Algorithm 1, lines 3-5) --------------
-        one = np.flatnonzero(state.n_in == 1)
+        one = np.flatnonzero((state.n_in == 1) & open_rows)
         if len(one):
             for a in np.unique(state.last1[one]):
                 rows = one[state.last1[one] == a]
@@ -346,6 +362,8 @@ class Matcher:
         # -- rows with no inlier yet: s_n starts a candidate (Algorithm 1, line 1) ----------------
         zero = np.flatnonzero(state.n_in == 0)
         members = self.index.class_members(cls)
+        if lidar and p.landmarks is not None and p.landmarks.anchored:
+            members = members[:0]
         if len(zero) and len(members):
             r = np.repeat(zero, len(members))
             w = np.tile(members, len(zero))
@@ -360,14 +378,10 @@ class Matcher:
                 part["n_lm"] = part["n_lm"] + 1
 
         # -- outlier tolerance: s_n treated as a false/misclassified detection (a landmark: as
-        # geometry the BIM lacks, within the landmarks' own budget, before a row's first inlier or
-        # once it holds a triangle) ----------------------------------------------------------------
+        # geometry the BIM lacks, within the landmarks' own budget) ---------------------------------
         if lidar:
             assert p.landmarks is not None and state.n_lm_out is not None
-            started = state.n_in > 0
-            paired = state.n_in >= 3  # a row skips a landmark once a triangle (Eq. 9) holds
-            within = state.n_lm_out < p.landmarks.budget(int(s_lidar.sum()))
-            out = np.flatnonzero(within & (~started | paired))
+            out = np.flatnonzero(state.n_lm_out < p.landmarks.budget(int(s_lidar.sum())))
         else:
             out = np.flatnonzero(state.n_out < p.max_outliers)
         if len(out):

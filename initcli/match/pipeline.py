@@ -266,9 +266,11 @@ def _storey_candidates(
     state = matcher.match(s_xy, s_cls, s_travel)
     rows = state.matches(params)
     assign, n_out, cost = state.assign[rows], state.n_out[rows], state.cost[rows]
-    # rule 1 over the camera's outliers (a landmark sub-match has the pose of its match: rule 3 merges
-    # them; over every landmark outlier pattern rule 1 costs patterns x matches)
-    keep = drop_dominated(assign, n_out)
+    # rule 1 over the camera's outliers and the camera's columns: with the landmarks' columns in the
+    # outlier set, a hypothesis with a false door and a skipped corner dominated itself and vanished
+    # (a landmark sub-match has the pose of its match: rule 3 merges them)
+    camera = np.array([not params.is_landmark(c) for c in s_cls], dtype=bool)
+    keep = drop_dominated(assign[:, camera], n_out)
     assign, n_out, cost = assign[keep], n_out[keep], cost[keep]
     if len(assign):
         inlier = assign != OUTLIER
@@ -372,14 +374,18 @@ def match_log(
 
     # Step 3-4: Algorithm 1 on every storey, then rule 1 (sub-matches) per storey; with no match,
     # one more outlier at a time up to the outlier_share budget. With lidar landmarks: the mixed
-    # sequence first (the camera's max_outliers); when it has no match, the camera's features alone
-    # as without landmarks (landmarks of geometry the BIM lacks never cost a camera match).
+    # sequence first (the camera's max_outliers; with two camera features or more every landmark
+    # may be an outlier and joins a candidate once it holds two: MatchOptions.landmark_matching);
+    # when it has no match, the camera's features alone as without landmarks (landmarks of
+    # geometry the BIM lacks never cost a camera match).
     params = opts.match_params()
     camera = [f for f in features if not params.is_landmark(f.cls)]
     if len(camera) < len(features):
         found = _search(report, site, cmap, storey_names, features, log, opts, escalate=False)
         if found is not None and found.storey:
             return report
+        if found is None and not camera:
+            return report  # the landmarks' search overflowed, the camera saw nothing: far too ambiguous
         if found is None:  # the landmarks' search overflowed: the camera's alone decide
             report.overflow, report.n_hypotheses = False, 0
             report.verdict, report.exit_code = verdict_text(0), EXIT_NO_MATCH
@@ -413,7 +419,8 @@ def _search(
     s_xy = np.array([[f.x, f.y] for f in features]).reshape(-1, 2)
     s_cls = [f.cls for f in features]
     s_travel = travel_at(log.odom, [f.t_confirmed for f in features])
-    params = opts.match_params()
+    lidar = opts.landmark_matching().classes if opts.landmarks else frozenset()
+    params = opts.match_params(camera=sum(c not in lidar for c in s_cls) >= 2)
     budget = opts.outlier_budget(sum(not params.is_landmark(c) for c in s_cls)) if escalate else 0
     while True:
         try:

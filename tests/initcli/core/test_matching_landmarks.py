@@ -74,7 +74,6 @@ def test_clutter_landmarks_use_their_own_outlier_budget() -> None:
     s_xy = b_xy[walk].copy()
     s_cls = [b_cls[i] for i in walk]
     # two landmarks of geometry the BIM lacks (material stacks) inside the sequence
-    # (a row skips a landmark before its first inlier or once it holds a triangle)
     s_xy = np.insert(s_xy, [0, 3, 4], [[80.0, 80.0], [-30.0, -30.0], [-35.0, 70.0]], axis=0)
     s_cls[0:0] = ["ConcaveCorner"]
     s_cls[4:4] = ["ConvexCorner"]
@@ -94,3 +93,37 @@ def test_clutter_landmarks_use_their_own_outlier_budget() -> None:
     # beyond the budget (3 of 7 with a share of 0.34: 2) the pattern is no match
     tight = replace(no_camera_outliers, landmarks=replace(LM, outlier_share=0.34))
     assert expected not in matches(b_xy, b_cls, s_xy, s_cls, tight)
+
+
+def test_a_row_skips_a_clutter_landmark_after_its_first_inlier() -> None:
+    """The stack's corner seen right after the first matched corner, and after the second: a row of
+    one or two inliers declares it an outlier as a row of none or of three does (the rule once kept
+    such rows from it, and the true place died wherever clutter followed its first corner)."""
+    rng = np.random.default_rng(5)
+    b_xy, b_cls = corners(rng, 30)
+    walk = [3, 8, 13, 18]
+    s_xy = b_xy[walk] + 20.0
+    s_cls = [b_cls[i] for i in walk]
+    s_xy = np.insert(s_xy, [1, 2], [[95.0, -40.0], [-50.0, 95.0]], axis=0)
+    s_cls[1:1] = ["ConvexCorner"]
+    s_cls[3:3] = ["ConcaveCorner"]
+    expected = (3, OUTLIER, 8, OUTLIER, 13, 18)
+    params = replace(PARAMS, max_outliers=0, landmarks=replace(LM, outlier_share=0.5))
+    assert expected in matches(b_xy, b_cls, s_xy, s_cls, params)
+
+
+def test_with_camera_features_landmarks_join_once_two_doors_fix_the_pose() -> None:
+    """``anchored`` (a sequence with camera features): a landmark seen before the second door is an
+    outlier in every match, one seen after it joins as an inlier, and none starts a candidate."""
+    rng = np.random.default_rng(6)
+    c_xy, c_cls = corners(rng, 20)
+    d_xy = rng.uniform(0, 40, size=(6, 2))
+    b_xy, b_cls = np.vstack([c_xy, d_xy]), [*c_cls, *["door"] * 6]
+    walk = [2, 20, 5, 21, 9, 22]  # a corner, a door, a corner, a door, a corner, a door
+    s_xy, s_cls = b_xy[walk] + 10.0, [b_cls[i] for i in walk]
+    anchored = replace(PARAMS, landmarks=replace(LM, outlier_share=1.0, anchored=True))
+    found = matches(b_xy, b_cls, s_xy, s_cls, anchored)
+    assert (OUTLIER, 20, OUTLIER, 21, 9, 22) in found
+    assert all(row[0] == OUTLIER and row[2] == OUTLIER for row in found)
+    free = replace(anchored, landmarks=replace(LM, outlier_share=1.0))
+    assert tuple(walk) in matches(b_xy, b_cls, s_xy, s_cls, free)
