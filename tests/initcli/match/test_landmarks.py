@@ -271,3 +271,42 @@ def test_a_false_door_and_a_clutter_corner_leave_the_true_place_listed(tmp_path)
     truth = [h for h in report.hypotheses if h.matches == ["d0", "d1", None, None, "d2", "d3"]]
     assert truth and truth[0].n_outliers == 1 and truth[0].pose.distance_to(Pose2D(0.0, 0.0, 0.0)) < 0.05
     assert report.verdict == "unique match", [h.matches for h in report.hypotheses]
+
+
+def test_landmarks_alone_claim_one_place_only_if_every_landmark_may_be_clutter(tmp_path) -> None:
+    """The camera off: a storey alike turned half round, two clutter corners seen first that fit two
+    corners of the turned place only. Within the budget (one landmark of the first two) the true
+    place dies and the turned one is unique; with every landmark allowed to be clutter both stand."""
+    rng = np.random.default_rng(11)
+    true_corners, clutter = rng.uniform(2, 18, size=(6, 2)), rng.uniform(2, 18, size=(2, 2))
+    centre = np.array([10.0, 10.0])
+    rows = [
+        Feature(
+            f"{name}{i}-CC1",
+            "ConcaveCorner",
+            float(x),
+            float(y),
+            1.0,
+            0.0,
+            0.5,
+            0.0,
+            "L",
+            ifc_class="IfcWall",
+        )
+        for name, pts in (("t", true_corners), ("r", 2 * centre - true_corners), ("q", 2 * centre - clutter))
+        for i, (x, y) in enumerate(pts)
+    ]
+    manifest = SiteManifest("w.ifc", "", "IFC4", "", "m", 1.0, 1.0, 0.05, landmarks=SETTINGS)
+    site = Site(tmp_path, {"L": StoreyModel("L", 0.0, rows)}, manifest)
+    records: list[Record] = [Odom(0.0, 0.0, 0.0, 0.0)]
+    for k, (x, y) in enumerate(np.vstack([clutter, true_corners])):
+        records.append(FeatureRecord(1.0 + k, "ConcaveCorner", float(x), float(y), LIDAR))
+    log = DetectionLog(
+        Path("w.jsonl"), Meta(DEFAULT_CAMERA, DEFAULT_MOUNT), records, list(range(len(records)))
+    )
+    report = match_log(log, site, MatchOptions(), ClassMap())
+    assert report.exit_code == EXIT_AMBIGUOUS, [h.matches for h in report.hypotheses]
+    assert any("unique match within the lidar landmarks' outlier budget" in n for n in report.notes)
+    places = {tuple(h.matches) for h in report.hypotheses}
+    assert (None, None, *(f"t{i}-CC1" for i in range(6))) in places
+    assert (*(f"q{i}-CC1" for i in range(2)), *(f"r{i}-CC1" for i in range(6))) in places
