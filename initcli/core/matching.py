@@ -328,13 +328,10 @@ class Matcher:
         s_new = s_xy[n]
         parts: list[dict[str, np.ndarray]] = []
 
+        anchored = lidar and p.landmarks is not None and p.landmarks.anchored
         assert state.n_lm is not None
         # rows a landmark may join (anchored: those holding two camera features)
-        open_rows = (
-            (state.n_in - state.n_lm >= 2)
-            if lidar and p.landmarks is not None and p.landmarks.anchored
-            else True
-        )
+        open_rows = (state.n_in - state.n_lm >= 2) if anchored else True
 
         # -- rows with >= 2 inliers: the triple criteria of Eq. 9 (Algorithm 1, lines 7-12) ------
         tri = np.flatnonzero((state.n_in >= 2) & open_rows)
@@ -362,8 +359,8 @@ class Matcher:
         # -- rows with no inlier yet: s_n starts a candidate (Algorithm 1, line 1) ----------------
         zero = np.flatnonzero(state.n_in == 0)
         members = self.index.class_members(cls)
-        if lidar and p.landmarks is not None and p.landmarks.anchored:
-            members = members[:0]
+        if anchored:
+            members = members[:0]  # an anchored landmark never starts a candidate
         if len(zero) and len(members):
             r = np.repeat(zero, len(members))
             w = np.tile(members, len(zero))

@@ -384,7 +384,19 @@ def match_log(
         found = _search(report, site, cmap, storey_names, features, log, opts, escalate=False)
         if found is not None and found.storey:
             if len(camera) < 2 and (report.n_hypotheses == 1 or report.one_place()):
-                _confirm_landmarks_alone(report, site, cmap, storey_names, features, log, opts)
+                # Landmarks matched alone to one place within landmark_outlier_share: that verdict
+                # stands only as the one with every landmark allowed to be an outlier (at most
+                # ESCALATED_PARTIALS partial matches). The budget can rule out the true place and
+                # leave a chance or mirror fit (ntu_hallway, camera off, seed 16: a claim 71 m off,
+                # turned half round, its true place ruled out in the rival search too).
+                budgeted = report.verdict
+                every = replace(opts, landmark_outlier_share=1.0)
+                _search(report, site, cmap, storey_names, features, log, every, False, ESCALATED_PARTIALS)
+                if report.exit_code != EXIT_UNIQUE:
+                    notes.append(
+                        f"{budgeted} within the lidar landmarks' outlier budget; {report.verdict} with"
+                        " every landmark allowed to be geometry the BIM lacks"
+                    )
             return report
         if found is None and not camera:
             return report  # the landmarks' search overflowed, the camera saw nothing: far too ambiguous
@@ -400,30 +412,6 @@ def match_log(
         report.features = features = _renumbered(camera)
     _search(report, site, cmap, storey_names, features, log, opts, escalate=True)
     return report
-
-
-def _confirm_landmarks_alone(
-    report: MatchReport,
-    site: Site,
-    cmap: ClassMap,
-    storey_names: list[str],
-    features: list[ConfirmedFeature],
-    log: DetectionLog,
-    opts: MatchOptions,
-) -> None:
-    """Landmarks matched alone (the camera saw next to nothing) to one place within
-    ``landmark_outlier_share``: matched again with every landmark allowed to be an outlier (at most
-    ESCALATED_PARTIALS partial matches), whose verdict stands. The budget can rule out the true place
-    and leave a chance or mirror fit (ntu_hallway, camera off, seed 16: a claim 71 m off, turned
-    half round, its true place ruled out by the budget in the rival search too)."""
-    budgeted = report.verdict
-    every = replace(opts, landmark_outlier_share=1.0)
-    _search(report, site, cmap, storey_names, features, log, every, False, ESCALATED_PARTIALS)
-    if report.exit_code != EXIT_UNIQUE:
-        report.notes.append(
-            f"{budgeted} within the lidar landmarks' outlier budget; {report.verdict} with every landmark"
-            " allowed to be geometry the BIM lacks"
-        )
 
 
 def _renumbered(features: Sequence[ConfirmedFeature]) -> list[ConfirmedFeature]:
@@ -447,11 +435,12 @@ def _search(
     s_xy = np.array([[f.x, f.y] for f in features]).reshape(-1, 2)
     s_cls = [f.cls for f in features]
     s_travel = travel_at(log.odom, [f.t_confirmed for f in features])
-    lidar = opts.landmark_matching().classes if opts.landmarks else frozenset()
-    params = opts.match_params(camera=sum(c not in lidar for c in s_cls) >= 2)
+    is_landmark = opts.match_params().is_landmark
+    n_camera = sum(not is_landmark(c) for c in s_cls)
+    params = opts.match_params(camera=n_camera >= 2)
     if max_partials is not None:
         params = replace(params, max_partials=max_partials)
-    budget = opts.outlier_budget(sum(not params.is_landmark(c) for c in s_cls)) if escalate else 0
+    budget = opts.outlier_budget(n_camera) if escalate else 0
     while True:
         try:
             cand = _candidates(site, cmap, storey_names, s_xy, s_cls, params, s_travel)
