@@ -12,4 +12,9 @@ EXIT_BAD_INPUT = 2
 
 
 class InputError(Exception):
-    """A problem with a user-supplied file or argument, worded for the user."""
+    """A problem with a user-supplied file or argument, worded for the user. Its text is one line
+    whatever the input held: a line break inside it (a YAML key or value quoted into the message)
+    reads as ``\\n``."""
+
+    def __str__(self) -> str:
+        return super().__str__().replace("\r", "\\r").replace("\n", "\\n")
