@@ -196,6 +196,10 @@ def survey(
     write_text_atomic(out / "survey.json", json.dumps(report, indent=2) + "\n")
     claim(out, SURVEY_WRITES)
     console.print(table)
+    for entry in storeys:
+        line = _lidar_twin_line(entry)
+        if line:
+            console.print(line)
     console.print(f"wrote {out}/survey.json and the maps")
 
 
@@ -258,6 +262,24 @@ def _survey_one(
     survey_png(out / f"survey_{stem}.png", result, improved, chosen)
     entry["map"] = f"survey_{stem}.png"
     return entry, chosen
+
+
+def _lidar_twin_line(entry: dict[str, object]) -> str | None:
+    """What the camera off means on a storey with lidar twins in its start region, or None."""
+    share = float(entry["lidar_twin_start_share"])  # type: ignore[arg-type]
+    if share <= 0:
+        return None
+    twins = [t for t in entry["lidar_twins"] if t["start_region"]]  # type: ignore[attr-defined]
+    where = "; ".join(
+        f"({t['x']:.1f}, {t['y']:.1f}) like ({t['twin_x']:.1f}, {t['twin_y']:.1f})"
+        f" turned {t['turn_deg']:.0f} deg"
+        for t in twins[:3]
+    )
+    more = f" and {len(twins) - 3} more" if len(twins) > 3 else ""
+    return (
+        f"{entry['storey']}: {100 * share:.0f} % of the start area has a lidar twin with its doors shut "
+        f"({where}{more}): with the camera off no start there initialises"
+    )
 
 
 def _table_row(name: str, entry: dict[str, object], chosen: list[Landmark]) -> list[str]:

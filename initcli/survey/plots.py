@@ -11,6 +11,8 @@ import numpy as np
 from bimkit.atomic import write_bytes_atomic
 from initcli.survey.survey import SHUT_IN_LABEL, Landmark, StoreySurvey
 
+LIDAR_TWIN_LABEL = "lidar twin, doors shut: camera off, no start here initialises"
+
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.collections import PathCollection
@@ -57,6 +59,7 @@ def _panel(
             label="never unique (most headings)",
         )
     _shut_in(ax, result, points_per_m)
+    _lidar_twins(ax, result)
     base = len(plan.features) - len(landmarks)
     f = plan.features
     for cls in sorted(set(f.cls[:base])):
@@ -104,6 +107,19 @@ def _shut_in(ax: Axes, result: StoreySurvey, points_per_m: float) -> None:
             ax.annotate(
                 SHUT_IN_LABEL, (room.x, room.y), fontsize=5, ha="center", va="center", color="0.3", zorder=6
             )
+
+
+def _lidar_twins(ax: Axes, result: StoreySurvey) -> None:
+    """Hatching over the spaces a lidar alone cannot tell from their twins (doors shut)."""
+    plan = result.plan
+    cells = plan.lidar_twin_cells
+    if not plan.lidar_twins or cells is None:
+        return
+    grid = plan.circulation.grid
+    x, _ = grid.cell_centre(0, np.arange(cells.shape[1]))
+    _, y = grid.cell_centre(np.arange(cells.shape[0]), 0)
+    ax.contourf(x, y, cells.astype(float), levels=[0.5, 1.5], colors="none", hatches=["///"], zorder=2.5)
+    ax.fill([], [], facecolor="none", edgecolor="0.2", hatch="///", label=LIDAR_TWIN_LABEL)  # the legend's
 
 
 def survey_png(

@@ -10,6 +10,7 @@ the numbers of ``survey.json`` and :func:`suggest_landmarks` the greedy landmark
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
@@ -18,6 +19,7 @@ import numpy as np
 
 from bimtools.site.load import StoreyModel
 from initcli.core.classes import ClassMap
+from initcli.core.region_twins import RegionTwin, region_twins
 from initcli.core.symmetry import Turn
 from initcli.core.visibility import CameraModel, FeatureArrays, visible
 from initcli.executor import Executor, LocalExecutor, map_unordered
@@ -34,6 +36,7 @@ __all__ = [
     "LANDMARK_CLASS",
     "LANDMARK_HEIGHT",
     "Landmark",
+    "LidarTwin",
     "SHUT_IN_MIN_AREA",
     "SampleViews",
     "ShutInRoom",
@@ -93,6 +96,21 @@ class ShutInRoom:
     area_m2: float  # where a robot can stand (the start clearance)
 
 
+@dataclass(frozen=True)
+class LidarTwin:
+    """A space (every door leaf closed) that a turn or shift lays on itself or on another space, walls
+    on walls and floor on floor (:mod:`initcli.core.region_twins`): with the camera off a lidar
+    cannot tell a pose there from its twin, and no start there initialises while the doors stay shut."""
+
+    x: float  # m: a cell of the space where a robot can stand, nearest its centroid
+    y: float
+    area_m2: float  # where a robot can stand (the start clearance)
+    twin_x: float  # m: where the lidar sees the same as at (x, y) ...
+    twin_y: float
+    turn_deg: float  # ... turned this much
+    start_region: bool  # part of the surveyed start region (else a shut-in room)
+
+
 @dataclass
 class StoreyPlan:
     """One storey, precomputed: features, occluders, loops, what the loops see, the start samples."""
@@ -110,6 +128,17 @@ class StoreyPlan:
     shut_in: list[ShutInRoom] = field(default_factory=list)
     shut_in_cells: np.ndarray | None = None  # bool mask over the grid: where shut_in rooms lie
     twin: Turn | None = None  # the turn that maps the storey onto itself: no start initialises
+    lidar_twins: list[LidarTwin] = field(default_factory=list)
+    lidar_twin_cells: np.ndarray | None = None  # bool mask over the grid: where lidar_twins lie
+
+    @property
+    def lidar_twin_start_share(self) -> float:
+        """Share of the start positions in a space with a lidar twin (camera off: none initialises)."""
+        cells = self.lidar_twin_cells
+        if cells is None or not len(self.positions):
+            return 0.0
+        row, col = self.circulation.grid.world_to_cell(self.positions[:, 0], self.positions[:, 1])
+        return float(np.mean(cells[row, col]))
 
 
 def storey_features(storey: StoreyModel, cmap: ClassMap | None = None) -> FeatureArrays:
@@ -170,6 +199,7 @@ def plan_storey(storey: StoreyModel, params: SurveyParams, cmap: ClassMap | None
     position = np.repeat(np.arange(len(positions)), params.headings)
     walls = np.array([[w.x1, w.y1, w.x2, w.y2, *w.normal] for w in storey.walls], dtype=float).reshape(-1, 6)
     rooms, cells = shut_in_rooms(circulation, params.start_clearance)
+    twins, twin_cells = lidar_twin_spaces(circulation, params.start_clearance)
     return StoreyPlan(
         storey.name,
         features,
@@ -184,29 +214,86 @@ def plan_storey(storey: StoreyModel, params: SurveyParams, cmap: ClassMap | None
         rooms,
         cells,
         self_similar(storey),
+        twins,
+        twin_cells,
     )
+
+
+def _standing(circulation: Circulation, clearance: float, where: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The labels of the connected free regions with cells in ``where`` that have at least
+    SHUT_IN_MIN_AREA where a robot can stand (``clearance`` m from the nearest obstacle), and the
+    mask of those standing cells."""
+    regions = circulation.regions
+    if regions is None:
+        return np.zeros(0, dtype=int), np.zeros(circulation.label.shape, dtype=bool)
+    stand = (regions > 0) & where & (circulation.clearance >= clearance)
+    counts = np.bincount(regions[stand], minlength=int(regions.max()) + 1)
+    keep = np.flatnonzero(counts * circulation.grid.resolution**2 >= SHUT_IN_MIN_AREA)
+    keep = keep[keep > 0]
+    return keep, stand & np.isin(regions, keep)
+
+
+def _nearest_centroid(circulation: Circulation, mask: np.ndarray) -> tuple[float, float]:
+    """The centre of the cell of ``mask`` nearest its centroid (m)."""
+    rows, cols = np.nonzero(mask)
+    k = int(np.argmin(np.hypot(rows - rows.mean(), cols - cols.mean())))
+    x, y = circulation.grid.cell_centre(rows[k : k + 1], cols[k : k + 1])
+    return round(float(x[0]), 2), round(float(y[0]), 2)
 
 
 def shut_in_rooms(circulation: Circulation, clearance: float) -> tuple[list[ShutInRoom], np.ndarray]:
     """The connected free regions outside the surveyed ``circulation`` (every door leaf closed; no
     feature faces them) with at least SHUT_IN_MIN_AREA where a robot can stand (``clearance`` m from
     the nearest obstacle), and the mask of their cells."""
-    regions = circulation.regions
-    if regions is None:
-        return [], np.zeros(circulation.label.shape, dtype=bool)
-    stand = (regions > 0) & ~circulation.label & (circulation.clearance >= clearance)
+    keep, cells = _standing(circulation, clearance, ~circulation.label)
     cell = circulation.grid.resolution**2
-    counts = np.bincount(regions[stand], minlength=int(regions.max()) + 1)
-    keep = np.flatnonzero(counts * cell >= SHUT_IN_MIN_AREA)
     rooms: list[ShutInRoom] = []
     for label in keep:
-        rows, cols = np.nonzero(stand & (regions == label))
-        k = int(np.argmin(np.hypot(rows - rows.mean(), cols - cols.mean())))
-        x, y = circulation.grid.cell_centre(rows[k : k + 1], cols[k : k + 1])
-        rooms.append(
-            ShutInRoom(round(float(x[0]), 2), round(float(y[0]), 2), round(float(counts[label] * cell), 1))
-        )
-    return rooms, stand & np.isin(regions, keep)
+        room = cells & (circulation.regions == label)
+        rooms.append(ShutInRoom(*_nearest_centroid(circulation, room), round(float(room.sum() * cell), 1)))
+    return rooms, cells
+
+
+def _moved(twin: RegionTwin, x: float, y: float) -> float:
+    tx, ty = twin.motion.apply(np.array([x, y]))
+    return math.hypot(float(tx) - x, float(ty) - y)
+
+
+def _farthest_from_fixed_point(
+    circulation: Circulation, mask: np.ndarray, twin: RegionTwin
+) -> tuple[float, float]:
+    """The standing cell of ``mask`` that the twin's motion moves farthest (m): a point whose twin
+    is another place, where the space's own centre is the centre of its turn."""
+    rows, cols = np.nonzero(mask)
+    x, y = circulation.grid.cell_centre(rows, cols)
+    xy = np.column_stack([x, y])
+    k = int(np.argmax(np.hypot(*(twin.motion.apply(xy) - xy).T)))
+    return round(float(xy[k, 0]), 2), round(float(xy[k, 1]), 2)
+
+
+def lidar_twin_spaces(circulation: Circulation, clearance: float) -> tuple[list[LidarTwin], np.ndarray]:
+    """The spaces of the map (every door leaf closed; start region and shut-in rooms, at least
+    SHUT_IN_MIN_AREA where a robot can stand) that have a lidar twin, and the mask of their cells."""
+    keep, cells = _standing(circulation, clearance, np.ones(circulation.label.shape, dtype=bool))
+    regions = circulation.regions
+    if regions is None or not len(keep):
+        return [], cells & False
+    grid = circulation.grid
+    twins = region_twins(regions, grid.resolution, (grid.origin[0], grid.origin[1]), keep)
+    out: list[LidarTwin] = []
+    mask = np.zeros(regions.shape, dtype=bool)
+    for twin in twins:
+        space = cells & (regions == twin.label)
+        x, y = _nearest_centroid(circulation, space)
+        if _moved(twin, x, y) < 1.0:
+            x, y = _farthest_from_fixed_point(circulation, space, twin)  # the centre of a half turn
+        tx, ty = twin.motion.apply(np.array([x, y]))
+        start = bool((space & circulation.label).any())
+        area = round(float(space.sum() * grid.resolution**2), 1)
+        turn = 180.0 if twin.turn_deg <= -179.95 else round(twin.turn_deg, 1)
+        out.append(LidarTwin(x, y, area, round(float(tx), 2), round(float(ty), 2), turn, start))
+        mask |= space
+    return out, mask
 
 
 @dataclass
@@ -258,20 +345,9 @@ def with_feature(
     flat = visible(poses, extra, plan.occluders, params.camera)
     bounds = np.cumsum([0, *sizes])
     approach = [np.hstack([a, flat[bounds[i] : bounds[i + 1]]]) for i, a in enumerate(views.approach)]
-    new_plan = StoreyPlan(
-        plan.name,
-        features,
-        plan.occluders,
-        plan.walls,
-        plan.circulation,
-        plan.loops,
-        cum,
-        plan.starts,
-        plan.position,
-        plan.positions,
-        plan.shut_in,
-        plan.shut_in_cells,
-    )
+    # The landmark is for the camera: the walls, and so the lidar's twins, stay; the turn of a
+    # self-similar storey is not looked for again (a sign on one side breaks it).
+    new_plan = dataclasses.replace(plan, features=features, loop_cum=cum, twin=None)
     return new_plan, SampleViews(np.concatenate([views.look, look_extra], axis=2), approach, views.entries)
 
 
@@ -415,6 +491,10 @@ def summarise(result: StoreySurvey) -> dict[str, object]:
         # rooms closed off by their doors: a robot there is shut in (cannot initialise from here)
         "shut_in_area_m2": round(sum(r.area_m2 for r in result.plan.shut_in), 1),
         "shut_in_rooms": [{"x": r.x, "y": r.y, "area_m2": r.area_m2} for r in result.plan.shut_in],
+        # spaces a lidar alone cannot place, doors shut: the camera off, no start there initialises
+        "lidar_twins": [dataclasses.asdict(t) for t in result.plan.lidar_twins],
+        "lidar_twin_area_m2": round(sum(t.area_m2 for t in result.plan.lidar_twins), 1),
+        "lidar_twin_start_share": round(result.plan.lidar_twin_start_share, 4),
         # the storey is itself turned: every start has a twin (a session fails at once there)
         "self_similar": None
         if twin is None

@@ -144,7 +144,13 @@ def test_a_room_with_one_door_is_never_unique() -> None:
 
 def _fake(distance: list[float], position: list[int], positions: int, headings: int) -> StoreySurvey:
     plan = SimpleNamespace(
-        name="L9", position=np.array(position), positions=np.zeros((positions, 2)), shut_in=[], twin=None
+        name="L9",
+        position=np.array(position),
+        positions=np.zeros((positions, 2)),
+        shut_in=[],
+        twin=None,
+        lidar_twins=[],
+        lidar_twin_start_share=0.0,
     )
     params = SurveyParams(spacing=2.0, headings=headings, limit_m=30.0)
     return StoreySurvey(plan, np.array(distance, dtype=float), params)  # type: ignore[arg-type]

@@ -1,0 +1,259 @@
+"""Spaces a lidar cannot tell apart: a free region of the map that a rigid motion lays onto itself or
+onto another region, walls on walls and free cells on free cells.
+
+A robot whose camera sees nothing has only its scans: from inside a region closed off by its
+doors (every leaf shut) it can see the region's walls and nothing beyond them. When a turn or a
+shift maps the region's walls onto the map's walls and its floor onto free floor, every scan taken
+at a pose ``p`` there is the scan taken at the twin pose ``T p``: no registration, scan fit or
+amount of driving tells the two apart, and a lidar-only claim would be a coin toss. Two identical
+offices along a corridor are twins (a shift), a ring corridor whose plan is point-symmetric once
+its doors are shut is its own twin (a half turn), although the rooms behind the doors differ and
+the storey as a whole (:mod:`initcli.core.symmetry`) is not self-similar. An open door, a camera
+feature or anything on site the model lacks (material, hoardings) can break the tie.
+
+The test (pure arrays): each region's candidate motions come from its free cells' moments (the
+centroid and principal axis of the region and of a region of about the same area, the axes
+turned by multiples of a quarter turn, never the identity), refined on a small grid; a motion
+counts when every wall cell bordering the region lands within ``tolerance`` of a wall cell that
+borders free space and every free cell at least a cell beyond the tolerance from a wall lands on a
+free cell. A mirror image is no twin (a lidar sees handedness).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+from scipy.spatial import cKDTree
+
+from initcli.core.geometry import Pose2D, wrap_angle
+from initcli.core.symmetry import TOLERANCE
+
+__all__ = ["RegionTwin", "region_twins"]
+
+AREA_SLACK = 0.05  # share of a region's free cells another region's count may differ by to be tried
+WALL_SLACK = 0.1  # share of its bordering wall cells likewise
+REFINE_CELLS = (-1.0, -0.5, 0.0, 0.5, 1.0)  # shifts (cells) of the refinement grid, in x and y
+REFINE_DEG = (-1.0, -0.5, 0.0, 0.5, 1.0)  # turns (degrees) of the refinement grid
+SAMPLE = 256  # wall cells the refinement is scored on; the best motion is then checked on all
+IDENTITY_M = 1.0  # m: a motion that moves no free cell of the region further than this is no twin
+
+
+@dataclass(frozen=True)
+class RegionTwin:
+    """A region (``label`` of the labelled free cells) and the rigid motion (BIM frame) that lays it on
+    ``twin`` (its own label: the region turned onto itself)."""
+
+    label: int
+    twin: int
+    motion: Pose2D  # p -> R p + t, metres and radians
+
+    @property
+    def turn_deg(self) -> float:
+        return math.degrees(wrap_angle(self.motion.yaw))
+
+
+def region_twins(
+    labels: np.ndarray,
+    resolution: float,
+    origin: tuple[float, float],
+    regions: list[int] | np.ndarray,
+    tolerance: float = TOLERANCE,
+) -> list[RegionTwin]:
+    """The twins of the ``regions`` (labels) of ``labels`` (H, W; 0: not free, else the connected free
+    region; row 0 the top, ``origin`` the bottom-left corner in metres, ``resolution`` m per cell):
+    for each region that has one, the first motion found. Regions have no twin where none is listed."""
+    labels = np.asarray(labels)
+    free = labels > 0
+    walls = ~free & ndimage.binary_dilation(free, structure=np.ones((3, 3), dtype=bool))
+    wall_xy = _xy(np.nonzero(walls), labels.shape, resolution, origin)
+    if len(wall_xy) < 3:
+        return []
+    tree = cKDTree(wall_xy)
+    near = _Lookup(ndimage.distance_transform_edt(~walls) * resolution, resolution, origin)
+    beyond = ndimage.distance_transform_edt(free) * resolution >= tolerance + 1.5 * resolution
+    counts = np.bincount(labels.ravel(), minlength=int(labels.max()) + 1)
+    shape = _Shapes(labels, walls, beyond, resolution, origin)
+    out: list[RegionTwin] = []
+    wanted = [int(r) for r in regions if 0 < int(r) < len(counts) and counts[int(r)] > 0]
+    for label in wanted:
+        n_walls = len(shape.walls(label))
+        similar = [
+            other
+            for other in range(1, len(counts))
+            if abs(int(counts[other]) - int(counts[label])) <= AREA_SLACK * counts[label]
+            and abs(len(shape.walls(other)) - n_walls) <= WALL_SLACK * n_walls
+        ]
+        for other in [label, *(o for o in similar if o != label)]:
+            motion = _fit(shape, tree, near, labels, label, other, tolerance)
+            if motion is not None:
+                out.append(RegionTwin(label, other, motion))
+                break
+    return out
+
+
+class _Shapes:
+    """Per region, computed once on its bounding box: its bordering wall cells, its free cells beyond
+    the tolerance from a wall, its centroid and principal axis (metres, radians)."""
+
+    def __init__(
+        self,
+        labels: np.ndarray,
+        walls: np.ndarray,
+        beyond: np.ndarray,
+        resolution: float,
+        origin: tuple[float, float],
+    ) -> None:
+        self.labels, self.walls_mask, self.beyond = labels, walls, beyond
+        self.resolution, self.origin = resolution, origin
+        self.boxes = ndimage.find_objects(labels)
+        self._walls: dict[int, np.ndarray] = {}
+        self._inner: dict[int, np.ndarray] = {}
+        self._axes: dict[int, tuple[np.ndarray, float]] = {}
+
+    def _box(self, label: int, pad: int) -> tuple[slice, slice]:
+        rows, cols = self.boxes[label - 1]
+        h, w = self.labels.shape
+        return (
+            slice(max(0, rows.start - pad), min(h, rows.stop + pad)),
+            slice(max(0, cols.start - pad), min(w, cols.stop + pad)),
+        )
+
+    def _cells(self, mask: np.ndarray, box: tuple[slice, slice]) -> np.ndarray:
+        rows, cols = np.nonzero(mask)
+        return _xy(
+            (rows + box[0].start, cols + box[1].start), self.labels.shape, self.resolution, self.origin
+        )
+
+    def walls(self, label: int) -> np.ndarray:
+        if label not in self._walls:
+            box = self._box(label, 2)
+            near = ndimage.binary_dilation(self.labels[box] == label, structure=np.ones((3, 3), dtype=bool))
+            self._walls[label] = self._cells(near & self.walls_mask[box], box)
+        return self._walls[label]
+
+    def inner(self, label: int) -> np.ndarray:
+        if label not in self._inner:
+            box = self._box(label, 0)
+            self._inner[label] = self._cells((self.labels[box] == label) & self.beyond[box], box)
+        return self._inner[label]
+
+    def axis(self, label: int) -> tuple[np.ndarray, float]:
+        """The centroid of the region's free cells and its principal axis (moments)."""
+        if label not in self._axes:
+            box = self._box(label, 0)
+            xy = self._cells(self.labels[box] == label, box)
+            c = xy.mean(axis=0)
+            d = xy - c
+            mu20, mu02, mu11 = (
+                float((d[:, 0] ** 2).mean()),
+                float((d[:, 1] ** 2).mean()),
+                float((d[:, 0] * d[:, 1]).mean()),
+            )
+            self._axes[label] = (c, 0.5 * math.atan2(2 * mu11, mu20 - mu02))
+        return self._axes[label]
+
+
+def _fit(
+    shape: _Shapes, tree: cKDTree, near: _Lookup, labels: np.ndarray, label: int, other: int, tolerance: float
+) -> Pose2D | None:
+    """The motion laying region ``label`` on region ``other``, or None."""
+    walls = shape.walls(label)
+    sample = walls[:: max(1, len(walls) // SAMPLE)]
+    inner = shape.inner(label)
+    (c, theta), (c2, theta2) = shape.axis(label), shape.axis(other)
+    for quarter in range(4):
+        angle0 = theta2 - theta + quarter * math.pi / 2
+        if other == label and abs(wrap_angle(angle0)) < math.radians(5.0):
+            continue  # the identity
+        motions = _refined(near, sample, c, c2, angle0, shape.resolution, tolerance)
+        if not motions:
+            continue
+        motion = min(motions, key=lambda m: _worst(tree, m.apply(sample), tolerance))
+        if _worst(tree, motion.apply(walls), tolerance) > tolerance:
+            continue
+        if other == label and _moves_at_most(motion, walls) < IDENTITY_M:
+            continue
+        if _on_free(motion.apply(inner), labels, shape.resolution, shape.origin):
+            return motion
+    return None
+
+
+def _refined(
+    near: _Lookup,
+    sample: np.ndarray,
+    centroid: np.ndarray,
+    target: np.ndarray,
+    angle0: float,
+    resolution: float,
+    tolerance: float,
+) -> list[Pose2D]:
+    """The motions of the refinement grid about ``angle0`` (centroid onto target), for an exact check,
+    or none when the distance map shows that none lays every sampled wall cell within ``tolerance``
+    (and the map's rounding) of a wall. The unrefined motion is tried first: a region it lays far off
+    (median beyond three tolerances) has no twin at this angle."""
+    shift = target - Pose2D(0.0, 0.0, angle0).apply(centroid)
+    base = Pose2D(float(shift[0]), float(shift[1]), angle0)
+    if float(np.median(near(base.apply(sample)))) > 3 * tolerance:
+        return []
+    motions = []
+    for ddeg in REFINE_DEG:
+        angle = angle0 + math.radians(ddeg)
+        shift = target - Pose2D(0.0, 0.0, angle).apply(centroid)
+        motions += [
+            Pose2D(float(shift[0] + dx * resolution), float(shift[1] + dy * resolution), angle)
+            for dx in REFINE_CELLS
+            for dy in REFINE_CELLS
+        ]
+    moved = np.concatenate([m.apply(sample) for m in motions])
+    worst = near(moved).reshape(len(motions), -1).max(axis=1)
+    if worst.min() > tolerance + near.slack:
+        return []
+    return motions
+
+
+class _Lookup:
+    """The distance (m) from a point to the nearest wall cell, read off a distance map of the cells
+    (off by at most ``slack``, half a cell's diagonal; points off the map: infinite)."""
+
+    def __init__(self, distance: np.ndarray, resolution: float, origin: tuple[float, float]) -> None:
+        self.distance, self.resolution, self.origin = distance, resolution, origin
+        self.slack = resolution * math.sqrt(0.5)
+
+    def __call__(self, xy: np.ndarray) -> np.ndarray:
+        h, w = self.distance.shape
+        col = np.floor((xy[:, 0] - self.origin[0]) / self.resolution).astype(int)
+        row = h - 1 - np.floor((xy[:, 1] - self.origin[1]) / self.resolution).astype(int)
+        inside = (row >= 0) & (row < h) & (col >= 0) & (col < w)
+        out = np.full(len(xy), np.inf)
+        out[inside] = self.distance[row[inside], col[inside]]
+        return out
+
+
+def _worst(tree: cKDTree, xy: np.ndarray, tolerance: float) -> float:
+    """The largest distance from a point to the nearest wall cell (inf: one beyond ``tolerance``)."""
+    return float(tree.query(xy, k=1, distance_upper_bound=tolerance + 1e-9)[0].max())
+
+
+def _moves_at_most(motion: Pose2D, xy: np.ndarray) -> float:
+    return float(np.hypot(*(motion.apply(xy) - xy).T).max()) if len(xy) else 0.0
+
+
+def _on_free(xy: np.ndarray, labels: np.ndarray, resolution: float, origin: tuple[float, float]) -> bool:
+    """Does every point lie on a free cell of ``labels``?"""
+    col = np.floor((xy[:, 0] - origin[0]) / resolution).astype(int)
+    row = labels.shape[0] - 1 - np.floor((xy[:, 1] - origin[1]) / resolution).astype(int)
+    inside = (row >= 0) & (row < labels.shape[0]) & (col >= 0) & (col < labels.shape[1])
+    return bool(inside.all() and (labels[row, col] > 0).all())
+
+
+def _xy(
+    cells: tuple[np.ndarray, ...], shape: tuple[int, ...], resolution: float, origin: tuple[float, float]
+) -> np.ndarray:
+    """Cell centres (rows, cols) as (N, 2) metres, row 0 the top."""
+    rows, cols = cells
+    x = origin[0] + (cols + 0.5) * resolution
+    y = origin[1] + (shape[0] - 1 - rows + 0.5) * resolution
+    return np.column_stack([x, y]).astype(float).reshape(-1, 2)
