@@ -54,6 +54,7 @@ def survey_params(config: SessionConfig, spacing: float, headings: int) -> Surve
         wall_distance=config.exploration.wall_distance,
         side=followed_side(config),
         min_sightings=m.min_sightings,
+        scan_tolerance=config.verification.scan_tolerance,
         camera=CameraModel(
             camera, mount, max_range=config.camera.range, max_view_angle_deg=config.camera.max_view_angle
         ),
@@ -278,7 +279,7 @@ def _lidar_twin_line(entry: dict[str, object]) -> str | None:
     more = f" and {len(twins) - 3} more" if len(twins) > 3 else ""
     return (
         f"{entry['storey']}: {100 * share:.0f} % of the start area has a lidar twin with its doors shut "
-        f"({where}{more}): with the camera off no start there initialises"
+        f"({where}{more}): with the camera off a start there cannot be told from its twin"
     )
 
 

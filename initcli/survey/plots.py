@@ -11,7 +11,7 @@ import numpy as np
 from bimkit.atomic import write_bytes_atomic
 from initcli.survey.survey import SHUT_IN_LABEL, Landmark, StoreySurvey
 
-LIDAR_TWIN_LABEL = "lidar twin, doors shut: camera off, no start here initialises"
+LIDAR_TWIN_LABEL = "lidar twin, doors shut: camera off, alike to the lidar"
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

@@ -21,6 +21,7 @@ from bimtools.site.load import StoreyModel
 from initcli.core.classes import ClassMap
 from initcli.core.region_twins import RegionTwin, region_twins
 from initcli.core.symmetry import Turn
+from initcli.core.verification_settings import VerificationParams
 from initcli.core.visibility import CameraModel, FeatureArrays, visible
 from initcli.executor import Executor, LocalExecutor, map_unordered
 from initcli.sim.as_built import closed_doors, door_ids
@@ -79,6 +80,8 @@ class SurveyParams:
     side: int = 1  # +1 left wall, -1 right wall
     start_clearance: float = 0.6  # m from the nearest obstacle for a start (as random starts)
     min_sightings: int = 3  # images before a feature is confirmed (detection filter)
+    # m: walls this close count as alike for the lidar twins (the session's verification.scan_tolerance)
+    scan_tolerance: float = field(default_factory=lambda: VerificationParams().scan_tolerance)
     camera: CameraModel = field(default_factory=lambda: CameraModel(DEFAULT_CAMERA, DEFAULT_MOUNT))
     matching: UniquenessParams = field(default_factory=UniquenessParams)
     landmark_spacing: float = 4.0  # m between candidate landmark positions along a corridor wall
@@ -100,7 +103,8 @@ class ShutInRoom:
 class LidarTwin:
     """A space (every door leaf closed) that a turn or shift lays on itself or on another space, walls
     on walls and floor on floor (:mod:`initcli.core.region_twins`): with the camera off a lidar
-    cannot tell a pose there from its twin, and no start there initialises while the doors stay shut."""
+    sees a pose there and its twin alike (within the session's scan tolerance), and a start there
+    initialises only by a chance difference while the doors stay shut."""
 
     x: float  # m: a cell of the space where a robot can stand, nearest its centroid
     y: float
@@ -199,7 +203,7 @@ def plan_storey(storey: StoreyModel, params: SurveyParams, cmap: ClassMap | None
     position = np.repeat(np.arange(len(positions)), params.headings)
     walls = np.array([[w.x1, w.y1, w.x2, w.y2, *w.normal] for w in storey.walls], dtype=float).reshape(-1, 6)
     rooms, cells = shut_in_rooms(circulation, params.start_clearance)
-    twins, twin_cells = lidar_twin_spaces(circulation, params.start_clearance)
+    twins, twin_cells = lidar_twin_spaces(circulation, params.start_clearance, params.scan_tolerance)
     return StoreyPlan(
         storey.name,
         features,
@@ -271,15 +275,18 @@ def _farthest_from_fixed_point(
     return round(float(xy[k, 0]), 2), round(float(xy[k, 1]), 2)
 
 
-def lidar_twin_spaces(circulation: Circulation, clearance: float) -> tuple[list[LidarTwin], np.ndarray]:
+def lidar_twin_spaces(
+    circulation: Circulation, clearance: float, tolerance: float
+) -> tuple[list[LidarTwin], np.ndarray]:
     """The spaces of the map (every door leaf closed; start region and shut-in rooms, at least
-    SHUT_IN_MIN_AREA where a robot can stand) that have a lidar twin, and the mask of their cells."""
+    SHUT_IN_MIN_AREA where a robot can stand) that have a lidar twin, walls alike within
+    ``tolerance`` m, and the mask of their cells."""
     keep, cells = _standing(circulation, clearance, np.ones(circulation.label.shape, dtype=bool))
     regions = circulation.regions
     if regions is None or not len(keep):
         return [], cells & False
     grid = circulation.grid
-    twins = region_twins(regions, grid.resolution, (grid.origin[0], grid.origin[1]), keep)
+    twins = region_twins(regions, grid.resolution, (grid.origin[0], grid.origin[1]), keep, tolerance)
     out: list[LidarTwin] = []
     mask = np.zeros(regions.shape, dtype=bool)
     for twin in twins:
@@ -491,10 +498,11 @@ def summarise(result: StoreySurvey) -> dict[str, object]:
         # rooms closed off by their doors: a robot there is shut in (cannot initialise from here)
         "shut_in_area_m2": round(sum(r.area_m2 for r in result.plan.shut_in), 1),
         "shut_in_rooms": [{"x": r.x, "y": r.y, "area_m2": r.area_m2} for r in result.plan.shut_in],
-        # spaces a lidar alone cannot place, doors shut: the camera off, no start there initialises
+        # spaces a lidar alone cannot place, doors shut: with the camera off a start there fails
         "lidar_twins": [dataclasses.asdict(t) for t in result.plan.lidar_twins],
         "lidar_twin_area_m2": round(sum(t.area_m2 for t in result.plan.lidar_twins), 1),
         "lidar_twin_start_share": round(result.plan.lidar_twin_start_share, 4),
+        "lidar_twin_tolerance_m": round(result.params.scan_tolerance, 3),
         # the storey is itself turned: every start has a twin (a session fails at once there)
         "self_similar": None
         if twin is None

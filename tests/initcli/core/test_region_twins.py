@@ -107,3 +107,13 @@ def test_unknown_or_empty_regions_are_skipped() -> None:
     labels, (room,) = floor_plan([ell()], [(1.0, 1.0)])
     assert region_twins(labels, RES, ORIGIN, [0, 99]) == []
     assert region_twins(np.zeros((10, 10), dtype=int), RES, ORIGIN, [1]) == []
+
+
+def test_walls_alike_within_the_tolerance_make_twins_a_deeper_difference_does_not() -> None:
+    shallow = rect(6.0, 4.0)
+    shallow = np.vstack([np.zeros((cells(0.1), shallow.shape[1]), dtype=bool), shallow])
+    shallow[: cells(0.1), cells(1.0) : cells(2.0)] = True  # a recess 0.1 m deep in one long wall
+    labels, (room,) = floor_plan([shallow], [(2.0, 2.0)])
+    assert twin_of(labels, room) is not None  # within 0.1 m (two cells) of its turned self
+    found = {t.label for t in region_twins(labels, RES, ORIGIN, [room], tolerance=0.05)}
+    assert room not in found  # a lidar check this fine tells the recess's side
