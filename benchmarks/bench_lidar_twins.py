@@ -53,9 +53,8 @@ def twin_masks(eval_config: Path, names: set[str], workdir: Path) -> dict[str, A
             models[config.site_path()] = prepare_site(config, workdir / site.name)
         model = models[config.site_path()]
         simulated, _ = choose_storey(config, model)
-        plans[site.name] = plan_storey(
-            model.storeys[simulated], SurveyParams(spacing=1.0, headings=1), site_class_map(model)
-        )
+        params = SurveyParams(spacing=1.0, headings=1, scan_tolerance=config.verification.scan_tolerance)
+        plans[site.name] = plan_storey(model.storeys[simulated], params, site_class_map(model))
         print(
             f"  {site.name}: storey {simulated}, {len(plans[site.name].lidar_twins)} twin space(s)",
             flush=True,
@@ -66,7 +65,7 @@ def twin_masks(eval_config: Path, names: set[str], workdir: Path) -> dict[str, A
 def split(eval_config: Path, results: Path, workdir: Path) -> dict[str, collections.Counter[str]]:
     """Per site: the record's starts counted by (in a twin space or not) x (initialised or not)."""
     rows = [json.loads(line) for line in results.read_text().splitlines() if line.strip()]
-    rows = [r for r in rows if r["method"] == "bim+pf" and not r.get("sweep_key")]
+    rows = [r for r in rows if r["method"] == "bim+pf" and not r.get("sweep_key") and not r.get("refused")]
     plans = twin_masks(eval_config, {r["site"] for r in rows}, workdir)
     out: dict[str, collections.Counter[str]] = collections.defaultdict(collections.Counter)
     for r in rows:
@@ -74,7 +73,8 @@ def split(eval_config: Path, results: Path, workdir: Path) -> dict[str, collecti
         grid = plan.circulation.grid
         row, col = grid.world_to_cell(r["start_pose"][0], r["start_pose"][1])
         cells = plan.lidar_twin_cells
-        twin = bool(cells is not None and cells[row, col])
+        inside = cells is not None and 0 <= row < cells.shape[0] and 0 <= col < cells.shape[1]
+        twin = bool(inside and cells[row, col])
         out[r["site"]][f"{'twin' if twin else 'elsewhere'} {'ok' if r['success'] else 'failed'}"] += 1
         out[r["site"]]["confident_wrong"] += bool(r["confident_wrong"])
     return out

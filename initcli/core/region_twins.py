@@ -12,11 +12,14 @@ the storey as a whole (:mod:`initcli.core.symmetry`) is not self-similar. An ope
 feature or anything on site the model lacks (material, hoardings) can break the tie.
 
 The test (pure arrays): each region's candidate motions come from its free cells' moments (the
-centroid and principal axis of the region and of a region of about the same area, the axes
-turned by multiples of a quarter turn, never the identity), refined on a small grid; a motion
-counts when every wall cell bordering the region lands within ``tolerance`` of a wall cell that
-borders free space and every free cell at least a cell beyond the tolerance from a wall lands on a
-free cell. A mirror image is no twin (a lidar sees handedness).
+centroid of the region onto that of a region of about the same area, turned by the difference of
+their principal axes and by the quarter turns of the map's grid, each plus multiples of a quarter
+turn; a 5-degree sweep where a region is too round for its axis to mean anything; never the
+identity), refined on a small grid; a motion counts when every wall cell bordering the region lands
+within ``tolerance`` of a wall cell that borders free space, every wall cell bordering the twin
+lands back within ``tolerance`` of one (a column by one wall of the twin only), and every free cell
+beyond the tolerance from a wall lands on a free cell. The map's edge counts as wall. A mirror
+image is no twin (a lidar sees handedness).
 """
 
 from __future__ import annotations
@@ -31,14 +34,16 @@ from scipy.spatial import cKDTree
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.symmetry import TOLERANCE
 
-__all__ = ["RegionTwin", "region_twins"]
+__all__ = ["IDENTITY_M", "RegionTwin", "region_twins"]
 
 AREA_SLACK = 0.05  # share of a region's free cells another region's count may differ by to be tried
 WALL_SLACK = 0.1  # share of its bordering wall cells likewise
 REFINE_CELLS = (-1.0, -0.5, 0.0, 0.5, 1.0)  # shifts (cells) of the refinement grid, in x and y
 REFINE_DEG = (-1.0, -0.5, 0.0, 0.5, 1.0)  # turns (degrees) of the refinement grid
 SAMPLE = 256  # wall cells the refinement is scored on; the best motion is then checked on all
-IDENTITY_M = 1.0  # m: a motion that moves no free cell of the region further than this is no twin
+IDENTITY_M = 1.0  # m: a motion that moves no wall cell of the region further than this is no twin
+ROUND = 0.1  # a region whose second moments differ by less than this share has no principal axis
+SWEEP_DEG = 5.0  # degrees between the turns tried on such a region
 
 
 @dataclass(frozen=True)
@@ -65,7 +70,9 @@ def region_twins(
     """The twins of the ``regions`` (labels) of ``labels`` (H, W; 0: not free, else the connected free
     region; row 0 the top, ``origin`` the bottom-left corner in metres, ``resolution`` m per cell):
     for each region that has one, the first motion found. Regions have no twin where none is listed."""
-    labels = np.asarray(labels)
+    # one cell of wall round the map: its edge bounds what a lidar sees, as a wall does
+    labels = np.pad(np.asarray(labels, dtype=np.int64), 1)
+    origin = (origin[0] - resolution, origin[1] - resolution)
     free = labels > 0
     walls = ~free & ndimage.binary_dilation(free, structure=np.ones((3, 3), dtype=bool))
     wall_xy = _xy(np.nonzero(walls), labels.shape, resolution, origin)
@@ -77,7 +84,7 @@ def region_twins(
     counts = np.bincount(labels.ravel(), minlength=int(labels.max()) + 1)
     shape = _Shapes(labels, walls, beyond, resolution, origin)
     out: list[RegionTwin] = []
-    wanted = [int(r) for r in regions if 0 < int(r) < len(counts) and counts[int(r)] > 0]
+    wanted = list(dict.fromkeys(int(r) for r in regions if 0 < int(r) < len(counts) and counts[int(r)] > 0))
     for label in wanted:
         n_walls = len(shape.walls(label))
         similar = [
@@ -111,7 +118,7 @@ class _Shapes:
         self.boxes = ndimage.find_objects(labels)
         self._walls: dict[int, np.ndarray] = {}
         self._inner: dict[int, np.ndarray] = {}
-        self._axes: dict[int, tuple[np.ndarray, float]] = {}
+        self._axes: dict[int, tuple[np.ndarray, float | None]] = {}
 
     def _box(self, label: int, pad: int) -> tuple[slice, slice]:
         rows, cols = self.boxes[label - 1]
@@ -140,8 +147,9 @@ class _Shapes:
             self._inner[label] = self._cells((self.labels[box] == label) & self.beyond[box], box)
         return self._inner[label]
 
-    def axis(self, label: int) -> tuple[np.ndarray, float]:
-        """The centroid of the region's free cells and its principal axis (moments)."""
+    def axis(self, label: int) -> tuple[np.ndarray, float | None]:
+        """The centroid of the region's free cells and its principal axis (moments; None: the
+        region is too round for one)."""
         if label not in self._axes:
             box = self._box(label, 0)
             xy = self._cells(self.labels[box] == label, box)
@@ -152,7 +160,8 @@ class _Shapes:
                 float((d[:, 1] ** 2).mean()),
                 float((d[:, 0] * d[:, 1]).mean()),
             )
-            self._axes[label] = (c, 0.5 * math.atan2(2 * mu11, mu20 - mu02))
+            round_ = math.hypot(mu20 - mu02, 2 * mu11) < ROUND * (mu20 + mu02)
+            self._axes[label] = (c, None if round_ else 0.5 * math.atan2(2 * mu11, mu20 - mu02))
         return self._axes[label]
 
 
@@ -160,13 +169,12 @@ def _fit(
     shape: _Shapes, tree: cKDTree, near: _Lookup, labels: np.ndarray, label: int, other: int, tolerance: float
 ) -> Pose2D | None:
     """The motion laying region ``label`` on region ``other``, or None."""
-    walls = shape.walls(label)
+    walls, back = shape.walls(label), shape.walls(other)
     sample = walls[:: max(1, len(walls) // SAMPLE)]
     inner = shape.inner(label)
     (c, theta), (c2, theta2) = shape.axis(label), shape.axis(other)
-    for quarter in range(4):
-        angle0 = theta2 - theta + quarter * math.pi / 2
-        if other == label and abs(wrap_angle(angle0)) < math.radians(5.0):
+    for angle0 in _angles(theta, theta2):
+        if other == label and abs(wrap_angle(angle0)) < math.radians(SWEEP_DEG):
             continue  # the identity
         motions = _refined(near, sample, c, c2, angle0, shape.resolution, tolerance)
         if not motions:
@@ -174,11 +182,27 @@ def _fit(
         motion = min(motions, key=lambda m: _worst(tree, m.apply(sample), tolerance))
         if _worst(tree, motion.apply(walls), tolerance) > tolerance:
             continue
+        if _worst(tree, motion.inverse().apply(back), tolerance) > tolerance:
+            continue
         if other == label and _moves_at_most(motion, walls) < IDENTITY_M:
             continue
         if _on_free(motion.apply(inner), labels, shape.resolution, shape.origin):
             return motion
     return None
+
+
+def _angles(theta: float | None, theta2: float | None) -> list[float]:
+    """The turns tried (radians): the difference of the principal axes and the grid's own, each
+    with its quarter turns; every SWEEP_DEG degrees where either region is too round for an axis."""
+    if theta is None or theta2 is None:
+        return [math.radians(d) for d in np.arange(0.0, 360.0, SWEEP_DEG)]
+    bases = [theta2 - theta, 0.0]
+    angles = [wrap_angle(b + q * math.pi / 2) for b in bases for q in range(4)]
+    out: list[float] = []
+    for a in angles:  # the axes' difference first; the grid's turns where they differ from it
+        if all(abs(wrap_angle(a - b)) > math.radians(2.0) for b in out):
+            out.append(float(a))
+    return out
 
 
 def _refined(
@@ -242,7 +266,9 @@ def _moves_at_most(motion: Pose2D, xy: np.ndarray) -> float:
 
 
 def _on_free(xy: np.ndarray, labels: np.ndarray, resolution: float, origin: tuple[float, float]) -> bool:
-    """Does every point lie on a free cell of ``labels``?"""
+    """Does every point lie on a free cell of ``labels``? (No points: nothing to say, no.)"""
+    if not len(xy):
+        return False
     col = np.floor((xy[:, 0] - origin[0]) / resolution).astype(int)
     row = labels.shape[0] - 1 - np.floor((xy[:, 1] - origin[1]) / resolution).astype(int)
     inside = (row >= 0) & (row < labels.shape[0]) & (col >= 0) & (col < labels.shape[1])

@@ -19,7 +19,7 @@ import numpy as np
 
 from bimtools.site.load import StoreyModel
 from initcli.core.classes import ClassMap
-from initcli.core.region_twins import RegionTwin, region_twins
+from initcli.core.region_twins import IDENTITY_M, RegionTwin, region_twins
 from initcli.core.symmetry import Turn
 from initcli.core.verification_settings import VerificationParams
 from initcli.core.visibility import CameraModel, FeatureArrays, visible
@@ -292,12 +292,12 @@ def lidar_twin_spaces(
     for twin in twins:
         space = cells & (regions == twin.label)
         x, y = _nearest_centroid(circulation, space)
-        if _moved(twin, x, y) < 1.0:
+        if _moved(twin, x, y) < IDENTITY_M:
             x, y = _farthest_from_fixed_point(circulation, space, twin)  # the centre of a half turn
         tx, ty = twin.motion.apply(np.array([x, y]))
         start = bool((space & circulation.label).any())
         area = round(float(space.sum() * grid.resolution**2), 1)
-        turn = 180.0 if twin.turn_deg <= -179.95 else round(twin.turn_deg, 1)
+        turn = 180.0 if twin.turn_deg <= -179.95 else round(twin.turn_deg, 1) + 0.0  # not -0.0
         out.append(LidarTwin(x, y, area, round(float(tx), 2), round(float(ty), 2), turn, start))
         mask |= space
     return out, mask

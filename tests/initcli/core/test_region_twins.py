@@ -117,3 +117,47 @@ def test_walls_alike_within_the_tolerance_make_twins_a_deeper_difference_does_no
     assert twin_of(labels, room) is not None  # within 0.1 m (two cells) of its turned self
     found = {t.label for t in region_twins(labels, RES, ORIGIN, [room], tolerance=0.05)}
     assert room not in found  # a lidar check this fine tells the recess's side
+
+
+def alcove_square() -> np.ndarray:
+    """A 4 x 4 m room with a 1 x 0.5 m alcove off one wall: too round for a principal axis, and no
+    turn lays it on itself."""
+    room = np.zeros((cells(4.5), cells(4.0)), dtype=bool)
+    room[cells(0.5) :, :] = True
+    room[: cells(0.5), cells(0.5) : cells(1.5)] = True
+    return room
+
+
+def test_near_square_rooms_alike_are_twins_though_their_axes_mean_nothing() -> None:
+    labels, (a, b) = floor_plan([alcove_square(), alcove_square()], [(1.0, 1.0), (12.0, 4.0)])
+    twin = twin_of(labels, a)
+    assert twin is not None and twin.twin == b
+    assert (twin.motion.x, twin.motion.y) == pytest.approx((11.0, -3.0), abs=RES)
+    labels, (a, b) = floor_plan([alcove_square(), np.rot90(alcove_square(), -1)], [(1.0, 1.0), (12.0, 4.0)])
+    twin = twin_of(labels, a)
+    assert twin is not None and twin.twin == b and twin.turn_deg == pytest.approx(-90.0, abs=1.0)
+
+
+def test_a_column_by_one_room_s_wall_only_breaks_the_twin() -> None:
+    with_column = ell()
+    r, c = cells(3.0), cells(0.15)  # a column 0.05 m square standing 0.15 m off the west wall
+    with_column[r : r + 1, c : c + 1] = False
+    labels, (a, b) = floor_plan([ell(), with_column], [(1.0, 1.0), (12.0, 1.0)])
+    # at a tolerance of 0.15 m a's walls all land on b's, and a's floor beyond the
+    # tolerance from a wall on b's floor; b's column, 0.2 m from a's wall, lands on nothing of a's
+    assert region_twins(labels, RES, ORIGIN, [a], tolerance=0.15) == []
+
+
+def test_the_map_s_edge_bounds_a_room_as_a_wall_does() -> None:
+    labels, (a, b) = floor_plan([ell(), ell()], [(0.0, 0.0), (12.0, 4.0)])  # a touches the map's edge
+    assert labels[0, 0] == a
+    twin = twin_of(labels, a)
+    assert twin is not None and twin.twin == b
+    back = twin_of(labels, b)
+    assert back is not None and back.twin == a
+
+
+def test_each_region_asked_for_once_as_an_array_or_a_list() -> None:
+    labels, (a, b) = floor_plan([ell(), ell()], [(1.0, 1.0), (12.0, 4.0)])
+    found = region_twins(labels, RES, ORIGIN, np.array([a, a, b]))
+    assert [t.label for t in found] == [a, b]
