@@ -34,7 +34,7 @@ from scipy.spatial import cKDTree
 from initcli.core.geometry import Pose2D, wrap_angle
 from initcli.core.symmetry import TOLERANCE
 
-__all__ = ["IDENTITY_M", "RegionTwin", "region_twins"]
+__all__ = ["IDENTITY_M", "RegionTwin", "moved", "region_twins"]
 
 AREA_SLACK = 0.05  # share of a region's free cells another region's count may differ by to be tried
 WALL_SLACK = 0.1  # share of its bordering wall cells likewise
@@ -57,7 +57,9 @@ class RegionTwin:
 
     @property
     def turn_deg(self) -> float:
-        return math.degrees(wrap_angle(self.motion.yaw))
+        """The turn in degrees, in (-180, 180] (a half turn is 180, a shift 0, never -0)."""
+        deg = math.degrees(wrap_angle(self.motion.yaw))
+        return 180.0 if deg <= -179.95 else deg + 0.0
 
 
 def region_twins(
@@ -184,7 +186,7 @@ def _fit(
             continue
         if _worst(tree, motion.inverse().apply(back), tolerance) > tolerance:
             continue
-        if other == label and _moves_at_most(motion, walls) < IDENTITY_M:
+        if other == label and moved(motion, walls).max(initial=0.0) < IDENTITY_M:
             continue
         if _on_free(motion.apply(inner), labels, shape.resolution, shape.origin):
             return motion
@@ -247,10 +249,7 @@ class _Lookup:
         self.slack = resolution * math.sqrt(0.5)
 
     def __call__(self, xy: np.ndarray) -> np.ndarray:
-        h, w = self.distance.shape
-        col = np.floor((xy[:, 0] - self.origin[0]) / self.resolution).astype(int)
-        row = h - 1 - np.floor((xy[:, 1] - self.origin[1]) / self.resolution).astype(int)
-        inside = (row >= 0) & (row < h) & (col >= 0) & (col < w)
+        row, col, inside = _cells_of(xy, self.distance.shape, self.resolution, self.origin)
         out = np.full(len(xy), np.inf)
         out[inside] = self.distance[row[inside], col[inside]]
         return out
@@ -261,18 +260,29 @@ def _worst(tree: cKDTree, xy: np.ndarray, tolerance: float) -> float:
     return float(tree.query(xy, k=1, distance_upper_bound=tolerance + 1e-9)[0].max())
 
 
-def _moves_at_most(motion: Pose2D, xy: np.ndarray) -> float:
-    return float(np.hypot(*(motion.apply(xy) - xy).T).max()) if len(xy) else 0.0
+def moved(motion: Pose2D, xy: np.ndarray) -> np.ndarray:
+    """(N,) m: how far ``motion`` moves each of the points ``xy`` (N, 2)."""
+    xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+    return np.asarray(np.hypot(*(motion.apply(xy) - xy).T))
 
 
 def _on_free(xy: np.ndarray, labels: np.ndarray, resolution: float, origin: tuple[float, float]) -> bool:
     """Does every point lie on a free cell of ``labels``? (No points: nothing to say, no.)"""
     if not len(xy):
         return False
-    col = np.floor((xy[:, 0] - origin[0]) / resolution).astype(int)
-    row = labels.shape[0] - 1 - np.floor((xy[:, 1] - origin[1]) / resolution).astype(int)
-    inside = (row >= 0) & (row < labels.shape[0]) & (col >= 0) & (col < labels.shape[1])
+    row, col, inside = _cells_of(xy, labels.shape, resolution, origin)
     return bool(inside.all() and (labels[row, col] > 0).all())
+
+
+def _cells_of(
+    xy: np.ndarray, shape: tuple[int, ...], resolution: float, origin: tuple[float, float]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The (row, col) of the cells holding the points ``xy`` (N, 2) m, row 0 the top, and which lie
+    on the map (the inverse of :func:`_xy`)."""
+    col = np.floor((xy[:, 0] - origin[0]) / resolution).astype(int)
+    row = shape[0] - 1 - np.floor((xy[:, 1] - origin[1]) / resolution).astype(int)
+    inside = (row >= 0) & (row < shape[0]) & (col >= 0) & (col < shape[1])
+    return row, col, inside
 
 
 def _xy(

@@ -19,7 +19,7 @@ import numpy as np
 
 from bimtools.site.load import StoreyModel
 from initcli.core.classes import ClassMap
-from initcli.core.region_twins import IDENTITY_M, RegionTwin, region_twins
+from initcli.core.region_twins import IDENTITY_M, RegionTwin, moved, region_twins
 from initcli.core.symmetry import Turn
 from initcli.core.verification_settings import VerificationParams
 from initcli.core.visibility import CameraModel, FeatureArrays, visible
@@ -258,11 +258,6 @@ def shut_in_rooms(circulation: Circulation, clearance: float) -> tuple[list[Shut
     return rooms, cells
 
 
-def _moved(twin: RegionTwin, x: float, y: float) -> float:
-    tx, ty = twin.motion.apply(np.array([x, y]))
-    return math.hypot(float(tx) - x, float(ty) - y)
-
-
 def _farthest_from_fixed_point(
     circulation: Circulation, mask: np.ndarray, twin: RegionTwin
 ) -> tuple[float, float]:
@@ -271,7 +266,7 @@ def _farthest_from_fixed_point(
     rows, cols = np.nonzero(mask)
     x, y = circulation.grid.cell_centre(rows, cols)
     xy = np.column_stack([x, y])
-    k = int(np.argmax(np.hypot(*(twin.motion.apply(xy) - xy).T)))
+    k = int(np.argmax(moved(twin.motion, xy)))
     return round(float(xy[k, 0]), 2), round(float(xy[k, 1]), 2)
 
 
@@ -284,7 +279,7 @@ def lidar_twin_spaces(
     keep, cells = _standing(circulation, clearance, np.ones(circulation.label.shape, dtype=bool))
     regions = circulation.regions
     if regions is None or not len(keep):
-        return [], cells & False
+        return [], cells  # no space where a robot can stand: an empty mask
     grid = circulation.grid
     twins = region_twins(regions, grid.resolution, (grid.origin[0], grid.origin[1]), keep, tolerance)
     out: list[LidarTwin] = []
@@ -292,12 +287,12 @@ def lidar_twin_spaces(
     for twin in twins:
         space = cells & (regions == twin.label)
         x, y = _nearest_centroid(circulation, space)
-        if _moved(twin, x, y) < IDENTITY_M:
+        if moved(twin.motion, np.array([x, y]))[0] < IDENTITY_M:
             x, y = _farthest_from_fixed_point(circulation, space, twin)  # the centre of a half turn
         tx, ty = twin.motion.apply(np.array([x, y]))
         start = bool((space & circulation.label).any())
         area = round(float(space.sum() * grid.resolution**2), 1)
-        turn = 180.0 if twin.turn_deg <= -179.95 else round(twin.turn_deg, 1) + 0.0  # not -0.0
+        turn = round(twin.turn_deg, 1) + 0.0  # round(-0.04) is -0.0
         out.append(LidarTwin(x, y, area, round(float(tx), 2), round(float(ty), 2), turn, start))
         mask |= space
     return out, mask
