@@ -2,9 +2,10 @@
 
 :func:`algorithm1` follows the published pseudocode line by line (loops over all of B, Eq. 5-9
 evaluated with ``math``), with the angle difference wrapped as documented in
-:func:`initcli.core.pattern.angle_difference`. :func:`algorithm1_with_outliers` applies it to every
+:func:`initcli.core.hypotheses.pattern.angle_difference`. :func:`algorithm1_with_outliers` applies it to every
 subsequence of S that leaves out at most ``max_outliers`` features -- the definition of outlier
-tolerance in :mod:`initcli.core.matching`. ``tests/initcli/core/test_matching.py`` checks the
+tolerance in :mod:`initcli.core.hypotheses.matching`.
+``tests/initcli/core/hypotheses/test_matching.py`` checks the
 indexed matcher against both; ``benchmarks/bench_match.py`` reports the speed ratio.
 """
 
@@ -14,7 +15,7 @@ import itertools
 import math
 from collections.abc import Sequence
 
-from initcli.core.matching import OUTLIER
+from initcli.core.hypotheses.matching import OUTLIER
 
 __all__ = ["algorithm1", "algorithm1_with_outliers"]
 

@@ -14,8 +14,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from initcli.core.geometry import Pose2D
-from initcli.core.projection import CameraIntrinsics, CameraMount, box_for_point, odom_to_pixel
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount, box_for_point, odom_to_pixel
+from initcli.core.geometry.se2 import Pose2D
 from initcli.io.detection_log import Scan
 from initcli.ros.bag_writer import (
     BagMessage,

@@ -74,12 +74,12 @@ def _stats(claims: Any, frame: Any, hypothesis: Any, rival: bool) -> dict[str, A
 
 def _session_decisions(job: tuple[str, str, float, int, str]) -> list[dict[str, Any]]:
     from initcli.config import load_config
-    from initcli.core.verification import TRACK_HYPOTHESES, trails
+    from initcli.config.building import prepare_site
+    from initcli.core.verify.checks import TRACK_HYPOTHESES, trails
     from initcli.eval.sweep import apply_sweep, parse_sweep
     from initcli.session import runner
     from initcli.session.claims import ClaimChecks
     from initcli.session.simulated import sim_session
-    from initcli.site import prepare_site
 
     name, key, value, seed, work = job
     config = load_config(SAMPLES / f"{name}.site.yaml", "construction")
@@ -185,7 +185,7 @@ def _track_pairs(decisions: list[dict[str, Any]]) -> dict[tuple[bool, bool], lis
     or not), with B's path fitted both from where its recent scans fit best and searched wide (as
     the session compares them; a B with outrank_outliers more outliers than A needs only the
     trailing lead)."""
-    from initcli.core.verification import VerificationParams, track_outranks, trails
+    from initcli.core.verify.checks import VerificationParams, track_outranks, trails
 
     params = VerificationParams()
     pairs: dict[tuple[bool, bool], list[TrackPair]] = collections.defaultdict(list)
@@ -303,7 +303,7 @@ def _print_tracks(decisions: list[dict]) -> None:
 
 def _print_pairs(decisions: list[dict]) -> None:
     """Pairs of hypotheses compared by the lidar along the path, and how often A outranks B."""
-    from initcli.core.verification import VerificationParams
+    from initcli.core.verify.checks import VerificationParams
 
     params = VerificationParams()
     print("\npairs of hypotheses compared by the lidar along the path (A passing the recent checks, B a")

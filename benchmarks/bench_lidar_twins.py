@@ -38,9 +38,9 @@ REAL_RUN = (SAMPLES / "eval_real.yaml", RECORDS / "start0_real_camera_off_ideal"
 def twin_masks(eval_config: Path, names: set[str], workdir: Path) -> dict[str, Any]:
     """Per eval site name: (the storey's survey plan) for the sites ``names`` of ``eval_config``."""
     from initcli.config import load_config
+    from initcli.config.building import choose_storey, prepare_site
     from initcli.eval.config import load_eval_config
     from initcli.match.pipeline import site_class_map
-    from initcli.site import choose_storey, prepare_site
     from initcli.survey.survey import SurveyParams, plan_storey
 
     plans: dict[str, Any] = {}

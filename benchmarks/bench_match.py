@@ -38,8 +38,8 @@ from _common import SAMPLES, parse_args  # noqa: E402
 from _oracle import algorithm1, algorithm1_with_outliers  # noqa: E402
 
 from bimtools.site.load import Site, load_site  # noqa: E402
-from initcli.core.geometry import Pose2D  # noqa: E402
-from initcli.core.matching import BimIndex, Matcher  # noqa: E402
+from initcli.core.geometry.se2 import Pose2D  # noqa: E402
+from initcli.core.hypotheses.matching import BimIndex, Matcher  # noqa: E402
 from initcli.io.detection_log import read_log, write_log  # noqa: E402
 from initcli.match.pipeline import MatchOptions, match_log, site_class_map  # noqa: E402
 from initcli.sim.synthetic_floor import SyntheticFloor, doors_along, make_floor, write_site_folder  # noqa: E402
@@ -261,7 +261,7 @@ def sample_logs(site: Site, n: int, seed: int, tmp: Path, phantom: bool = False)
 
 def _has_phantom(record, ghost: SimFeature, log) -> bool:
     """Does this detections record hold a box of the phantom (its centre maps onto the phantom)?"""
-    from initcli.core.projection import detections_to_odom
+    from initcli.core.geometry.projection import detections_to_odom
 
     meta = log.records[0]
     boxes = np.array([o.bbox for o in record.objects])

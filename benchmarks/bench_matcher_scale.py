@@ -43,9 +43,9 @@ import numpy as np  # noqa: E402
 from _common import parse_args  # noqa: E402  (benchmarks/ is the script's folder)
 from bench_match import pin_one_core  # noqa: E402
 
-from initcli.core.classes import ClassMap  # noqa: E402
-from initcli.core.geometry import Pose2D  # noqa: E402
-from initcli.core.matching import BimIndex, Matcher, MatchState  # noqa: E402
+from initcli.core.features.classes import ClassMap  # noqa: E402
+from initcli.core.geometry.se2 import Pose2D  # noqa: E402
+from initcli.core.hypotheses.matching import BimIndex, Matcher, MatchState  # noqa: E402
 from initcli.match.pipeline import MatchOptions  # noqa: E402
 
 GOALS_MS = {1_000: 1.0, 10_000: 10.0}  # median ms per update

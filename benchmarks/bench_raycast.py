@@ -1,6 +1,6 @@
 """Benchmark of the simulated lidar: ms per 360-beam scan (20 m) on each sample storey.
 
-"before" is the brute force kept as :func:`initcli.core.raycast.ray_segment_distances` (every ray
+"before" is the brute force kept as :func:`initcli.core.geometry.raycast.ray_segment_distances` (every ray
 against every static segment the grid index returns within range, plus the workers), as
 ``SimWorld.raycast`` did it; "after" is ``SimWorld.raycast`` now (:func:`cast_rays`). Scans are cast
 from random free cells of the storey's occupancy map at random headings; the two answers are
@@ -23,11 +23,11 @@ from _common import SAMPLES, parse_args
 
 from bimtools.site.records import FREE
 from initcli.config import load_config
-from initcli.core.raycast import ray_segment_distances
+from initcli.config.building import choose_storey, prepare_site
+from initcli.core.geometry.raycast import ray_segment_distances
 from initcli.sim.build import build_sim
 from initcli.sim.driver import LidarSpec
 from initcli.sim.world import SimWorld
-from initcli.site import choose_storey, prepare_site
 
 STOREYS = ("ntu_hallway", "block_a", "block_b")
 

@@ -30,8 +30,8 @@ PAPER_DISTANCE = {"ntu_hallway": 44.88, "block_a": 14.81, "block_b": 16.61}
 def one_session(args: tuple[str, int, str]) -> dict:
     name, seed, workdir = args
     from initcli.config import load_config
+    from initcli.config.building import prepare_site
     from initcli.session.simulated import sim_session
-    from initcli.site import prepare_site
 
     config = load_config(SAMPLES / f"{name}.site.yaml")
     site = prepare_site(config, Path(workdir) / name)
@@ -55,8 +55,8 @@ def one_session(args: tuple[str, int, str]) -> dict:
 
 def bench_particle_filter(repeats: int = 50) -> float:
     from bimtools.extract.pipeline import extract_site
-    from initcli.core.geometry import Pose2D
-    from initcli.core.particle_filter import FilterNoise, LaserModel, LikelihoodField, ParticleFilter
+    from initcli.core.filters.particle_filter import FilterNoise, LaserModel, LikelihoodField, ParticleFilter
+    from initcli.core.geometry.se2 import Pose2D
 
     site = extract_site(SAMPLES / "block_a.ifc")
     grid = site.storeys[0].grid

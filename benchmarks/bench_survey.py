@@ -30,10 +30,10 @@ EVAL_MEDIAN = {"ntu_hallway": 28.0, "block_a": 3.2, "block_b": 4.3}
 def main() -> None:
     from initcli.cli.survey import survey_params
     from initcli.config import load_config
+    from initcli.config.building import choose_storey, prepare_site
     from initcli.eval.trial import trial_seed
     from initcli.executor import LocalExecutor
     from initcli.sim.build import build_sim
-    from initcli.site import choose_storey, prepare_site
     from initcli.survey.survey import (
         plan_storey,
         sample_views,

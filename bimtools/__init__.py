@@ -2,7 +2,7 @@
 
 Data flows IFC -> :mod:`bimtools.ifc` (model access) -> :mod:`bimtools.extract`
 (features, wall sections, occupancy) -> :mod:`bimtools.site` (typed records and their
-file formats). :mod:`bimtools.preview` draws a storey, :mod:`bimtools.cli` is the command face and
+file formats). :mod:`bimtools.extract.preview` draws a storey, :mod:`bimtools.cli` is the command face and
 :mod:`bimtools.samples` writes the sample models. What both commands share (errors, input checks,
 atomic outputs, the JSON Schemas) is in :mod:`bimkit`; the robot-side pipeline lives in
 :mod:`initcli`.

@@ -17,7 +17,7 @@ from bimkit.cli import number_option
 from bimkit.errors import EXIT_BAD_INPUT, InputError
 from bimkit.outputs import OutputFolder, check_outputs
 from bimtools import __version__
-from bimtools.extract.settings import (
+from bimtools.settings import (
     DEFAULT_RESOLUTION,
     DEFAULT_SECTION_HEIGHT,
     RESOLUTION_RANGE,

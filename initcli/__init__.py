@@ -15,7 +15,7 @@ Layout (like the ``evo`` tool):
 - :mod:`initcli.baselines` -- the methods the paper compares against (markers, AMCL).
 - :mod:`initcli.eval` -- ``bim-init eval``: the paper's Tables 2 and 3.
 - :mod:`initcli.survey` -- ``bim-init survey``: where on a floor a robot can initialise.
-- :mod:`initcli.config` (the session config), :mod:`initcli.site` (the site model a config names),
+- :mod:`initcli.config` (the session config), :mod:`initcli.config.building` (the site model a config names),
   :mod:`initcli.executor` (process pool or Ray cluster).
 - :mod:`initcli.cli` -- the thin command faces; :mod:`initcli.cli.main` is the typer app behind the
   ``bim-init`` console script.

@@ -36,11 +36,11 @@ def replayed_claim(log_path: Path, site_dir: Path, report: MatchReport) -> Hypot
     import copy
 
     from bimtools.site.load import load_site
-    from initcli.core.registration_settings import RegistrationParams
+    from initcli.core.lidar.registration_params import RegistrationParams
     from initcli.io.detection_log import read_log
     from initcli.match.pipeline import site_class_map
-    from initcli.match.registration import DECIDED_BY_REGISTRATION, replay_registration
-    from initcli.match.verify import verify_and_favour
+    from initcli.verify.evidence import verify_and_favour
+    from initcli.verify.registration import DECIDED_BY_REGISTRATION, replay_registration
 
     if report.verdict == "unique match":
         return report.hypotheses[0]

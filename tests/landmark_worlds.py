@@ -15,8 +15,8 @@ from shapely.geometry.base import BaseGeometry
 from bimtools.extract.floorplan import FloorPlan, ObstacleShape, build_floorplan
 from bimtools.extract.landmarks import wall_landmarks
 from bimtools.extract.section import polygons_of
-from bimtools.extract.settings import LandmarkSettings
-from initcli.core.raycast import cast_rays
+from bimtools.settings import LandmarkSettings
+from initcli.core.geometry.raycast import cast_rays
 
 WALL = 0.2  # m: wall thickness of the worlds
 BEAMS = 360

@@ -330,7 +330,7 @@ def test_api_pages_follow_the_packages_pyproject_includes(tmp_path):
 
 def test_api_pages_cover_this_repository():
     modules = docgen.package_modules(ROOT)
-    assert "initcli.core.matching" in modules and "bimtools.extract.features" in modules
+    assert "initcli.core.hypotheses.matching" in modules and "bimtools.extract.features" in modules
     assert not any(m.startswith("tests") for m in modules)
 
 

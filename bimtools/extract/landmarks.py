@@ -4,7 +4,7 @@ corners and openings at the section height, as rows of features.csv.
 Fed from the wall surfaces the extractor already computes (:mod:`bimtools.extract.floorplan`:
 the boundary of the storey's solid at the cut, straight pieces with the solid on their left and
 the normal into free space on their right; the rows of walls.geojson). The rules, with the
-numbers of :class:`bimtools.extract.settings.LandmarkSettings`:
+numbers of :class:`bimtools.settings.LandmarkSettings`:
 
 - *Rings*: the pieces chain end to start into the closed outlines of the solid. Consecutive pieces
   within ``LEG_COLLINEAR`` of one direction join into a *leg* (two walls butting in one line are
@@ -42,7 +42,7 @@ import numpy as np
 import shapely
 from scipy.spatial import cKDTree
 
-from bimtools.extract.settings import LandmarkSettings
+from bimtools.settings import LandmarkSettings
 from bimtools.site.records import LANDMARK_CATEGORIES, Feature, WallSegment
 
 LEG_COLLINEAR = math.radians(2.0)  # pieces turning less than this continue one leg

@@ -7,7 +7,7 @@ from pathlib import Path
 from bimkit.atomic import staged_directory
 from bimtools import __version__
 from bimtools.extract.pipeline import ExtractedSite
-from bimtools.preview import render_preview
+from bimtools.extract.preview import render_preview
 from bimtools.site.features_csv import write_features
 from bimtools.site.manifest import SiteManifest, format_manifest
 from bimtools.site.occupancy_map import write_map

@@ -28,7 +28,12 @@ from bimtools.extract.landmarks import region_probe, storey_landmarks
 from bimtools.extract.occupancy import rasterise
 from bimtools.extract.placement import opening_in_plan
 from bimtools.extract.section import polygons_of, projected_footprint, section_polygon
-from bimtools.extract.settings import (
+from bimtools.ifc.categories import CategorySet, load_categories
+from bimtools.ifc.geometry import Mesh, ProgressCallback, iterate_meshes
+from bimtools.ifc.model import ModelInfo, describe_model, open_model
+from bimtools.ifc.storeys import Storey, container_storey, list_storeys, storey_at_elevation
+from bimtools.ifc.text import element_name
+from bimtools.settings import (
     DEFAULT_RESOLUTION,
     DEFAULT_SECTION_HEIGHT,
     MAX_STOREY_ELEVATION,
@@ -36,11 +41,6 @@ from bimtools.extract.settings import (
     SECTION_HEIGHT_RANGE,
     LandmarkSettings,
 )
-from bimtools.ifc.categories import CategorySet, load_categories
-from bimtools.ifc.geometry import Mesh, ProgressCallback, iterate_meshes
-from bimtools.ifc.model import ModelInfo, describe_model, open_model
-from bimtools.ifc.storeys import Storey, container_storey, list_storeys, storey_at_elevation
-from bimtools.ifc.text import element_name
 from bimtools.site.records import Feature, OccupancyGrid, camera_features
 
 __all__ = [

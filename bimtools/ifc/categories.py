@@ -14,8 +14,8 @@ import ifcopenshell
 
 from bimkit.checks import range_problem, read_yaml
 from bimkit.errors import InputError
-from bimtools.extract.settings import LandmarkSettings, parse_landmarks
 from bimtools.ifc.text import element_text, predefined_type
+from bimtools.settings import LandmarkSettings, parse_landmarks
 from bimtools.site.records import LANDMARK_CATEGORIES
 
 __all__ = [

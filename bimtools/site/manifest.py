@@ -9,7 +9,7 @@ from typing import Any
 
 from bimkit.checks import read_json
 from bimkit.errors import InputError
-from bimtools.extract.settings import LandmarkSettings, parse_landmarks
+from bimtools.settings import LandmarkSettings, parse_landmarks
 from bimtools.site.records import StoreyInfo
 
 __all__ = ["SITE_FORMAT", "SiteManifest", "format_manifest", "read_manifest"]
@@ -32,7 +32,7 @@ class SiteManifest:
     tool_version: str = ""
     format: str = SITE_FORMAT
     # the rules the lidar landmarks of features.csv were extracted by (None: no landmarks), so
-    # that a scan is read by the same rules (initcli.core.scan_landmarks.ScanLandmarkParams.from_rules)
+    # that a scan is read by the same rules (initcli.core.lidar.scan_landmarks.ScanLandmarkParams.from_rules)
     landmarks: LandmarkSettings | None = None
 
     def to_dict(self) -> dict[str, Any]:

@@ -20,9 +20,9 @@ from bimtools.site.load import Site
 from initcli.baselines.drive import drive_attempts, limit_passed
 from initcli.baselines.outcome import LocalisationOutcome
 from initcli.config import SessionConfig
-from initcli.core.geometry import Pose2D
-from initcli.core.global_localisation import GlobalLocalisation, GlobalLocalisationParams
-from initcli.core.motion import motion_delta
+from initcli.core.filters.global_localisation import GlobalLocalisation, GlobalLocalisationParams
+from initcli.core.geometry.motion import motion_delta
+from initcli.core.geometry.se2 import Pose2D
 from initcli.drivers.base import SensorFrame
 from initcli.sim.build import SimSetup
 

@@ -24,9 +24,9 @@ from typing import Protocol
 
 from initcli.baselines.outcome import LocalisationOutcome
 from initcli.config import SessionConfig, followed_side, turn_in_place_speed, wall_follow_params
-from initcli.core.bug_navigation import BugNavigator, cross_floor
-from initcli.core.geometry import wrap_angle
-from initcli.core.wall_following import MovingObstacleWait, ScanView, open_beside, wall_follow
+from initcli.core.geometry.se2 import wrap_angle
+from initcli.core.navigation.bug_navigation import BugNavigator, cross_floor
+from initcli.core.navigation.wall_following import MovingObstacleWait, ScanView, open_beside, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
 
 __all__ = ["BaselineAttempt", "WallFollowingExplorer", "drive_attempts", "limit_passed"]

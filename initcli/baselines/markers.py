@@ -16,8 +16,8 @@ from bimtools.site.load import Site
 from initcli.baselines.drive import drive_attempts, limit_passed
 from initcli.baselines.outcome import LocalisationOutcome
 from initcli.config import SessionConfig, camera_of
-from initcli.core.geometry import Pose2D
-from initcli.core.marker_pose import robot_pose_from_marker
+from initcli.core.features.marker_pose import robot_pose_from_marker
+from initcli.core.geometry.se2 import Pose2D
 from initcli.drivers.base import SensorFrame
 from initcli.sim.build import SimSetup
 from initcli.sim.markers import Marker, MarkerDetector, MarkerParams, place_markers

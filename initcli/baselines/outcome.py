@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from initcli.core.geometry import Pose2D
+from initcli.core.geometry.se2 import Pose2D
 
 __all__ = ["LocalisationOutcome"]
 

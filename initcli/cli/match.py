@@ -22,6 +22,7 @@ from rich.table import Table
 from bimkit.cli import error_line
 from bimkit.errors import InputError
 from bimkit.outputs import OutputFile, check_outputs
+from bimkit.settings import describe, settings_of
 from initcli.cli import PROG
 from initcli.cli.bag_options import (
     BaseFrame,
@@ -37,14 +38,13 @@ from initcli.cli.bag_options import (
     bag_options,
 )
 from initcli.cli.progress import message_progress
-from initcli.core.geometry import Pose2D
-from initcli.core.registration_settings import RegistrationParams
-from initcli.core.verification import TRACK_HYPOTHESES, Verification
+from initcli.core.geometry.se2 import Pose2D
+from initcli.core.lidar.registration_params import RegistrationParams
+from initcli.core.verify.checks import TRACK_HYPOTHESES, Verification
 from initcli.match.pipeline import EXIT_BAD_INPUT, MatchOptions, MatchReport, run_match
-from initcli.match.registration import check_and_register
 from initcli.match.report_file import report_to_dict
 from initcli.ros.convert import log_or_bag
-from initcli.settings import describe, settings_of
+from initcli.verify.registration import check_and_register
 
 __all__ = ["match", "print_report"]
 

@@ -22,9 +22,9 @@ from bimkit.errors import InputError
 from bimkit.outputs import OutputFile, OutputFolder, check_outputs
 from initcli.cli import PROG
 from initcli.config import load_config
-from initcli.core.geometry import Pose2D
+from initcli.config.building import input_paths
+from initcli.core.geometry.se2 import Pose2D
 from initcli.session.simulated import RUN_MARKERS, RUN_WRITES, run_simulated
-from initcli.site import input_paths
 
 __all__ = ["EXIT_FAILED", "LiveView", "RUN_MARKERS", "SEED_MAX", "parse_start", "result_table", "run"]
 

@@ -19,7 +19,7 @@ from bimkit.outputs import OutputFolder, check_outputs
 from bimtools.site.load import load_site
 from initcli.cli import PROG
 from initcli.config import SessionConfig, camera_of, followed_side, load_config
-from initcli.core.visibility import CameraModel
+from initcli.core.features.visibility import CameraModel
 from initcli.executor import Executor, make_executor
 from initcli.match.pipeline import site_class_map
 from initcli.survey.survey import (

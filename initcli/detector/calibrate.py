@@ -23,7 +23,7 @@ import numpy as np
 
 from bimkit.documents import file_sha256
 from bimkit.errors import InputError
-from initcli.core.classes import ClassMap
+from initcli.core.features.classes import ClassMap
 from initcli.detector import DETECTOR_CONFIDENCE
 from initcli.detector.layouts import iou_matrix
 from initcli.detector.profile import ALL, DetectorProfile, RecallTable

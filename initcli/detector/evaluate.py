@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from bimkit.errors import InputError
-from initcli.core.classes import ClassMap
+from initcli.core.features.classes import ClassMap
 from initcli.detector import DETECTOR_CONFIDENCE
 from initcli.detector.datasets import load_dataset
 from initcli.detector.metrics import MetricAccumulator, Metrics

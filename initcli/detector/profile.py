@@ -22,7 +22,7 @@ import numpy as np
 from bimkit.atomic import write_text_atomic
 from bimkit.documents import read_json
 from bimkit.errors import InputError
-from bimkit.schemas import schema_path
+from bimkit.schemas import schema_path, validate_document
 from initcli.detector import MODELS_DIR
 
 __all__ = [
@@ -211,8 +211,6 @@ def resolve_profile(name: str, base: Path | None = None) -> Path:
 
 def read_profile(path: Path) -> DetectorProfile:
     """The profile at ``path``; a missing, unreadable or malformed file is one :class:`InputError`."""
-    from initcli.config import validate_document  # the config's validator (names the JSON path)
-
     path = Path(path)
     if not path.exists():
         raise InputError(f"{path}: no such detector profile (bim-init detector calibrate writes one)")

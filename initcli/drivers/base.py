@@ -7,8 +7,8 @@ from typing import Protocol
 
 import numpy as np
 
-from initcli.core.geometry import Pose2D
-from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.se2 import Pose2D
 from initcli.io.detection_log import DetectedObject
 
 __all__ = ["LaserScan", "RobotDriver", "SensorFrame"]

@@ -8,14 +8,14 @@ from pathlib import Path
 
 from bimtools.site.load import load_site
 from initcli.config import SessionConfig, load_config
-from initcli.core.geometry import Pose2D
+from initcli.config.building import choose_storey, input_paths, prepare_site, prepare_world
+from initcli.core.geometry.se2 import Pose2D
 from initcli.eval.config import EvalConfig, EvalSite
 from initcli.eval.records import TrialKey, TrialRecord
 from initcli.eval.sweep import Sweep, sweep_label
 from initcli.eval.trial import TrialJob, run_trial, trial_seed
 from initcli.executor import Executor, LocalExecutor, map_unordered
 from initcli.sim.build import check_start
-from initcli.site import choose_storey, input_paths, prepare_site, prepare_world
 
 __all__ = ["PreparedSite", "check_start_poses", "plan_jobs", "prepare_sites", "run_jobs", "site_configs"]
 

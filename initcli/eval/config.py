@@ -12,9 +12,9 @@ from pathlib import Path
 from typing import Any
 
 from bimkit.errors import InputError
-from bimkit.schemas import schema_path
-from initcli.config import read_yaml, validate_document
-from initcli.core.global_localisation import GlobalLocalisationParams
+from bimkit.schemas import schema_path, validate_document
+from initcli.config import read_yaml
+from initcli.core.filters.global_localisation import GlobalLocalisationParams
 from initcli.eval.records import METHODS, FailureRule
 from initcli.sim.markers import MarkerParams
 

@@ -8,7 +8,7 @@ from collections.abc import Iterable
 import numpy as np
 
 from initcli.baselines.outcome import LocalisationOutcome
-from initcli.core.geometry import wrap_angle
+from initcli.core.geometry.se2 import wrap_angle
 from initcli.eval.records import FailureRule, MethodSummary, TrialRecord
 
 __all__ = ["judge", "pose_errors", "score", "summarise"]

@@ -13,7 +13,7 @@ from bimkit.checks import check_number
 from bimkit.errors import InputError
 from initcli.config import SCHEMA_PATH as SITE_SCHEMA
 from initcli.config import SessionConfig
-from initcli.config_checks import problems
+from initcli.config.checks import problems
 
 __all__ = ["SWEEP_KEYS", "Sweep", "apply_sweep", "check_sweep", "format_value", "parse_sweep", "sweep_label"]
 
@@ -158,7 +158,7 @@ def apply_sweep(config: SessionConfig, sweep: Sweep, value: float) -> SessionCon
 
 
 def check_sweep(sweep: Sweep, configs: Iterable[SessionConfig]) -> None:
-    """Every swept value passes the site config's cross-field checks (:mod:`initcli.config_checks`)
+    """Every swept value passes the site config's cross-field checks (:mod:`initcli.config.checks`)
     on every site: ``matching.min_depth`` swept above ``matching.max_depth``, ``miss_rate`` swept in
     a config that has a detector profile, ... are refused before any trial runs."""
     for config in configs:

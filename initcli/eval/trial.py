@@ -22,7 +22,8 @@ from bimtools.site.load import Site, load_site
 from initcli.baselines.drive import BaselineAttempt, drive_attempts
 from initcli.baselines.outcome import LocalisationOutcome
 from initcli.config import SessionConfig, load_config
-from initcli.core.geometry import Pose2D
+from initcli.config.building import choose_storey
+from initcli.core.geometry.se2 import Pose2D
 from initcli.eval.records import FailureRule, TrialRecord
 from initcli.eval.scoring import score
 from initcli.eval.sweep import Sweep, apply_sweep, sweep_label
@@ -30,7 +31,6 @@ from initcli.session.result import CANNOT_LEAVE, SessionResult
 from initcli.session.simulated import sim_session
 from initcli.sim.build import SimSetup, build_sim
 from initcli.sim.scenario import NoFreeSpace
-from initcli.site import choose_storey
 
 __all__ = ["TrialJob", "run_trial", "session_outcomes", "trial_seed"]
 
@@ -183,7 +183,7 @@ def _run_trial(job: TrialJob) -> list[TrialRecord]:
         setup = baseline_sim()
         if "amcl" in job.methods:
             from initcli.baselines.amcl import AmclAttempt
-            from initcli.core.global_localisation import GlobalLocalisationParams
+            from initcli.core.filters.global_localisation import GlobalLocalisationParams
 
             params = dataclasses.replace(GlobalLocalisationParams(), **dict(job.amcl))
             attempts.append(AmclAttempt(config, site, setup, np.random.default_rng(job.seed + 1), params))

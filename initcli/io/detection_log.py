@@ -11,7 +11,7 @@ Schema: ``schemas/detection_log.schema.json`` (one line = one instance). Records
   (2n+1)x(2n+1) window at the box centre).
 - ``feature`` (optional): an already aggregated feature in the odom frame; ``source`` says which
   sensor found it: ``camera`` (the default: a log without the field is a camera log) or ``lidar``
-  (a wall corner, column corner or opening, see :mod:`initcli.core.landmark_tracks`).
+  (a wall corner, column corner or opening, see :mod:`initcli.core.lidar.landmark_tracks`).
 - ``scan`` (optional), ``truth`` (optional, simulation only: true pose in the BIM frame).
 - ``state``, ``hypotheses`` (optional, written by ``bim-init run``): kept as plain data.
 
@@ -34,9 +34,9 @@ from bimkit.documents import check_finite_tree, parse_json, read_bytes
 from bimkit.errors import InputError
 from bimkit.limits import MAX_LOG_BYTES, MAX_LOG_LINE_BYTES, show_bytes
 from bimtools.site.records import CAMERA, LIDAR, SENSORS
-from initcli.core.geometry import Pose2D
-from initcli.core.landmark_tracks import LidarLandmark
-from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.se2 import Pose2D
+from initcli.core.lidar.landmark_tracks import LidarLandmark
 from initcli.io.log_records import (
     LOG_VERSION,
     RECORD_TYPES,

@@ -8,8 +8,8 @@ from pathlib import Path
 from typing import Any, Union
 
 from bimtools.site.records import CAMERA
-from initcli.core.geometry import Pose2D
-from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.se2 import Pose2D
 
 __all__ = [
     "DetectedObject",

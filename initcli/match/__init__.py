@@ -4,6 +4,6 @@
 Algorithm 1) on a :class:`~initcli.io.detection_log.DetectionLog` and a site model; ``bim-init
 match`` and the online session both call it. :mod:`initcli.match.sightings` turns the log's images
 into sightings (Eq. 1-2), for the pipeline and, image by image, for the session;
-:mod:`initcli.match.verify` checks the hypotheses against the log (negative evidence, the lidar);
+:mod:`initcli.verify.evidence` checks the hypotheses against the log (negative evidence, the lidar);
 :mod:`initcli.match.report_file` writes the result as JSON (``match_result.schema.json``).
 """

@@ -3,7 +3,7 @@
 A log's landmarks are its ``feature`` records with ``source: lidar`` (the online session writes each
 one when its track is confirmed); a log with scans but no such records (a bag, a log written before
 landmarks were on) has them found in its scans by the same tracker the session runs
-(:class:`initcli.core.landmark_tracks.LandmarkTracker`, the scans in log order, each at the odom pose
+(:class:`initcli.core.lidar.landmark_tracks.LandmarkTracker`, the scans in log order, each at the odom pose
 of the latest odom record), so a session's log replays to the same landmarks either way. The rules
 are the site's (site.json records the ``landmarks:`` block bim-extract applied); a site without
 landmark rows has no landmarks matched, and a log's lidar records are then left out with a note.
@@ -22,10 +22,10 @@ import numpy as np
 
 from bimtools.site.load import Site
 from bimtools.site.records import LIDAR
-from initcli.core.classes import ClassMap
-from initcli.core.detection_filter import ConfirmedFeature
-from initcli.core.landmark_tracks import LandmarkTracker, ScanInput
-from initcli.core.scan_landmarks import ScanLandmarkParams
+from initcli.core.features.classes import ClassMap
+from initcli.core.features.detection_filter import ConfirmedFeature
+from initcli.core.lidar.landmark_tracks import LandmarkTracker, ScanInput
+from initcli.core.lidar.scan_landmarks import ScanLandmarkParams
 from initcli.io.detection_log import DetectionLog, FeatureRecord, Odom, Scan
 
 __all__ = [

@@ -24,16 +24,19 @@ from bimkit.checks import read_yaml
 from bimkit.errors import InputError
 from bimtools.site.load import Site, StoreyModel, load_site
 from bimtools.site.records import LIDAR
-from initcli.core.classes import ClassMap
-from initcli.core.detection_filter import (
+from initcli.config.matching import MatchOptions
+from initcli.core.features.classes import ClassMap
+from initcli.core.features.detection_filter import (
     ConfirmedFeature,
     GivenFeature,
     Sighting,
     filter_detections,
     within_drift_window,
 )
-from initcli.core.geometry import Pose2D, wrap_angle
-from initcli.core.hypotheses import (
+from initcli.core.geometry.se2 import Pose2D, wrap_angle
+from initcli.core.hypotheses.matching import OUTLIER, BimIndex, Matcher, MatchOverflow, MatchParams
+from initcli.core.hypotheses.pose import estimate_pose, rigid_align_batch
+from initcli.core.hypotheses.ranking import (
     confidences,
     distinct_places,
     drop_dominated,
@@ -42,12 +45,9 @@ from initcli.core.hypotheses import (
     rank_order,
     verdict_text,
 )
-from initcli.core.matching import OUTLIER, BimIndex, Matcher, MatchOverflow, MatchParams
-from initcli.core.pose import estimate_pose, rigid_align_batch
-from initcli.core.rectify import WallArray, rectify_pose
+from initcli.core.hypotheses.rectify import WallArray, rectify_pose
 from initcli.io.detection_log import DetectionLog, FeatureRecord, read_log
 from initcli.match.landmarks import combined_sequence, log_landmarks, recent_landmarks, travel_at
-from initcli.match.options import MatchOptions
 from initcli.match.sightings import sightings_from_log
 
 __all__ = [
@@ -128,9 +128,10 @@ class MatchReport:
     outliers_allowed: int = 0  # the outlier budget the hypotheses were found with (grown: outlier_share)
     overflow: bool = False  # matching stopped at the partial-match cap (far too ambiguous)
     decided_by: str | None = None  # what made the verdict unique: DECIDED_BY_PAPER, DECIDED_BY_LIDAR, or
-    # initcli.match.registration's DECIDED_BY_REGISTRATION
+    # initcli.verify.registration's DECIDED_BY_REGISTRATION
     paper_verdict: str | None = None  # Algorithm 1's own verdict where the lidar changed it
-    # the first unique lidar registration along the log that decided the verdict (initcli.match.registration):
+    # the first unique lidar registration along the log that decided the verdict
+    # (initcli.verify.registration):
     # its fit, its best distinct rival's fit and whether the camera's misses counted, as summary.json
     registration: dict[str, object] | None = None
     # every lidar landmark of the log, its records or those found in its scans (the verification's

@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from initcli.core.geometry import Pose2D
+from initcli.core.geometry.se2 import Pose2D
 from initcli.match.pipeline import MatchReport
 
 __all__ = ["RESULT_FORMAT", "report_to_dict"]

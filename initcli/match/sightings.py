@@ -11,9 +11,9 @@ import math
 
 import numpy as np
 
-from initcli.core.classes import ClassMap
-from initcli.core.detection_filter import Sighting, is_truncated
-from initcli.core.projection import CameraIntrinsics, CameraMount, detections_to_odom
+from initcli.core.features.classes import ClassMap
+from initcli.core.features.detection_filter import Sighting, is_truncated
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount, detections_to_odom
 from initcli.io.detection_log import DetectionLog, Detections
 
 __all__ = ["image_sightings", "sightings_from_log"]

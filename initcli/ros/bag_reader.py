@@ -22,9 +22,9 @@ from typing import Any
 import numpy as np
 
 from bimkit.errors import InputError
-from initcli.core.depth import window_depth
-from initcli.core.geometry import Pose2D, wrap_angle
-from initcli.core.projection import CameraIntrinsics, CameraMount, mount_from_optical
+from initcli.core.geometry.depth import window_depth
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount, mount_from_optical
+from initcli.core.geometry.se2 import Pose2D, wrap_angle
 from initcli.io.detection_log import DetectedObject, Detections, Meta, Odom, Record, Scan
 from initcli.ros.bag_source import BagSource
 from initcli.ros.bag_topics import choose_topics

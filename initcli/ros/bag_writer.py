@@ -28,8 +28,8 @@ import numpy as np
 from bimkit.errors import InputError
 from bimtools.site.load import load_site
 from bimtools.site.records import OccupancyGrid
-from initcli.core.geometry import Pose2D
-from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.se2 import Pose2D
 from initcli.io.detection_log import DetectionLog, Detections, HypothesesRecord, Odom, Scan, State, read_log
 from initcli.ros.msgdefs import from_dict, ros1_typestore, ros2_typestore
 from initcli.ros.nav2 import (
@@ -247,7 +247,7 @@ def transform_stamped(
 
 def camera_tf(t: float, mount: CameraMount, base: str = BASE_FRAME) -> list[dict[str, Any]]:
     """base -> camera_link (the camera body: the log's camera_pose) -> optical frame (REP 103 axes)."""
-    from initcli.core.projection import R_BODY_OPTICAL
+    from initcli.core.geometry.projection import R_BODY_OPTICAL
 
     return [
         transform_stamped(t, base, CAMERA_FRAME, mount.translation, matrix_quaternion(mount.rotation())),

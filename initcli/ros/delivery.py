@@ -22,8 +22,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from initcli.core.geometry import Pose2D
-from initcli.core.motion import Alphas, carry_covariance
+from initcli.core.geometry.motion import Alphas, carry_covariance
+from initcli.core.geometry.se2 import Pose2D
 from initcli.ros.nav2 import covariance_6x6, initial_pose_message, state_message
 from initcli.ros.records import (
     INITIALPOSE_TOPIC,

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from bimkit.errors import InputError
-from initcli.core.projection import CameraIntrinsics, CameraMount, mount_from_optical
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount, mount_from_optical
 from initcli.ros.messages import checked_transform, intrinsics
 from initcli.ros.records import CAMERA_INFO, TF_MESSAGE
 from initcli.ros.rosbridge import RosbridgeLink

@@ -11,7 +11,7 @@ import numpy as np
 
 from bimkit.cli import native_stderr_silenced
 from bimkit.errors import InputError
-from initcli.core.projection import CameraIntrinsics
+from initcli.core.geometry.projection import CameraIntrinsics
 from initcli.ros.tf import msg_transform
 
 __all__ = ["checked_transform", "decode_depth", "decode_image", "finite", "intrinsics", "stamp_seconds"]

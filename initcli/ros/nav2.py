@@ -13,7 +13,7 @@ import numpy as np
 from bimkit.checks import check_number, read_json
 from bimkit.errors import InputError
 from bimkit.schemas import schema_path
-from initcli.core.geometry import Pose2D
+from initcli.core.geometry.se2 import Pose2D
 from initcli.io.detection_log import HypothesesRecord, read_log
 from initcli.ros.records import InitialPose
 from initcli.ros.tf import yaw_quaternion
@@ -134,7 +134,7 @@ SUMMARY_SCHEMA = schema_path("summary.schema.json")
 def read_summary(path: Path) -> dict[str, Any]:
     """A ``summary.json`` checked against ``summary.schema.json`` (``"success": "false"`` is not a
     boolean, a pose needs its numbers) and its covariance a covariance (no negative variance)."""
-    from initcli.config import validate_document  # jsonschema, with messages naming the key
+    from bimkit.schemas import validate_document  # jsonschema, with messages naming the key
 
     doc = read_json(Path(path), "a bim-init run summary (summary.json)")  # bounded, every number finite
     if not isinstance(doc, dict) or "success" not in doc:

@@ -27,9 +27,9 @@ from typing import Any
 import numpy as np
 
 from bimkit.errors import InputError
-from initcli.core.depth import window_depth
-from initcli.core.geometry import Pose2D
-from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.depth import window_depth
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.se2 import Pose2D
 from initcli.drivers.base import LaserScan, SensorFrame
 from initcli.io.detection_log import DetectedObject
 from initcli.ros.bag_reader import DEPTH_SYNC_S

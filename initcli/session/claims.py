@@ -2,12 +2,12 @@
 
 Enough matched features; no credible rival when more outliers are allowed and alpha is wider (an
 as-built site has doors the BIM lacks, and doors built off their place); negative evidence, the
-path through free space and the lidar's fit (:mod:`initcli.core.verification`); with several
+path through free space and the lidar's fit (:mod:`initcli.core.verify.checks`); with several
 hypotheses, the one the lidar along the path plainly favours; and at the end, the fine-tuned pose.
 Every check is written to the session's detection log and kept for ``summary.json``.
 
 The settings are the ``verification:`` section of the session config
-(:class:`initcli.settings_session.VerificationSection`, its ``rivals`` the rival search).
+(:class:`initcli.config.session.VerificationSection`, its ``rivals`` the rival search).
 """
 
 from __future__ import annotations
@@ -19,9 +19,10 @@ from collections.abc import Callable
 import numpy as np
 
 from bimtools.site.load import Site
-from initcli.core.geometry import Pose2D
-from initcli.core.registration import Candidate, Registration
-from initcli.core.verification import (
+from initcli.config.session import VerificationSection
+from initcli.core.geometry.se2 import Pose2D
+from initcli.core.lidar.registration import Candidate, Registration
+from initcli.core.verify.checks import (
     TRACK_HYPOTHESES,
     CameraView,
     Verification,
@@ -33,17 +34,16 @@ from initcli.core.verification import (
 )
 from initcli.drivers.base import SensorFrame
 from initcli.match.pipeline import Hypothesis, MatchReport
-from initcli.match.registration import registration_record
-from initcli.match.verify import (
+from initcli.session.perception import Perception
+from initcli.session.result import SessionResult
+from initcli.verify.evidence import (
     StoreyEvidence,
     claim_params,
     track_transform,
     verify_transform,
     without_landmark_misses,
 )
-from initcli.session.perception import Perception
-from initcli.session.result import SessionResult
-from initcli.settings_session import VerificationSection
+from initcli.verify.registration import registration_record
 
 __all__ = ["ClaimChecks", "Note"]
 

@@ -3,12 +3,12 @@
 Wall following circles an island of clutter or an open hall with no wall in reach (a *loop*), or
 shuttles over the same few metres for minutes (a dead end behind a material stack, targets that
 keep failing). Out of a loop the robot drives to the nearest unexplored opening the lidar has
-seen (a frontier of :class:`~initcli.core.frontier.LocalMap`), else along the most open direction;
-when shuttling it follows the other wall. A *lap* (:class:`~initcli.core.laps.LapWatch`: back where
+seen (a frontier of :class:`~initcli.core.navigation.frontier.LocalMap`), else along the most open direction;
+when shuttling it follows the other wall. A *lap* (:class:`~initcli.core.navigation.laps.LapWatch`: back where
 it was after its path turned once round a room, a hall or a closed corridor section) that brought no
 new feature sends it to an opening of the local map it can pass; with none left it is *shut in*,
 and the session stops (:class:`~initcli.session.result.ShutIn`). A crossing drives across an open
-floor to a wall the lidar sees (:func:`~initcli.core.bug_navigation.cross_floor`). While one of
+floor to a wall the lidar sees (:func:`~initcli.core.navigation.bug_navigation.cross_floor`). While one of
 them is under way it steers instead of the wall follower.
 
 The settings are ``exploration.loops``, ``exploration.shuttles``, ``exploration.frontier`` and
@@ -21,7 +21,8 @@ import math
 
 import numpy as np
 
-from initcli.core.bug_navigation import (
+from initcli.config.exploration import FrontierSettings, LapSettings, LoopSettings, ShuttleSettings
+from initcli.core.navigation.bug_navigation import (
     GAP_SPEED,
     BugNavigator,
     BugParams,
@@ -30,14 +31,13 @@ from initcli.core.bug_navigation import (
     cross_floor,
     crossing_to,
 )
-from initcli.core.confinement import ConfinementWatch
-from initcli.core.feature_walls import toward_long_wall
-from initcli.core.frontier import LocalMap
-from initcli.core.laps import LapWatch
-from initcli.core.wall_following import ScanView, WallFollowParams
+from initcli.core.navigation.confinement import ConfinementWatch
+from initcli.core.navigation.feature_walls import toward_long_wall
+from initcli.core.navigation.frontier import LocalMap
+from initcli.core.navigation.laps import LapWatch
+from initcli.core.navigation.wall_following import ScanView, WallFollowParams
 from initcli.drivers.base import SensorFrame
 from initcli.session.result import SessionResult, ShutIn
-from initcli.settings_exploration import FrontierSettings, LapSettings, LoopSettings, ShuttleSettings
 
 __all__ = ["Escapes", "LAP_ROUTE_PASS", "LAP_ROUTE_SPACING", "PATH_STRIDE", "open_point", "path_points"]
 

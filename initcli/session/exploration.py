@@ -19,10 +19,10 @@ import numpy as np
 from bimtools.site.load import Site
 from bimtools.site.records import Feature
 from initcli.config import SessionConfig
-from initcli.core.bug_navigation import BugParams, RouteNavigator
-from initcli.core.geometry import Pose2D, rot2
-from initcli.core.grid_planner import PlanningGrid, with_doors_closed
-from initcli.core.wall_following import ScanView, WallFollowParams
+from initcli.core.geometry.se2 import Pose2D, rot2
+from initcli.core.navigation.bug_navigation import BugParams, RouteNavigator
+from initcli.core.navigation.grid_planner import PlanningGrid, with_doors_closed
+from initcli.core.navigation.wall_following import ScanView, WallFollowParams
 from initcli.drivers.base import SensorFrame
 from initcli.match.pipeline import Hypothesis
 
@@ -229,7 +229,7 @@ def unseen_features(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The camera features each hypothesis has not matched yet, in the robot's frame at ``odom``:
     points (N x 2), normals (N x 2) and the index of the hypothesis each belongs to (N,), for
-    :func:`initcli.core.feature_walls.toward_feature_wall`."""
+    :func:`initcli.core.navigation.feature_walls.toward_feature_wall`."""
     points, normals, owner = [], [], []
     for k, hypothesis in enumerate(hypotheses):
         matched = {m for m in hypothesis.matches if m is not None}

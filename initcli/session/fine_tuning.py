@@ -16,13 +16,19 @@ from typing import Literal
 import numpy as np
 
 from bimtools.site.records import Feature, OccupancyGrid
-from initcli.core.detection_filter import ConfirmedFeature
-from initcli.core.geometry import Pose2D, wrap_angle
-from initcli.core.motion import motion_delta
-from initcli.core.particle_filter import FilterNoise, LaserModel, ParticleFilter, likelihood_field, scan_fit
-from initcli.core.wall_following import ScanView, WallFollowParams, wall_follow
+from initcli.config.session import FineTuningSection
+from initcli.core.features.detection_filter import ConfirmedFeature
+from initcli.core.filters.particle_filter import (
+    FilterNoise,
+    LaserModel,
+    ParticleFilter,
+    likelihood_field,
+    scan_fit,
+)
+from initcli.core.geometry.motion import motion_delta
+from initcli.core.geometry.se2 import Pose2D, wrap_angle
+from initcli.core.navigation.wall_following import ScanView, WallFollowParams, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
-from initcli.settings_session import FineTuningSection
 
 __all__ = ["FineLost", "FineTuned", "FineTuning", "FineTuningHooks", "Settlement", "matched_pairs", "settle"]
 

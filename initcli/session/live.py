@@ -19,8 +19,9 @@ import numpy as np
 from bimkit.atomic import staged_directory
 from bimkit.errors import InputError
 from initcli.config import SessionConfig, camera_of, config_to_dict
-from initcli.core.geometry import Pose2D
-from initcli.core.particle_filter import FilterNoise
+from initcli.config.building import choose_storey, prepare_site
+from initcli.core.filters.particle_filter import FilterNoise
+from initcli.core.geometry.se2 import Pose2D
 from initcli.ros.delivery import CarriedPose, deliver_initial_pose, pose_record
 from initcli.ros.live_camera import live_camera
 from initcli.ros.rosbridge import RosbridgeLink
@@ -29,7 +30,6 @@ from initcli.session.outputs import summary_document, write_summary
 from initcli.session.result import MatchStep, SessionResult
 from initcli.session.runner import Observer, Session
 from initcli.session.simulated import RUN_MARKERS, SESSION_RNG_OFFSET
-from initcli.site import choose_storey, prepare_site
 
 __all__ = ["run_live", "stopped_reason"]
 

@@ -14,13 +14,13 @@ import math
 
 import numpy as np
 
-from initcli.core.bug_navigation import FloorCrossing
-from initcli.core.feature_walls import toward_feature_wall
-from initcli.core.geometry import Pose2D, wrap_angle
-from initcli.core.wall_following import ScanView, open_beside
+from initcli.config.session import ExplorationSection
+from initcli.core.geometry.se2 import Pose2D, wrap_angle
+from initcli.core.navigation.bug_navigation import FloorCrossing
+from initcli.core.navigation.feature_walls import toward_feature_wall
+from initcli.core.navigation.wall_following import ScanView, open_beside
 from initcli.drivers.base import SensorFrame
 from initcli.session.escapes import Escapes
-from initcli.settings_session import ExplorationSection
 
 __all__ = ["Looks"]
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from bimtools.site.load import StoreyModel
-from initcli.core.geometry import Pose2D
+from initcli.core.geometry.se2 import Pose2D
 from initcli.session.result import SessionResult
 
 __all__ = ["render_report", "summary_document", "write_summary"]
@@ -49,7 +49,7 @@ def summary_document(result: SessionResult, simulated: bool, extra: dict | None 
         "loop_escapes": result.loop_escapes,
         "crossings": result.crossings,
         # Beyond the paper: each check of a unique match (stage coarse) and of the final pose (fine):
-        # missed_predictions, scan_fit, passed (initcli.core.verification).
+        # missed_predictions, scan_fit, passed (initcli.core.verify.checks).
         "verification": list(result.verifications),
         "rejected_matches": result.rejected,
         "decided_by": result.decided_by,

@@ -14,10 +14,10 @@ from pathlib import Path
 import numpy as np
 
 from bimtools.site.load import Site
-from initcli.core.classes import ClassMap
-from initcli.core.detection_filter import ConfirmedFeature, DetectionFilter, Sighting
-from initcli.core.geometry import Pose2D
-from initcli.core.landmark_tracks import LandmarkTracker, ScanInput
+from initcli.core.features.classes import ClassMap
+from initcli.core.features.detection_filter import ConfirmedFeature, DetectionFilter, Sighting
+from initcli.core.geometry.se2 import Pose2D
+from initcli.core.lidar.landmark_tracks import LandmarkTracker, ScanInput
 from initcli.drivers.base import SensorFrame
 from initcli.io.detection_log import (
     DetectionLog,
@@ -34,7 +34,7 @@ from initcli.io.detection_log import (
 from initcli.match.landmarks import feature_records
 from initcli.match.pipeline import Hypothesis, MatchOptions, MatchReport, match_log
 from initcli.match.sightings import image_sightings
-from initcli.match.verify import PathEvidence
+from initcli.verify.evidence import PathEvidence
 
 __all__ = ["HYPOTHESES_LOGGED", "Perception"]
 

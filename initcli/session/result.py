@@ -9,12 +9,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from initcli.core.detection_filter import ConfirmedFeature
-from initcli.core.geometry import Pose2D, wrap_angle
+from initcli.core.features.detection_filter import ConfirmedFeature
+from initcli.core.geometry.se2 import Pose2D, wrap_angle
 
 if TYPE_CHECKING:
+    from initcli.config.session import LimitsSection
     from initcli.match.pipeline import Hypothesis
-    from initcli.settings_session import LimitsSection
 
 __all__ = [
     "CANNOT_LEAVE",

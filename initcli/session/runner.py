@@ -34,16 +34,16 @@ from initcli.config import (
     turn_in_place_speed,
     wall_follow_params,
 )
-from initcli.core.classes import ClassMap
-from initcli.core.detection_filter import ConfirmedFeature
-from initcli.core.geometry import Pose2D
-from initcli.core.verification import TRACK_HYPOTHESES, CameraView
-from initcli.core.wall_following import MovingObstacleWait, ScanView, wall_follow
+from initcli.config.building import twin_reason
+from initcli.core.features.classes import ClassMap
+from initcli.core.features.detection_filter import ConfirmedFeature
+from initcli.core.geometry.se2 import Pose2D
+from initcli.core.navigation.wall_following import MovingObstacleWait, ScanView, wall_follow
+from initcli.core.verify.checks import TRACK_HYPOTHESES, CameraView
 from initcli.drivers.base import RobotDriver, SensorFrame
 from initcli.io.detection_log import Meta, State
 from initcli.match.landmarks import site_tracker
 from initcli.match.pipeline import DECIDED_BY_LIDAR, DECIDED_BY_PAPER, Hypothesis, MatchReport
-from initcli.match.registration import DECIDED_BY_REGISTRATION, SubmapRegistration, registered_hypothesis
 from initcli.session.claims import ClaimChecks
 from initcli.session.escapes import Escapes, path_points
 from initcli.session.exploration import ActiveExploration, unseen_features
@@ -51,7 +51,7 @@ from initcli.session.fine_tuning import FineLost, FineTuning, FineTuningHooks, m
 from initcli.session.looks import Looks
 from initcli.session.perception import Perception
 from initcli.session.result import SHUT_IN, MatchStep, SessionResult, limit_reason
-from initcli.site import twin_reason
+from initcli.verify.registration import DECIDED_BY_REGISTRATION, SubmapRegistration, registered_hypothesis
 
 __all__ = ["Observer", "Session"]
 

@@ -15,12 +15,12 @@ import numpy as np
 from bimkit.atomic import staged_directory
 from bimtools.site.load import Site
 from initcli.config import SessionConfig, config_to_dict
-from initcli.core.geometry import Pose2D
+from initcli.config.building import choose_storey, prepare_site, prepare_world
+from initcli.core.geometry.se2 import Pose2D
 from initcli.session.outputs import render_report, summary_document, write_summary
 from initcli.session.result import CANNOT_LEAVE, SessionResult
 from initcli.session.runner import Observer, Session
 from initcli.sim.build import SimSetup, build_sim
-from initcli.site import choose_storey, prepare_site, prepare_world
 
 __all__ = ["RUN_MARKERS", "RUN_WRITES", "SESSION_RNG_OFFSET", "SimSession", "run_simulated", "sim_session"]
 

@@ -39,8 +39,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from bimtools.site.records import UNKNOWN, Feature, Obstacle
-from initcli.core.raycast import ray_segment_distances
-from initcli.settings_sim import AsBuiltParams
+from initcli.config.sim import AsBuiltParams
+from initcli.core.geometry.raycast import ray_segment_distances
 from initcli.sim.scenario import Circulation
 from initcli.sim.synthetic_log import SimFeature
 from initcli.sim.world import polygon_edges

@@ -15,9 +15,10 @@ from bimkit.errors import InputError
 from bimtools.site.load import Site, StoreyModel
 from bimtools.site.records import FREE, OCCUPIED
 from initcli.config import SessionConfig, as_built_params, camera_of, start_pose_degrees
-from initcli.config_checks import detector_profile
-from initcli.core.classes import ClassMap
-from initcli.core.geometry import Pose2D
+from initcli.config.building import world_storey
+from initcli.config.checks import detector_profile
+from initcli.core.features.classes import ClassMap
+from initcli.core.geometry.se2 import Pose2D
 from initcli.io.detection_log import DetectedObject
 from initcli.sim.as_built import (
     HOARDING_CLASS,
@@ -34,7 +35,6 @@ from initcli.sim.robot import DiffDriveRobot, OdometryNoise
 from initcli.sim.scenario import Circulation, place_clutter, place_workers, random_start
 from initcli.sim.synthetic_log import sim_features_from_bim
 from initcli.sim.world import SimWorld, world_edges
-from initcli.site import world_storey
 
 __all__ = ["SimSetup", "build_sim", "check_clearance", "check_start"]
 

@@ -22,8 +22,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from initcli.core.geometry import Pose2D
-from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.se2 import Pose2D
 from initcli.detector.profile import DetectorProfile
 from initcli.io.detection_log import DetectedObject
 from initcli.sim.synthetic_log import SimFeature, SyntheticParams, false_box, render_image

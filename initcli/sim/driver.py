@@ -12,9 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from initcli.core.geometry import Pose2D
-from initcli.core.projection import CameraIntrinsics, CameraMount
-from initcli.core.raycast import TWO_PI
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.raycast import TWO_PI
+from initcli.core.geometry.se2 import Pose2D
 from initcli.drivers.base import LaserScan, SensorFrame
 from initcli.io.detection_log import DetectedObject
 from initcli.sim.robot import DiffDriveRobot

@@ -8,7 +8,7 @@ walls. The RGBD camera was used to detect the marker using OpenCV library and th
 robot location by decoding the unique marker."
 
 Frames: the BIM frame is the world (x, y on the floor plan, z up); the camera conventions are
-those of :mod:`initcli.core.projection` (optical: x right, y down, z forward). A marker's own
+those of :mod:`initcli.core.geometry.projection` (optical: x right, y down, z forward). A marker's own
 frame is OpenCV's ArUco frame: origin at the tag centre, x to the right and y up as a viewer in
 front of the tag sees it, z out of the wall (along the wall normal, into free space).
 """
@@ -22,10 +22,10 @@ import numpy as np
 
 from bimtools.site.load import StoreyModel
 from bimtools.site.records import WallSegment
-from initcli.core.geometry import Pose2D
-from initcli.core.marker_pose import tag_object_points, tag_rotation
-from initcli.core.projection import CameraIntrinsics, CameraMount, odom_to_optical
-from initcli.core.raycast import ray_segment_distances, sight_blocked
+from initcli.core.features.marker_pose import tag_object_points, tag_rotation
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount, odom_to_optical
+from initcli.core.geometry.raycast import ray_segment_distances, sight_blocked
+from initcli.core.geometry.se2 import Pose2D
 from initcli.sim.scenario import Circulation
 from initcli.sim.world import SimWorld
 
@@ -106,7 +106,8 @@ class MarkerParams:
     fx = 320) one tag seen 30-50 degrees off its normal gives the robot's position to 1-5 cm at
     2-3 m and ~0.1 m at 4 m; seen head-on the tag's tilt is poorly conditioned (15 cm at 2 m);
     beyond 8-10 m the error is metres, often an IPPE mirror solution (see
-    ``tests/initcli/core/test_marker_pose.py``). With the defaults a 20 cm tag is too small to decode past
+    ``tests/initcli/core/features/test_marker_pose.py``). With the defaults a 20 cm tag is too small to
+    decode past
     ~6 m (``min_side_px``); the paper's far detection needs ``range`` and ``min_side_px`` relaxed
     (a sharper camera).
     """

@@ -16,8 +16,8 @@ import numpy as np
 
 from bimkit.errors import InputError
 from bimtools.site.load import StoreyModel
-from initcli.core.geometry import Pose2D
-from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.se2 import Pose2D
 from initcli.io.detection_log import DetectedObject
 from initcli.sim.world import SimWorld
 

@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from bimtools.site.load import StoreyModel
-from initcli.core.depth import window_depth
-from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.depth import window_depth
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount
 from initcli.detector import DETECTOR_CONFIDENCE
 from initcli.detector.runtime import Detection, Detector
 from initcli.detector.synth.look import Look

@@ -19,8 +19,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from initcli.core.geometry import Pose2D, wrap_angle
-from initcli.core.motion import apply_delta, motion_delta
+from initcli.core.geometry.motion import apply_delta, motion_delta
+from initcli.core.geometry.se2 import Pose2D, wrap_angle
 
 __all__ = ["DiffDriveRobot", "OdometryNoise"]
 

@@ -12,8 +12,8 @@ import numpy as np
 from bimkit.errors import InputError
 from bimtools.site.load import StoreyModel
 from bimtools.site.records import FREE, Obstacle, OccupancyGrid
-from initcli.core.geometry import Pose2D
-from initcli.core.raycast import ray_segment_distances
+from initcli.core.geometry.raycast import ray_segment_distances
+from initcli.core.geometry.se2 import Pose2D
 from initcli.sim.world import Worker
 
 __all__ = [

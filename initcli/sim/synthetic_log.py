@@ -1,7 +1,7 @@
 """Synthetic detection logs: BIM features + a true robot path -> a version-1 detection log.
 
 Each camera image renders the BIM features in view with the inverse of Eq. 1-2
-(:mod:`initcli.core.projection`): the element's centre at ``centre_height`` of its height is
+(:mod:`initcli.core.geometry.projection`): the element's centre at ``centre_height`` of its height is
 projected to a pixel, the box is sized from the element's width and height, and ``depth`` is the
 optical depth z_c (plus optional noise). Applying Eq. 1-2 to such a box returns the feature's
 position exactly, so a noise-free log reproduces the BIM layout in the odom frame.
@@ -20,10 +20,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from initcli.core.classes import ClassMap
-from initcli.core.geometry import Pose2D, wrap_angle
-from initcli.core.projection import CameraIntrinsics, CameraMount, box_for_point, odom_to_pixel
-from initcli.core.raycast import sight_blocked
+from initcli.core.features.classes import ClassMap
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount, box_for_point, odom_to_pixel
+from initcli.core.geometry.raycast import sight_blocked
+from initcli.core.geometry.se2 import Pose2D, wrap_angle
 from initcli.io.detection_log import DetectedObject, Detections, Meta, Odom, Record, Truth
 
 __all__ = [

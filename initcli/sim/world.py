@@ -10,7 +10,12 @@ from functools import cached_property
 import numpy as np
 
 from bimtools.site.records import Obstacle
-from initcli.core.raycast import cast_rays, nearest_segment_distance, ray_segment_params, segment_directions
+from initcli.core.geometry.raycast import (
+    cast_rays,
+    nearest_segment_distance,
+    ray_segment_params,
+    segment_directions,
+)
 
 __all__ = [
     "GLASS_ECHO_DEG",
@@ -273,7 +278,7 @@ class SimWorld:
         even: tuple[float, float] | None = None,
     ) -> np.ndarray:
         """Range along each ray to the nearest static segment or worker at ``t`` (see
-        :func:`initcli.core.raycast.cast_rays`, also for ``even``)."""
+        :func:`initcli.core.geometry.raycast.cast_rays`, also for ``even``)."""
         origin = np.asarray(origin, dtype=float)
         block = self._near(float(origin[0]), float(origin[1]), max_range)
         static, directions, glazed = block.opaque, block.directions, block.glazed

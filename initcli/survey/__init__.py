@@ -4,5 +4,5 @@
 following along the wall-distance contour of the circulation area), :mod:`~initcli.survey.uniqueness`
 (incremental Algorithm 1 until one hypothesis is left), :mod:`~initcli.survey.survey` (samples,
 summary, landmark suggestions) and :mod:`~initcli.survey.plots`; the camera model is the
-simulator's, noise-free and batched over poses (:mod:`initcli.core.visibility`).
+simulator's, noise-free and batched over poses (:mod:`initcli.core.features.visibility`).
 """

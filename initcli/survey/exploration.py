@@ -1,7 +1,7 @@
 """The deterministic exploration path of a survey sample: look round on the spot, then follow a wall.
 
 The session turns once on the spot and then follows the ``side`` wall at ``wall_distance``
-(:func:`initcli.core.wall_following.wall_follow`). Noise-free, the path of a wall follower is the
+(:func:`initcli.core.navigation.wall_following.wall_follow`). Noise-free, the path of a wall follower is the
 iso-line of the circulation area's clearance at ``wall_distance``: one closed loop per boundary
 (the corridor outline, islands), traversed with the wall on the followed side. A start joins the
 nearest loop point on its followed side that it can see, straight; then it follows the loop.
@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 
 from bimtools.site.records import OccupancyGrid
-from initcli.core.raycast import sight_blocked
+from initcli.core.geometry.raycast import sight_blocked
 
 __all__ = ["ENTRY_CANDIDATES", "Entry", "Loop", "follow_loops", "join_loop", "look_round"]
 

@@ -18,17 +18,17 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bimtools.site.load import StoreyModel
-from initcli.core.classes import ClassMap
-from initcli.core.region_twins import IDENTITY_M, RegionTwin, moved, region_twins
-from initcli.core.symmetry import Turn
-from initcli.core.verification_settings import VerificationParams
-from initcli.core.visibility import CameraModel, FeatureArrays, visible
+from initcli.config.building import self_similar
+from initcli.core.features.classes import ClassMap
+from initcli.core.features.visibility import CameraModel, FeatureArrays, visible
+from initcli.core.lidar.region_twins import IDENTITY_M, RegionTwin, moved, region_twins
+from initcli.core.lidar.symmetry import Turn
+from initcli.core.verify.params import VerificationParams
 from initcli.executor import Executor, LocalExecutor, map_unordered
 from initcli.sim.as_built import closed_doors, door_ids
 from initcli.sim.scenario import Circulation
 from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT, sim_features_from_bim
 from initcli.sim.world import polygon_edges
-from initcli.site import self_similar
 from initcli.survey.exploration import Entry, Loop, follow_loops, join_loop, look_round
 from initcli.survey.uniqueness import UniquenessParams, first_unique
 
@@ -102,7 +102,7 @@ class ShutInRoom:
 @dataclass(frozen=True)
 class LidarTwin:
     """A space (every door leaf closed) that a turn or shift lays on itself or on another space, walls
-    on walls and floor on floor (:mod:`initcli.core.region_twins`): with the camera off a lidar
+    on walls and floor on floor (:mod:`initcli.core.lidar.region_twins`): with the camera off a lidar
     sees a pose there and its twin alike (within the session's scan tolerance), and a start there
     initialises only by a chance difference while the doors stay shut."""
 

@@ -17,10 +17,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from initcli.core.hypotheses import drop_dominated, pose_groups, rank_order
-from initcli.core.matching import OUTLIER, BimIndex, Matcher, MatchOverflow, MatchParams, MatchState
-from initcli.core.pose import rigid_align_batch
-from initcli.core.verification_settings import VerificationParams
+from initcli.core.hypotheses.matching import (
+    OUTLIER,
+    BimIndex,
+    Matcher,
+    MatchOverflow,
+    MatchParams,
+    MatchState,
+)
+from initcli.core.hypotheses.pose import rigid_align_batch
+from initcli.core.hypotheses.ranking import drop_dominated, pose_groups, rank_order
+from initcli.core.verify.params import VerificationParams
 from initcli.match.pipeline import MatchOptions
 
 __all__ = ["AMBIGUOUS", "UniquenessParams", "count_hypotheses", "first_unique"]

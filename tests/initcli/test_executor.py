@@ -9,10 +9,10 @@ import pytest
 
 from bimkit.errors import InputError
 from initcli.config import load_config
+from initcli.config.building import prepare_site
 from initcli.eval.campaign import PreparedSite, plan_jobs, run_jobs
 from initcli.eval.config import EvalConfig, EvalSite
 from initcli.executor import LocalExecutor, make_executor, map_unordered
-from initcli.site import prepare_site
 
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_models"
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from initcli.core.raycast import ray_segment_params
+from initcli.core.geometry.raycast import ray_segment_params
 from initcli.detector.synth.look import FeatureLooks, Look, default_look
 from initcli.detector.synth.paint import clutter_colours, decoration_colours, feature_colours, texture
 from initcli.detector.synth.scene import Camera, Panels, Scene
@@ -61,7 +61,7 @@ def cast_rays(
     origin: np.ndarray, dirs: np.ndarray, segs: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Rays ``origin + t * dirs`` (W, 2) against segments (S, 4): all t (W, S) (inf = miss), the
-    position s along each segment and the hits (:func:`initcli.core.raycast.ray_segment_params`;
+    position s along each segment and the hits (:func:`initcli.core.geometry.raycast.ray_segment_params`;
     a hit is ``t > 1e-6`` and ``s`` in [0, 1] give or take 1e-9)."""
     a = segs[:, 0:2]
     e = segs[:, 2:4] - a

@@ -21,8 +21,8 @@ from shapely.geometry.polygon import orient
 
 from bimkit.errors import InputError
 from bimtools.site.load import StoreyModel
-from initcli.core.classes import ClassMap
-from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.core.features.classes import ClassMap
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount
 from initcli.detector import CLASS_NAMES
 
 __all__ = [

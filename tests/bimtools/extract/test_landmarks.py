@@ -18,8 +18,8 @@ from bimtools.extract.floorplan import ObstacleShape, build_floorplan
 from bimtools.extract.landmarks import LINE_TOLERANCE, chain_rings, storey_landmarks, wall_landmarks
 from bimtools.extract.output import write_site
 from bimtools.extract.pipeline import extract_site
-from bimtools.extract.settings import LandmarkSettings
 from bimtools.ifc.categories import load_categories
+from bimtools.settings import LandmarkSettings
 from bimtools.site.features_csv import format_features
 from bimtools.site.load import load_site
 from bimtools.site.records import FREE, LANDMARK_CATEGORIES

@@ -162,7 +162,7 @@ def test_lidar_landmarks_lie_on_the_walls_and_face_free_floor(shared_ifc_dir, na
     an opening's two edges lie on wall lines, and 0.3 m along every normal is a free cell."""
     from bimtools.extract.circulation import FreeRegions
     from bimtools.extract.landmarks import LINE_TOLERANCE, region_probe, storey_landmarks
-    from bimtools.extract.settings import LandmarkSettings
+    from bimtools.settings import LandmarkSettings
 
     settings = LandmarkSettings(enabled=True)
     total = 0

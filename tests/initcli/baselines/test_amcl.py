@@ -10,9 +10,9 @@ import pytest
 from initcli.baselines.amcl import AmclTracePoint, run_amcl
 from initcli.baselines.outcome import LocalisationOutcome
 from initcli.config import SessionConfig, load_config
-from initcli.core.global_localisation import GlobalLocalisationParams
+from initcli.config.building import choose_storey, prepare_site
+from initcli.core.filters.global_localisation import GlobalLocalisationParams
 from initcli.sim.build import build_sim
-from initcli.site import choose_storey, prepare_site
 from tests.helpers import SAMPLES
 
 

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from initcli.core.geometry import Pose2D
+from initcli.core.geometry.se2 import Pose2D
 from initcli.drivers.base import SensorFrame
 
 
@@ -42,8 +42,8 @@ def test_one_shared_drive_gives_each_baseline_the_outcome_it_has_alone(tmp_path)
     from initcli.baselines.drive import drive_attempts
     from initcli.baselines.markers import MarkerAttempt, run_markers
     from initcli.config import load_config
+    from initcli.config.building import choose_storey, prepare_site
     from initcli.sim.build import build_sim
-    from initcli.site import choose_storey, prepare_site
     from tests.helpers import SAMPLES
 
     config = load_config(SAMPLES / "block_a.site.yaml", reality="construction")

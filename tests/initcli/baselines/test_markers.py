@@ -10,10 +10,10 @@ import pytest
 from bimtools.site.load import Site
 from initcli.baselines.markers import MarkerParams, deploy_markers, run_markers
 from initcli.config import SessionConfig, load_config
-from initcli.core.geometry import Pose2D
+from initcli.config.building import choose_storey, prepare_site
+from initcli.core.geometry.se2 import Pose2D
 from initcli.sim.build import build_sim
 from initcli.sim.markers import Marker
-from initcli.site import choose_storey, prepare_site
 from tests.helpers import SAMPLES
 
 

@@ -342,9 +342,9 @@ def test_the_lidar_along_the_path_makes_a_symmetric_match_unique(tmp_path: Path,
 def test_a_unique_match_the_lidar_refutes_is_not_claimed(symmetric_session) -> None:
     """Algorithm 1's one hypothesis is still checked: alone at the true place it stays unique; moved
     to a place where the scans do not fit the walls, the verdict is no consistent match (exit 4)."""
-    from initcli.core.geometry import Pose2D
+    from initcli.core.geometry.se2 import Pose2D
     from initcli.match.pipeline import DECIDED_BY_PAPER, MatchOptions, run_match
-    from initcli.match.verify import check_hypotheses
+    from initcli.verify.evidence import check_hypotheses
 
     log, site = symmetric_session
 

@@ -12,8 +12,8 @@ import pytest
 from bimtools.site.load import StoreyModel
 from bimtools.site.records import Feature, WallSegment
 from initcli.cli.plot_hypotheses import _extent, plot_hypotheses
-from initcli.core.detection_filter import ConfirmedFeature
-from initcli.core.geometry import Pose2D
+from initcli.core.features.detection_filter import ConfirmedFeature
+from initcli.core.geometry.se2 import Pose2D
 
 
 def _storey(name: str) -> StoreyModel:

@@ -18,10 +18,10 @@ from typer.testing import CliRunner
 
 from initcli.cli.main import app
 from initcli.config import load_config
-from initcli.core.geometry import Pose2D
+from initcli.config.building import prepare_site
+from initcli.core.geometry.se2 import Pose2D
 from initcli.ros.rosbridge_driver import header_stamp
 from initcli.ros.tf import quaternion_yaw
-from initcli.site import prepare_site
 from tests.helpers import SAMPLES
 from tests.initcli.ros.rosbridge_server import RosbridgeServer
 from tests.initcli.ros.sim_robot import SimRobot

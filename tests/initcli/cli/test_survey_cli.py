@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 from bimkit.schemas import schema_path
 from initcli.cli.main import app
 from initcli.config import load_config
-from initcli.site import prepare_site
+from initcli.config.building import prepare_site
 
 SAMPLES = Path(__file__).resolve().parents[3] / "sample_models"
 runner = CliRunner()

@@ -7,7 +7,7 @@ import math
 import pytest
 
 from initcli.baselines.outcome import LocalisationOutcome
-from initcli.core.geometry import Pose2D
+from initcli.core.geometry.se2 import Pose2D
 from initcli.eval.records import FailureRule, TrialRecord
 from initcli.eval.scoring import judge, pose_errors, score, summarise
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from initcli.core.geometry import Pose2D
+from initcli.core.geometry.se2 import Pose2D
 from initcli.eval.trial import session_outcomes, trial_seed
 from initcli.session.result import CANNOT_LEAVE, SHUT_IN, CoarseClaim, SessionResult
 

@@ -10,7 +10,7 @@ import jsonschema
 import pytest
 
 from bimkit.errors import InputError
-from initcli.core.geometry import Pose2D
+from initcli.core.geometry.se2 import Pose2D
 from initcli.io.detection_log import (
     DetectedObject,
     Detections,

@@ -13,21 +13,21 @@ from bimtools.extract.landmarks import storey_landmarks
 from bimtools.site.load import Site, StoreyModel
 from bimtools.site.manifest import SiteManifest
 from bimtools.site.records import LIDAR, Feature
-from initcli.core.classes import ClassMap
-from initcli.core.geometry import Pose2D
-from initcli.core.landmark_tracks import LandmarkTracker, ScanInput
-from initcli.core.scan_landmarks import ScanLandmarkParams
-from initcli.core.verification import CameraView, VerificationParams
+from initcli.config.session import VerificationSection
+from initcli.core.features.classes import ClassMap
+from initcli.core.geometry.se2 import Pose2D
+from initcli.core.lidar.landmark_tracks import LandmarkTracker, ScanInput
+from initcli.core.lidar.scan_landmarks import ScanLandmarkParams
+from initcli.core.verify.checks import CameraView, VerificationParams
 from initcli.drivers.base import LaserScan, SensorFrame
 from initcli.io.detection_log import DetectionLog, FeatureRecord, Meta, Odom, Record, Scan, read_log
 from initcli.match.landmarks import feature_records, log_landmarks, site_tracker, travel_at
 from initcli.match.pipeline import EXIT_AMBIGUOUS, MatchOptions, match_log
-from initcli.match.verify import PathEvidence, StoreyEvidence, verify_transform, without_landmark_misses
 from initcli.session.claims import ClaimChecks
 from initcli.session.perception import Perception
 from initcli.session.result import SessionResult
-from initcli.settings_session import VerificationSection
 from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
+from initcli.verify.evidence import PathEvidence, StoreyEvidence, verify_transform, without_landmark_misses
 from tests.landmark_worlds import RANGE_MAX, SETTINGS, walled
 
 # A staircase-shaped floor: corners in no symmetric pattern.

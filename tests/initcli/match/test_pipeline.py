@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from bimtools.site.load import load_site
-from initcli.core.classes import ClassMap
-from initcli.core.geometry import Pose2D
+from initcli.core.features.classes import ClassMap
+from initcli.core.geometry.se2 import Pose2D
 from initcli.io.detection_log import read_log, write_log
 from initcli.match.pipeline import MatchOptions, MatchReport, match_log, site_class_map
 from initcli.sim.synthetic_floor import write_site_folder

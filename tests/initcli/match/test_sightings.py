@@ -6,15 +6,15 @@ import math
 
 import numpy as np
 
-from initcli.core.classes import ClassMap
-from initcli.core.geometry import Pose2D
-from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.config.session import LidarSection
+from initcli.core.features.classes import ClassMap
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.se2 import Pose2D
 from initcli.drivers.base import LaserScan, SensorFrame
 from initcli.io.detection_log import DetectedObject, Detections, Meta, Scan, read_log
 from initcli.match.pipeline import MatchOptions
 from initcli.match.sightings import image_sightings, sightings_from_log
 from initcli.session.perception import Perception
-from initcli.settings_session import LidarSection
 
 SCAN_LOG_EVERY = LidarSection().log_every
 

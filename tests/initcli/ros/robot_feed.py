@@ -11,7 +11,7 @@ import threading
 import time
 from typing import Any
 
-from initcli.core.geometry import Pose2D
+from initcli.core.geometry.se2 import Pose2D
 from initcli.ros.nav2 import pose_dict, stamp_dict
 from tests.initcli.ros.rosbridge_server import RosbridgeServer
 

@@ -25,12 +25,12 @@ import numpy as np
 
 from bimtools.site.load import Site
 from initcli.config import SessionConfig
-from initcli.core.geometry import Pose2D
+from initcli.config.building import choose_storey
+from initcli.core.geometry.se2 import Pose2D
 from initcli.drivers.base import SensorFrame
 from initcli.ros.bag_writer import OPTICAL_FRAME, camera_info, camera_tf
 from initcli.ros.nav2 import pose_dict, stamp_dict
 from initcli.sim.build import build_sim
-from initcli.site import choose_storey
 from tests.initcli.ros.rosbridge_server import RosbridgeServer
 
 T0 = 1_700_000_000.0

@@ -10,7 +10,7 @@ import pytest
 
 from benchmarks._recordings import CAMERA, MOUNT, POINTS, door_image, make_recording, write
 from bimkit.errors import InputError
-from initcli.core.projection import detections_to_odom
+from initcli.core.geometry.projection import detections_to_odom
 from initcli.detector.runtime import Detector
 from initcli.io.detection_log import Detections, Meta, Odom, Scan
 from initcli.ros.bag_reader import BagSource, bag_to_records, parse_class_names

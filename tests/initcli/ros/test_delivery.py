@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from initcli.config import Nav2Section
-from initcli.core.geometry import Pose2D
-from initcli.core.particle_filter import FilterNoise
-from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.core.filters.particle_filter import FilterNoise
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.se2 import Pose2D
 from initcli.ros.rosbridge_driver import header_stamp
 from initcli.ros.tf import quaternion_yaw
 from tests.initcli.ros.robot_feed import MovingRobot

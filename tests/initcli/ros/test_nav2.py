@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from bimkit.errors import InputError
-from initcli.core.geometry import Pose2D
-from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.se2 import Pose2D
 from initcli.io.detection_log import Detections, HypothesesRecord, Meta, Odom, write_log
 from initcli.ros.nav2 import (
     covariance_6x6,

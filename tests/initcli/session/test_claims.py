@@ -12,21 +12,21 @@ import numpy as np
 import pytest
 
 from bimtools.site.load import Site, load_site
-from initcli.core.classes import ClassMap
-from initcli.core.geometry import Pose2D
-from initcli.core.projection import CameraIntrinsics
-from initcli.core.verification import CameraView
+from initcli.config.session import VerificationSection
+from initcli.core.features.classes import ClassMap
+from initcli.core.geometry.projection import CameraIntrinsics
+from initcli.core.geometry.se2 import Pose2D
+from initcli.core.verify.checks import CameraView
 from initcli.drivers.base import SensorFrame
 from initcli.io.detection_log import read_log, write_log
 from initcli.match.pipeline import Hypothesis, MatchOptions, MatchReport, match_log
 from initcli.match.sightings import sightings_from_log
-from initcli.match.verify import PathEvidence
 from initcli.session.claims import ClaimChecks
 from initcli.session.perception import Perception
 from initcli.session.result import SessionResult
-from initcli.settings_session import VerificationSection
 from initcli.sim.synthetic_floor import write_site_folder
 from initcli.sim.synthetic_log import SimFeature, SyntheticParams, make_log, path_from_waypoints
+from initcli.verify.evidence import PathEvidence
 from tests.helpers import rooms_map
 
 DOORS_X = (3.0, 6.0, 13.0, 19.5)  # no mirror image of itself: the reversed corridor matches nothing

@@ -9,14 +9,14 @@ import math
 import numpy as np
 import pytest
 
-from initcli.core.bug_navigation import BugNavigator, BugParams
-from initcli.core.geometry import Pose2D
-from initcli.core.raycast import ray_segment_distances
-from initcli.core.wall_following import ScanView, WallFollowParams
+from initcli.config.exploration import FrontierSettings, LoopSettings, ShuttleSettings
+from initcli.core.geometry.raycast import ray_segment_distances
+from initcli.core.geometry.se2 import Pose2D
+from initcli.core.navigation.bug_navigation import BugNavigator, BugParams
+from initcli.core.navigation.wall_following import ScanView, WallFollowParams
 from initcli.drivers.base import LaserScan, SensorFrame
 from initcli.session.escapes import Escapes, open_point
 from initcli.session.result import SessionResult, ShutIn
-from initcli.settings_exploration import FrontierSettings, LoopSettings, ShuttleSettings
 
 LOOPS, SHUTTLES, FRONTIER = LoopSettings(), ShuttleSettings(), FrontierSettings()
 ANGLES = np.linspace(-math.pi, math.pi, 360, endpoint=False)

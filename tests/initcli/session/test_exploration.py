@@ -12,12 +12,12 @@ import pytest
 from bimtools.site.load import Site, StoreyModel
 from bimtools.site.records import FREE, OCCUPIED, Feature, OccupancyGrid
 from initcli.config import load_config
-from initcli.core.geometry import Pose2D
-from initcli.core.wall_following import WallFollowParams
+from initcli.config.exploration import TargetSettings
+from initcli.core.geometry.se2 import Pose2D
+from initcli.core.navigation.wall_following import WallFollowParams
 from initcli.drivers.base import SensorFrame
 from initcli.match.pipeline import Hypothesis
 from initcli.session.exploration import ActiveExploration
-from initcli.settings_exploration import TargetSettings
 from tests.helpers import SAMPLES
 
 TARGETS = TargetSettings()  # exploration.targets' defaults

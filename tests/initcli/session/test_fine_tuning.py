@@ -7,12 +7,12 @@ import math
 import numpy as np
 
 from bimtools.site.records import Feature
-from initcli.core.detection_filter import ConfirmedFeature
-from initcli.core.geometry import Pose2D
-from initcli.core.verification_settings import VerificationParams
+from initcli.config.session import FineTuningSection
+from initcli.core.features.detection_filter import ConfirmedFeature
+from initcli.core.geometry.se2 import Pose2D
+from initcli.core.verify.params import VerificationParams
 from initcli.session.fine_tuning import Settlement, matched_pairs
 from initcli.session.fine_tuning import settle as settle_with
-from initcli.settings_session import FineTuningSection
 
 PARAMS = FineTuningSection()  # the defaults
 KEEP_RECTIFIED_MARGIN = PARAMS.keep_rectified_margin

@@ -9,14 +9,14 @@ import math
 
 import numpy as np
 
-from initcli.core.geometry import Pose2D
-from initcli.core.raycast import ray_segment_distances
-from initcli.core.wall_following import ScanView, WallFollowParams
+from initcli.config.session import ExplorationSection
+from initcli.core.geometry.raycast import ray_segment_distances
+from initcli.core.geometry.se2 import Pose2D
+from initcli.core.navigation.wall_following import ScanView, WallFollowParams
 from initcli.drivers.base import SensorFrame
 from initcli.session.escapes import Escapes
 from initcli.session.looks import Looks
 from initcli.session.result import SessionResult
-from initcli.settings_session import ExplorationSection
 
 EXPLORATION = ExplorationSection()
 ANGLES = np.linspace(-math.pi, math.pi, 360, endpoint=False)

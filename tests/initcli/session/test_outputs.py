@@ -11,8 +11,8 @@ import pytest
 
 from bimtools.site.load import StoreyModel
 from bimtools.site.records import Feature, WallSegment
-from initcli.core.detection_filter import ConfirmedFeature
-from initcli.core.geometry import Pose2D
+from initcli.core.features.detection_filter import ConfirmedFeature
+from initcli.core.geometry.se2 import Pose2D
 from initcli.session.outputs import _ellipse, render_report, summary_document, write_summary
 from initcli.session.result import MatchStep, SessionResult
 

@@ -10,12 +10,12 @@ import pytest
 
 from bimtools.site.load import Site
 from initcli.config import SessionConfig, load_config
-from initcli.core.geometry import Pose2D
+from initcli.config.building import prepare_site
+from initcli.core.geometry.se2 import Pose2D
 from initcli.io.detection_log import State
-from initcli.match.registration import DECIDED_BY_REGISTRATION
 from initcli.session.simulated import sim_session
 from initcli.sim.synthetic_log import SimFeature
-from initcli.site import prepare_site
+from initcli.verify.registration import DECIDED_BY_REGISTRATION
 from tests.helpers import SAMPLES
 
 WRONG_M = 2.0  # a claimed pose this far from the truth is a confident wrong result

@@ -16,9 +16,9 @@ from typer.testing import CliRunner
 from bimtools.site.load import Site
 from initcli.cli.main import app
 from initcli.config import SessionConfig, load_config
-from initcli.match.registration import DECIDED_BY_REGISTRATION
+from initcli.config.building import prepare_site
 from initcli.session.simulated import sim_session
-from initcli.site import prepare_site
+from initcli.verify.registration import DECIDED_BY_REGISTRATION
 from tests.helpers import SAMPLES
 
 
@@ -130,7 +130,7 @@ def test_as_built_the_open_doors_tell_a_repeating_floor_from_its_half_turn(
     """ntu_hallway's corridors are the same turned half round but for where the doors are; its map
     draws the doors shut. As built, with the camera off, the beams through the open doors cross the
     map's walls at the true place as at every place alike, and only with the model's doors open
-    (:func:`initcli.core.registration.open_doorways`) are the places alike ruled out."""
+    (:func:`initcli.core.lidar.registration.open_doorways`) are the places alike ruled out."""
     config = load_config(SAMPLES / "ntu_hallway.site.yaml", reality="construction")
     sim = dataclasses.replace(config.sim, miss_rate=1.0, false_positives_per_minute=0.0)
     config = dataclasses.replace(

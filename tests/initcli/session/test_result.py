@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from initcli.core.geometry import Pose2D
+from initcli.core.geometry.se2 import Pose2D
 from initcli.session.result import SessionResult
 
 

@@ -12,7 +12,7 @@ import pytest
 
 from bimtools.site.load import Site
 from initcli.config import load_config
-from initcli.core.geometry import Pose2D
+from initcli.core.geometry.se2 import Pose2D
 from initcli.drivers.base import LaserScan, SensorFrame
 from initcli.session.runner import Session
 from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
@@ -136,8 +136,8 @@ def test_the_initial_look_turns_all_the_way_round_before_exploring(tmp_path: Pat
     """block_a, seed 69: two doors are confirmed 2 s into the look, with 8 hypotheses. The look goes
     on (what is behind the robot costs no distance) and the features seen on the rest of the turn
     make the match unique on the spot; ending the look at the first ambiguous match drove 14 m."""
+    from initcli.config.building import prepare_site
     from initcli.session.simulated import sim_session
-    from initcli.site import prepare_site
 
     config = load_config(SAMPLES / "block_a.site.yaml")
     built = sim_session(config, prepare_site(config, tmp_path / "site"), 69)
@@ -214,10 +214,10 @@ def test_a_failed_fine_stage_explores_on_and_fine_tunes_the_next_claim(
     """The filter loses the robot in the first fine stage (hoardings hiding the walls, say): the
     claim is dropped, exploration goes on, the match is claimed again and fine-tuned from there.
     When the second stage fails too (FINE_TRIES), the session fails with the filter's reason."""
+    from initcli.config.building import prepare_site
+    from initcli.config.session import FineTuningSection
     from initcli.session import fine_tuning
     from initcli.session.simulated import sim_session
-    from initcli.settings_session import FineTuningSection
-    from initcli.site import prepare_site
 
     FINE_TRIES = FineTuningSection().tries  # fine_tuning.tries' default
     assert FINE_TRIES == 2

@@ -9,10 +9,11 @@ import pytest
 
 from bimtools.site.load import StoreyModel
 from initcli.config import load_config
-from initcli.core.geometry import Pose2D
-from initcli.core.marker_pose import robot_pose_from_marker
-from initcli.core.projection import CameraIntrinsics, CameraMount
-from initcli.core.raycast import ray_segment_distances
+from initcli.config.building import choose_storey, prepare_site
+from initcli.core.features.marker_pose import robot_pose_from_marker
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.raycast import ray_segment_distances
+from initcli.core.geometry.se2 import Pose2D
 from initcli.sim.markers import (
     MAX_SHIFT,
     Marker,
@@ -23,7 +24,6 @@ from initcli.sim.markers import (
 )
 from initcli.sim.scenario import Circulation
 from initcli.sim.world import SimWorld
-from initcli.site import choose_storey, prepare_site
 from tests.helpers import SAMPLES
 
 CAMERA = CameraIntrinsics(320.0, 320.0, 320.0, 240.0, 640, 480)

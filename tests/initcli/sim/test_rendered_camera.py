@@ -12,7 +12,7 @@ import pytest
 from bimtools.extract.output import write_site
 from bimtools.extract.pipeline import extract_site
 from bimtools.site.load import load_site
-from initcli.core.projection import CameraIntrinsics, CameraMount
+from initcli.core.geometry.projection import CameraIntrinsics, CameraMount
 from initcli.detector import DEFAULT_MODEL
 from initcli.detector.layouts import iou_matrix
 from initcli.detector.runtime import Detector

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from initcli.core.geometry import Pose2D
+from initcli.core.geometry.se2 import Pose2D
 from initcli.sim.robot import DiffDriveRobot, OdometryNoise
 
 EXACT = OdometryNoise(0.0, 0.0, 0.0, 0.0)

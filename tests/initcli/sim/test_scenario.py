@@ -6,9 +6,9 @@ import numpy as np
 
 from bimtools.site.records import FREE, Feature
 from initcli.config import load_config
+from initcli.config.building import choose_storey, prepare_site
 from initcli.sim.build import build_sim
 from initcli.sim.scenario import Circulation
-from initcli.site import choose_storey, prepare_site
 from tests.helpers import SAMPLES
 
 

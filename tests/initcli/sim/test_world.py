@@ -10,12 +10,12 @@ import pytest
 
 from bimtools.site.records import FREE, Obstacle
 from initcli.config import load_config
-from initcli.core.raycast import ray_segment_distances
+from initcli.config.building import choose_storey, prepare_site
+from initcli.core.geometry.raycast import ray_segment_distances
 from initcli.sim.build import build_sim
 from initcli.sim.driver import LidarSpec
 from initcli.sim.scenario import WORKER_ROOM_M
 from initcli.sim.world import SimWorld, Worker
-from initcli.site import choose_storey, prepare_site
 from tests.helpers import SAMPLES
 
 LIDAR = LidarSpec()

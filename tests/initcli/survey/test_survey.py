@@ -12,7 +12,7 @@ import pytest
 
 from bimtools.site.load import StoreyModel
 from bimtools.site.records import FREE, OCCUPIED, Feature, Obstacle, OccupancyGrid, WallSegment
-from initcli.core.classes import ClassMap
+from initcli.core.features.classes import ClassMap
 from initcli.survey.survey import (
     StoreySurvey,
     SurveyParams,

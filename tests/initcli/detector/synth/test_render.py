@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from bimtools.site.load import StoreyModel, load_site
-from initcli.core.geometry import Pose2D
-from initcli.core.projection import CameraMount, detections_to_odom
+from initcli.core.geometry.projection import CameraMount, detections_to_odom
+from initcli.core.geometry.se2 import Pose2D
 from initcli.detector.runtime import Detection
 from initcli.detector.synth.render import render_view
 from initcli.detector.synth.scene import Camera, Scene, camera_pose_in_world

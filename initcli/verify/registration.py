@@ -1,0 +1,261 @@
+"""The lidar submap registration (beyond the paper; ``registration:`` settings), for the session
+and for ``bim-init match``.
+
+The session: with no camera claim, every ``registration.every`` m of travel from
+``registration.min_travel`` on, the scans of the last ``registration.window`` m are registered over
+every storey's map (:func:`initcli.core.lidar.registration.register`); a unique registration becomes a
+hypothesis that the claim checks judge as they judge a camera claim
+(:meth:`initcli.session.claims.ClaimChecks.registered`) before the session fine-tunes it.
+
+``bim-init match`` (:func:`check_and_register`): when the features leave no unique verdict, the log
+is replayed as a session gathered it and its submap registered where a session registers it (every
+``registration.every`` m from ``registration.min_travel``); the first unique registration that
+passes the same checks is the verdict, ``decided_by`` ``lidar registration``
+(:func:`replay_registration`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from bimtools.site.load import Site, load_site
+from bimtools.site.records import Feature
+from initcli.config.building import twin_reason
+from initcli.core.features.classes import ClassMap
+from initcli.core.filters.particle_filter import likelihood_field
+from initcli.core.geometry.se2 import Pose2D
+from initcli.core.hypotheses.ranking import verdict_text
+from initcli.core.lidar.registration import (
+    GRID,
+    Candidate,
+    Registration,
+    RegistrationMap,
+    open_doorways,
+    register,
+    shut_doorways,
+)
+from initcli.core.lidar.registration_params import RegistrationParams
+from initcli.core.lidar.scan_fit import BeamEnds, ScanSample
+from initcli.core.verify.checks import CameraView, Verification
+from initcli.core.verify.params import VerificationParams
+from initcli.io.detection_log import DetectionLog, Scan, read_log
+from initcli.match.pipeline import EXIT_UNIQUE, Hypothesis, MatchReport, site_class_map
+from initcli.match.sightings import sightings_from_log
+from initcli.verify.evidence import PathEvidence, StoreyEvidence, check_loaded, claim_params, verify_transform
+
+__all__ = [
+    "DECIDED_BY_REGISTRATION",
+    "SubmapRegistration",
+    "check_and_register",
+    "door_openings",
+    "registered_hypothesis",
+    "registration_record",
+    "replay_registration",
+]
+
+DECIDED_BY_REGISTRATION = "lidar registration"  # summary.json's decided_by for such a claim
+
+
+class SubmapRegistration:
+    """When to register, and the storeys' maps prepared for it (once, on the first attempt)."""
+
+    def __init__(self, params: RegistrationParams, site: Site, storey: str | None, tolerance: float) -> None:
+        self.params = params
+        self.site = site
+        self.storey = storey  # None: every storey
+        self.tolerance = tolerance  # verification.scan_tolerance
+        self.next_at = params.min_travel  # m of travel of the next attempt
+        self.attempts = 0
+        self._maps: list[RegistrationMap] | None = None
+
+    def due(self, travel: float) -> bool:
+        return self.params.enabled and travel >= self.next_at
+
+    def maps(self) -> list[RegistrationMap]:
+        if self._maps is None:
+            names = [self.storey] if self.storey is not None else list(self.site.storeys)
+            cmap = site_class_map(self.site)
+            self._maps = []
+            for name in names:
+                storey = self.site.storeys[name]
+                if storey.grid is None:
+                    continue
+                doors = door_openings(storey.features, cmap)
+                field_ = likelihood_field(storey.grid)
+                through = fit = field_  # no doors: the map as drawn, doors open or shut
+                if len(doors):
+                    opened = open_doorways(
+                        storey.grid, doors, GRID.door_slack, GRID.door_depth, GRID.door_front
+                    )
+                    through = likelihood_field(opened)
+                    shut = shut_doorways(
+                        storey.grid, doors, GRID.door_slack, GRID.door_depth, GRID.door_front
+                    )
+                    fit = likelihood_field(shut)
+                self._maps.append(RegistrationMap(name, storey.grid, field_, through=through, fit=fit))
+        return self._maps
+
+    def attempt(self, path: PathEvidence, travel: float) -> tuple[Registration, Pose2D | None]:
+        """Register the submap of the recent path: the outcome, and the odom pose of the submap's last
+        scan (a candidate's transform, odom -> BIM, is its pose times that pose's inverse; None
+        without scans)."""
+        self.next_at = travel + self.params.every
+        self.attempts += 1
+        scans, _ = path.along(self.params.window)
+        if path.scans and (not scans or path.scans[-1].odom != scans[-1].odom):
+            # the newest scan too (a turn on the spot adds no travel, so no scan along the path)
+            s = path.scans[-1]
+            scans = [*scans, ScanSample(s.odom, s.angles[::2], s.ranges[::2], s.range_max)]
+        if not scans or not self.maps():
+            return Registration((), False, "no scans" if not scans else "no map", 0), None
+        ends = BeamEnds.of(scans)
+        return register(ends, self.maps(), self.params, self.tolerance), ends.last
+
+
+def door_openings(features: Iterable[Feature], cmap: ClassMap) -> np.ndarray:
+    """(N, 5) rows of x, y, normal x, y and width of the storey's doors (IfcDoor or a subclass, or
+    features of class door or lift: a lift's landing door), for
+    :func:`initcli.core.lidar.registration.open_doorways`."""
+    rows = [
+        (f.x, f.y, f.norm_x, f.norm_y, f.width)
+        for f in features
+        if f.ifc_class.startswith("IfcDoor") or cmap.canonical(f.category) in ("door", "lift")
+    ]
+    return np.array(rows, dtype=float).reshape(-1, 5)
+
+
+def registered_hypothesis(storey: str, transform: Pose2D, odom: Pose2D) -> Hypothesis:
+    """A unique registration as the hypothesis a claim is made of (no feature matched)."""
+    pose = transform * odom
+    return Hypothesis(
+        rank=1,
+        storey=storey,
+        assignment=(),
+        matches=[],
+        n_outliers=0,
+        cost=0.0,
+        pose=pose,
+        rectified_pose=None,
+        transform=transform,
+        confidence=1.0,
+        support=1,
+    )
+
+
+def registration_record(claim: Candidate, found: Registration, blind: bool) -> dict[str, object]:
+    """What a registration claim adds to its coarse verification (summary.json) and to ``bim-init
+    match``'s report: what decided it, its fit, its best distinct rival's fit, whether negative
+    evidence counted (not when the camera is ``blind``) and, when places alike were ruled out by
+    their beams through walls, the shares of such beams (the claim's, then theirs)."""
+    rival = next((c for c in found.candidates if c is not claim), None)
+    record: dict[str, object] = {
+        "decided_by": DECIDED_BY_REGISTRATION,
+        "registration_fit": round(claim.fit, 4),
+        "registration_rival_fit": None if rival is None else round(rival.fit, 4),
+        "negative_evidence": not blind,
+    }
+    if found.contested and found.through:  # places alike ruled out by their beams through walls
+        record["registration_through"] = [round(share, 4) for share in found.through]
+        record["registration_doors_open"] = found.doors_open
+    return record
+
+
+def check_and_register(
+    log_path: Path,
+    site_path: Path,
+    report: MatchReport,
+    skip_bad: bool,
+    shown: int,
+    params: RegistrationParams,
+) -> list[Verification | None]:
+    """:func:`initcli.verify.evidence.check_hypotheses`, then, when the verdict is not unique,
+    :func:`replay_registration` (``params.enabled``)."""
+    log, site = read_log(log_path, skip_bad=skip_bad), load_site(site_path)
+    checks = check_loaded(log, site, report, shown)
+    return replay_registration(log, site, report, checks, params, shown)
+
+
+def replay_registration(
+    log: DetectionLog,
+    site: Site,
+    report: MatchReport,
+    checks: list[Verification | None],
+    params: RegistrationParams,
+    shown: int,
+    verification: VerificationParams | None = None,
+) -> list[Verification | None]:
+    """A ``bim-init match`` verdict that is not unique (no features, several places, or a unique
+    match the checks refused), made unique by the lidar as a session claims it: the log replayed
+    as a session gathered it, its submap registered where a session registers it (every
+    ``params.every`` m of travel from ``params.min_travel``), the first unique registration that
+    passes the checks of a session's registration claim (:func:`initcli.verify.evidence.claim_params`:
+    no negative evidence from a camera that saw nothing so far) is claimed. Its place, carried by
+    odometry to the log's last odom pose, goes first in ``report`` (Algorithm 1's hypotheses below
+    it, at most ``shown`` in all), ``decided_by`` ``lidar registration``, ``paper_verdict``
+    Algorithm 1's. Returns the checks in the report's new order (unchanged when nothing is
+    claimed)."""
+    if (
+        not params.enabled
+        or report.exit_code == EXIT_UNIQUE
+        or report.odom_pose is None
+        or not log.of_type(Scan)
+    ):
+        return checks
+    verification = verification or VerificationParams()
+    storey = None if report.options.storey in (None, "auto") else report.options.storey
+    twins = twin_reason(site, storey)
+    if twins is not None:  # as a session, which fails at 0 m there: a registration is a coin toss
+        report.notes.append(f"lidar registration: not replayed, {twins}")
+        return checks
+    registration = SubmapRegistration(params, site, storey, verification.scan_tolerance)
+    cmap = site_class_map(site)
+    seen = sightings_from_log(log, cmap, report.options.edge_margin)
+    view = CameraView(log.meta.camera, log.meta.camera_pose, report.options.min_depth)
+    why = f"{params.min_travel:g} m of travel (registration.min_travel) not reached"
+    for path, travel, t in PathEvidence.growing(log):
+        if not registration.due(travel):
+            continue
+        found, last = registration.attempt(path, travel)
+        best, why = found.best, found.why
+        if not found.unique or best is None or last is None:
+            continue
+        sightings = [s for s in seen if s.t <= t]
+        blind = bool(path.image_poses) and not sightings  # as the session's ClaimChecks.blind
+        transform = best.pose * last.inverse()
+        evidence = StoreyEvidence.of(site.storeys[best.storey], cmap)
+        confirmed = None if report.landmarks is None else [f for f in report.landmarks if f.t <= t]
+        check = verify_transform(
+            transform, evidence, path, sightings, view, claim_params(verification, blind), confirmed
+        )
+        if check.passed or not verification.enabled:
+            claimed = registered_hypothesis(best.storey, transform, report.odom_pose)
+            _claim(report, claimed, registration_record(best, found, blind), travel, shown)
+            return [check, *checks][:shown]
+        why = f"{why}, but it fails the checks ({'; '.join(check.reasons)})"
+    report.notes.append(
+        f"lidar registration: no claim in {registration.attempts} registration(s) along the log,"
+        f" the last: {why}"
+    )
+    return checks
+
+
+def _claim(
+    report: MatchReport, claimed: Hypothesis, record: dict[str, object], travel: float, shown: int
+) -> None:
+    """``report`` made a unique match on the registration's place ``claimed`` (at ``travel`` m)."""
+    below = " (its hypotheses listed below)" if report.hypotheses else ""
+    report.hypotheses = [claimed, *(replace(h, rank=h.rank + 1) for h in report.hypotheses)][:shown]
+    report.paper_verdict = report.paper_verdict or report.verdict
+    report.verdict, report.exit_code = verdict_text(1), EXIT_UNIQUE
+    report.decided_by, report.storey = DECIDED_BY_REGISTRATION, claimed.storey
+    report.n_hypotheses += 1
+    report.registration = record
+    report.notes.append(
+        f"unique by lidar registration at {travel:.1f} m of travel, as a session claims it (fit"
+        f" {record['registration_fit']}, the best distinct place {record['registration_rival_fit']});"
+        f" Algorithm 1 left {report.paper_verdict}{below}"
+    )

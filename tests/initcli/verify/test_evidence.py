@@ -1,0 +1,137 @@
+"""Verification of hypotheses against a log (initcli.verify.evidence): negative evidence separates two
+corridors that are alike but for one door, and neither is claimed while both fit."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from bimtools.site.load import load_site
+from initcli.core.geometry.projection import CameraIntrinsics
+from initcli.core.verify.checks import VerificationParams
+from initcli.io.detection_log import read_log, write_log
+from initcli.match.pipeline import MatchOptions, run_match, site_class_map
+from initcli.sim.synthetic_floor import write_site_folder
+from initcli.sim.synthetic_log import SimFeature, SyntheticParams, make_log, path_from_waypoints
+from initcli.verify.evidence import PathEvidence, StoreyEvidence, verify_report
+
+DOORS_X = (3.0, 8.5, 13.0, 19.0)
+CAMERA = CameraIntrinsics(320.0, 320.0, 320.0, 240.0, 640, 480)  # the session default: ~90 degrees
+EXTRA_X = 25.0  # corridor B has one door more than corridor A
+
+
+def corridor(y: float, prefix: str, xs: tuple[float, ...]) -> list[SimFeature]:
+    """Doors on the north wall (y + 1) of a corridor along x, facing into it (-y)."""
+    return [SimFeature(f"{prefix}{i}", "door", x, y + 1.0, 0.0, -1.0, 1.0, 2.1) for i, x in enumerate(xs)]
+
+
+def walls(y: float) -> np.ndarray:
+    return np.array([[0.0, y - 1.0, 32.0, y - 1.0, 0.0, 1.0], [0.0, y + 1.0, 32.0, y + 1.0, 0.0, -1.0]])
+
+
+def test_negative_evidence_tells_two_corridors_alike_but_for_one_door(tmp_path: Path) -> None:
+    a = corridor(0.0, "A", DOORS_X)
+    b = corridor(12.0, "B", (*DOORS_X, EXTRA_X))
+    site_dir = write_site_folder(tmp_path / "site", {"L1": (a + b, np.vstack([walls(0.0), walls(12.0)]))})
+    # The robot drives along corridor A (where there is no door at x = 25), past x = 25.
+    t, path = path_from_waypoints([(1.0, 0.0), (30.0, 0.0)], start_yaw=0.0)
+    log = make_log(a, t, path, camera=CAMERA, params=SyntheticParams(empty_detections=True), seed=3)
+    log_path = tmp_path / "a.jsonl"
+    write_log(log_path, log.records)
+    options = MatchOptions(max_outliers=0)
+    report = run_match(log_path, site_dir, options)
+    # Algorithm 1 cannot tell the corridors apart (nor the way along them): nothing is claimed.
+    assert report.n_hypotheses >= 2 and report.exit_code != 0
+    site = load_site(Path(site_dir))
+    checks = verify_report(read_log(log_path), site, report, site_class_map(site), VerificationParams())
+    by_corridor = {}
+    for h, check in zip(report.hypotheses, checks, strict=True):
+        assert check is not None
+        if abs(h.pose.yaw) < 0.5:  # the two hypotheses facing the way the robot drove
+            by_corridor["A" if abs(h.pose.y) < 2.0 else "B"] = check
+    assert set(by_corridor) == {"A", "B"}
+    assert by_corridor["A"].missed_predictions == 0
+    assert by_corridor["B"].missed_predictions >= 1
+    assert "B4" in by_corridor["B"].missed_ids  # the door B has and A lacks was in view, never seen
+    assert by_corridor["A"].predicted >= 3
+
+
+def test_path_evidence_of_a_log_has_its_images_and_scans(tmp_path: Path) -> None:
+    t, path = path_from_waypoints([(1.0, 0.0), (10.0, 0.0)], start_yaw=0.0)
+    log = make_log(corridor(0.0, "A", DOORS_X), t, path, params=SyntheticParams(empty_detections=True))
+    write_log(tmp_path / "a.jsonl", log.records)
+    evidence = PathEvidence.of_log(read_log(tmp_path / "a.jsonl"))
+    assert len(evidence.image_poses) == len(t)
+    assert evidence.image_travel[-1] > 8.5
+    assert evidence.image_travel == sorted(evidence.image_travel)
+
+
+def test_the_path_keeps_a_scan_every_half_metre_for_its_last_hundred_metres() -> None:
+    from initcli.core.geometry.se2 import Pose2D
+    from initcli.verify.evidence import TRACK_KEPT_M, TRACK_STEP_M
+
+    evidence = PathEvidence()
+    angles = np.linspace(-np.pi, np.pi, 360, endpoint=False)
+    for k in range(1500):  # 150 m at 0.1 m between scans
+        travel = 0.1 * k
+        evidence.add_scan(Pose2D(travel, 0.0, 0.0), travel, angles, np.full(360, 3.0), 20.0)
+    gaps = np.diff(evidence.track_travel)
+    assert gaps.min() >= TRACK_STEP_M - 1e-9 and gaps.max() < TRACK_STEP_M + 0.1 + 1e-9
+    assert evidence.track_travel[-1] - evidence.track_travel[0] <= TRACK_KEPT_M
+    assert evidence.track_travel[0] >= 149.9 - TRACK_KEPT_M - TRACK_STEP_M
+    scans, travel = evidence.along(20.0)
+    assert len(scans) == len(travel) and 20.0 - TRACK_STEP_M <= travel[-1] - travel[0] <= 20.0
+    assert len(scans[0].angles) == 60  # every third beam kept for the recent scans, every second of those
+    assert evidence.along(1000.0)[0] == evidence.track
+    assert PathEvidence().along(20.0) == ([], [])
+
+
+def _corridor_storey() -> StoreyEvidence:
+    """A closed corridor 1.6 m wide and 40 m long (x in [0, 40], y in [0, 1.6]); outside is unknown."""
+    from initcli.core.filters.particle_filter import LikelihoodField
+    from initcli.core.verify.checks import FreeSpace
+    from tests.helpers import rooms_map
+
+    grid = rooms_map([(0.0, 0.0, 40.0, 1.6)], 44.0, 5.6)
+    empty = np.zeros((0, 2))
+    return StoreyEvidence(
+        [], empty, empty, np.zeros(0), [], np.zeros((0, 4)), LikelihoodField(grid), FreeSpace(grid, 0.3)
+    )
+
+
+def test_a_long_wall_drive_with_odometry_drift_stays_in_free_space_placed_window_by_window() -> None:
+    """Odometry that turns 0.2 degrees per metre too much puts the right place's path of the last
+    30 m through the corridor wall when one transform places all of it; placed window by window as
+    the lidar along the path aligns it, the path lies in the corridor. A place across the wall gains
+    nothing from that."""
+    from initcli.core.geometry.projection import CameraMount
+    from initcli.core.geometry.raycast import ray_segment_distances
+    from initcli.core.geometry.se2 import Pose2D
+    from initcli.core.verify.checks import CameraView
+    from initcli.verify.evidence import verify_transform
+
+    storey = _corridor_storey()
+    segments = np.array(
+        [[0.0, 0.0, 40.0, 0.0], [0.0, 1.6, 40.0, 1.6], [0.0, 0.0, 0.0, 1.6], [40.0, 0.0, 40.0, 1.6]]
+    )
+    angles = np.linspace(-np.pi, np.pi, 360, endpoint=False)
+    evidence = PathEvidence()
+    odom, bias = Pose2D(1.0, 0.8, 0.0), np.radians(0.2)
+    for k, x in enumerate(np.arange(1.0, 39.0, 0.25)):
+        if k:
+            odom = odom * Pose2D(0.25, 0.0, 0.25 * bias)  # the true step is straight on
+        ranges = ray_segment_distances(np.array([x, 0.8]), angles, segments, 12.0)
+        travel = x - 1.0
+        evidence.add_scan(odom, travel, angles, np.where(ranges < 12.0, ranges, np.inf), 12.0)
+        evidence.add_image(odom, travel)
+    right = Pose2D(38.75, 0.8, 0.0) * odom.inverse()
+    view = CameraView(CAMERA, CameraMount(0.2, 0.0, 1.0, 0.0, 0.0, 0.0), min_depth=0.5)
+    params = VerificationParams()
+    check = verify_transform(right, storey, evidence, [], view, params)
+    assert check.passed, check.reasons
+    assert check.path_free is not None and check.path_free >= params.min_path_free
+    single = verify_transform(right, storey, evidence, [], view, VerificationParams(track_m=0.0))
+    assert not single.passed and single.path_free is not None and single.path_free < params.min_path_free
+    across = Pose2D(0.0, 1.7, 0.0) * right  # the same drive placed beside the corridor
+    assert not verify_transform(across, storey, evidence, [], view, params).passed
