@@ -88,7 +88,13 @@ def summary_table(manifest) -> Table:
 @app.command()
 def extract(
     model: Annotated[
-        Path, typer.Argument(metavar="MODEL.ifc", help="IFC model (IFC2X3, IFC4, IFC4X3)", show_default=False)
+        Path,
+        typer.Argument(
+            metavar="MODEL.ifc|MAP.yaml",
+            help="IFC model (IFC2X3, IFC4, IFC4X3), or a ROS map_server / Nav2 map YAML (its PGM or "
+            "PNG beside it)",
+            show_default=False,
+        ),
     ],
     outdir: Annotated[
         Path | None, typer.Option("-o", "--outdir", help="output folder [default: ./<model-stem>_site/]")
@@ -113,6 +119,14 @@ def extract(
             callback=number_option(PROG, **RESOLUTION_RANGE),
         ),
     ] = DEFAULT_RESOLUTION,
+    features: Annotated[
+        Path | None,
+        typer.Option(
+            "--features",
+            metavar="FILE.csv",
+            help="with a map: the features (paper Table 1 columns, as features.csv) to put in the site",
+        ),
+    ] = None,
     force: Annotated[
         bool,
         typer.Option(
@@ -124,7 +138,10 @@ def extract(
     ] = False,
     version: Annotated[bool, typer.Option("--version", help="print the version and exit")] = False,
 ) -> None:
-    """Extract doors, lifts and stairs (paper Table 1), wall outlines, ROS maps and previews per storey."""
+    """Extract doors, lifts and stairs (paper Table 1), wall outlines, ROS maps and previews per storey.
+
+    Given a map YAML instead, write it as a site of one storey named after the file: the map as
+    given, walls from its occupied cells, the features of --features (else none)."""
     from bimtools.extract.output import SITE_MARKERS, SITE_WRITES, write_site
     from bimtools.extract.pipeline import extract_site
     from bimtools.ifc.categories import load_categories
@@ -132,6 +149,15 @@ def extract(
     if version:
         out.print(f"bim-extract {__version__}")
         return
+    from bimtools.extract.from_map import is_map_file
+
+    if is_map_file(model):
+        _extract_map(model, outdir, storey, categories, section_height, resolution, features, force, as_json)
+        return
+    if features is not None:
+        _fail(
+            f"--features {features}: applies to a map (MAP.yaml); an IFC model's features come from the model"
+        )
     progress = LazyProgress("geometry")
     try:
         target = outdir if outdir is not None else Path.cwd() / f"{model.stem}_site"
@@ -156,6 +182,63 @@ def extract(
         out.print(summary_table(manifest))
         for note in site.notes:
             out.print(f"note: {note}", highlight=False)
+        out.print(f"wrote {len(manifest.files)} files to {target}")
+
+
+def _fail(message: str) -> None:
+    print(f"{PROG}: error: {' '.join(message.split())}", file=sys.stderr)
+    raise typer.Exit(EXIT_BAD_INPUT)
+
+
+def _extract_map(
+    model: Path,
+    outdir: Path | None,
+    storey: str | None,
+    categories: Path | None,
+    section_height: float,
+    resolution: float,
+    features: Path | None,
+    force: bool,
+    as_json: bool,
+) -> None:
+    """``bim-extract MAP.yaml``: the map as a one-storey site (bimtools.extract.from_map)."""
+    from bimtools.extract.from_map import read_map_site, trace_map_site, write_map_site
+    from bimtools.extract.output import SITE_MARKERS, SITE_WRITES
+    from bimtools.site.occupancy_map import map_image_path
+
+    try:
+        if storey is not None and storey not in ("all", model.stem):
+            raise InputError(
+                f"--storey {storey!r}: a map has one storey, named after its file: {model.stem!r}"
+            )
+        target = outdir if outdir is not None else Path.cwd() / f"{model.stem}_site"
+        check_outputs(
+            [model, map_image_path(model) if model.is_file() else None, categories, features],
+            [OutputFolder(target, "-o/--outdir", SITE_MARKERS, SITE_WRITES)],
+            force,
+        )
+        names: tuple[str, ...] = ("Door", "Lift", "Stairs")
+        if categories is not None:
+            from bimtools.ifc.categories import load_categories
+
+            names = tuple(load_categories(categories).names)
+        site = read_map_site(model, features, names, section_height)
+        if resolution != DEFAULT_RESOLUTION and abs(resolution - site.grid.resolution) > 1e-12:
+            raise InputError(
+                f"--resolution {resolution:g}: a map keeps its own resolution ({site.grid.resolution:g} m)"
+            )
+        manifest = write_map_site(target, trace_map_site(site))
+    except InputError as exc:
+        _fail(str(exc))
+    if as_json:
+        print(json.dumps(manifest.to_dict(), indent=2))
+    else:
+        out.print(summary_table(manifest))
+        out.print(
+            f"note: {len(site.walls)} wall surfaces and {len(site.obstacles)} obstacles from the occupied "
+            f"cells; {len(site.features)} features",
+            highlight=False,
+        )
         out.print(f"wrote {len(manifest.files)} files to {target}")
 
 

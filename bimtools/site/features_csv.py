@@ -62,6 +62,11 @@ def _number(path: Path, line: int, column: str, text: str) -> float:
 
 def read_features(path: Path) -> list[Feature]:
     """Read a features.csv; raise :class:`InputError` naming ``file:line`` on a bad row."""
+    return [f for _, f in read_feature_rows(path)]
+
+
+def read_feature_rows(path: Path) -> list[tuple[int, Feature]]:
+    """The features of a features.csv with the line each ends on (for messages of later checks)."""
     path = Path(path)
     text = read_text(path, "a feature table (features.csv)", encoding="utf-8-sig")
     reader = csv.DictReader(io.StringIO(text, newline=""))
@@ -71,7 +76,7 @@ def read_features(path: Path) -> list[Feature]:
         raise InputError(f"{path}:{reader.line_num}: not a CSV row ({exc})") from None
 
 
-def _rows(path: Path, reader: csv.DictReader[str]) -> list[Feature]:
+def _rows(path: Path, reader: csv.DictReader[str]) -> list[tuple[int, Feature]]:
     header = [h.strip() for h in (reader.fieldnames or [])]
     missing = [c for c in TABLE1_COLUMNS if c not in header]
     if missing:
@@ -79,7 +84,7 @@ def _rows(path: Path, reader: csv.DictReader[str]) -> list[Feature]:
             f"{path}:1: missing column(s) {', '.join(missing)} (Table 1 needs {','.join(TABLE1_COLUMNS)})"
         )
     reader.fieldnames = header
-    features: list[Feature] = []
+    features: list[tuple[int, Feature]] = []
     for row in reader:
         line = reader.line_num
         if not any((v or "").strip() for v in row.values() if isinstance(v, str)):
@@ -94,25 +99,22 @@ def _rows(path: Path, reader: csv.DictReader[str]) -> list[Feature]:
         norm = math.hypot(nx, ny)
         if norm < 1e-9:
             raise InputError(f"{path}:{line}: Norm_X, Norm_Y is the zero vector")
-        features.append(
-            Feature(
-                id=values["ID"],
-                category=values["Category"],
-                x=_number(path, line, "X", values["X"]),
-                y=_number(path, line, "Y", values["Y"]),
-                norm_x=nx / norm,
-                norm_y=ny / norm,
-                width=_number(path, line, "Width", values["Width"]),
-                height=_number(path, line, "Height", values["Height"]),
-                storey=values["Storey"],
-                elevation=_number(path, line, "Elevation", values["Elevation"])
-                if values["Elevation"]
-                else 0.0,
-                ifc_class=values["IfcClass"],
-                name=values["Name"],
-            )
+        feature = Feature(
+            id=values["ID"],
+            category=values["Category"],
+            x=_number(path, line, "X", values["X"]),
+            y=_number(path, line, "Y", values["Y"]),
+            norm_x=nx / norm,
+            norm_y=ny / norm,
+            width=_number(path, line, "Width", values["Width"]),
+            height=_number(path, line, "Height", values["Height"]),
+            storey=values["Storey"],
+            elevation=_number(path, line, "Elevation", values["Elevation"]) if values["Elevation"] else 0.0,
+            ifc_class=values["IfcClass"],
+            name=values["Name"],
         )
+        features.append((line, feature))
     return features
 
 
-__all__ = ["EXTRA_COLUMNS", "format_features", "read_features", "write_features"]
+__all__ = ["EXTRA_COLUMNS", "format_features", "read_feature_rows", "read_features", "write_features"]

@@ -50,6 +50,17 @@ class Site:
         return self.storeys[name]
 
 
+def _storeys(features: list[Feature], manifest: SiteManifest | None) -> dict[str, StoreyModel]:
+    """The manifest's storeys (a map's may hold no feature), then those the features name."""
+    storeys: dict[str, StoreyModel] = {}
+    for info in manifest.storeys if manifest is not None else []:
+        storeys.setdefault(info.name, StoreyModel(info.name, info.elevation, []))
+    for f in features:
+        model = storeys.setdefault(f.storey, StoreyModel(f.storey, f.elevation, []))
+        model.features.append(f)
+    return storeys
+
+
 def load_site(path: Path, with_maps: bool = True) -> Site:
     """Read an OUTDIR (features.csv, walls.geojson, maps, site.json) or a features.csv alone."""
     path = Path(path)
@@ -62,14 +73,12 @@ def load_site(path: Path, with_maps: bool = True) -> Site:
     else:
         csv_path = path
     features = read_features(csv_path)
-    if not features:
-        raise InputError(f"{csv_path}: no features")
     manifest = read_manifest(path / "site.json") if path.is_dir() and (path / "site.json").exists() else None
+    # A site of a map (bim-extract MAP.yaml) may hold no features: its storeys are the manifest's.
+    if not features and (manifest is None or not any(info.map_yaml for info in manifest.storeys)):
+        raise InputError(f"{csv_path}: no features")
 
-    storeys: dict[str, StoreyModel] = {}
-    for f in features:
-        model = storeys.setdefault(f.storey, StoreyModel(f.storey, f.elevation, []))
-        model.features.append(f)
+    storeys = _storeys(features, manifest)
     if path.is_dir() and (path / "walls.geojson").exists():
         walls, obstacles = read_walls(path / "walls.geojson")
         for w in walls:

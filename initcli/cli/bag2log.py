@@ -1,4 +1,5 @@
-"""``bim-init bag2log BAG -o LOG.jsonl``: a recorded ROS bag as a detection log (no ROS needed).
+"""``bim-init bag2log BAG -o LOG.jsonl``: a recorded ROS bag or a CARMEN laser log as a detection log
+(no ROS needed).
 
 Exit codes: 0 written, 2 bad input (one line on stderr).
 """
@@ -34,7 +35,13 @@ __all__ = ["bag2log"]
 
 
 def bag2log(
-    bag: Annotated[Path, typer.Argument(metavar="BAG", help="ROS 1 .bag, ROS 2 bag folder (.db3) or .mcap.")],
+    bag: Annotated[
+        Path,
+        typer.Argument(
+            metavar="BAG",
+            help="ROS 1 .bag, ROS 2 bag folder (.db3) or .mcap; or a CARMEN laser log (.log, .clf, .gz).",
+        ),
+    ],
     out: Annotated[Path, typer.Option("-o", "--out", metavar="LOG.jsonl", help="Detection log to write.")],
     image_topic: ImageTopic = None,
     detections_topic: DetectionsTopic = None,
@@ -47,7 +54,9 @@ def bag2log(
     rate: Rate = None,
     class_names: ClassNames = None,
 ) -> None:
-    """Convert a recorded ROS bag into a detection log for ``bim-init match``."""
+    """Convert a recorded ROS bag or a CARMEN laser log into a detection log for ``bim-init match``.
+    A bag or log without a camera (a laser scan and odometry only) gives a log of scans and odometry
+    whose meta says ``camera_absent``."""
     try:
         check_outputs([bag, None if model == "default" else Path(model)], [OutputFile(out, "-o/--out")])
         options = bag_options(
@@ -68,8 +77,9 @@ def bag2log(
         fail(PROG, exc)
     for warning in stats.warnings:
         typer.echo(f"bim-init: warning: {warning}", err=True)
+    camera = "camera absent (lidar only), " if stats.camera_absent else ""
     typer.echo(
-        f"wrote {out}: {stats.images} images, {stats.objects} detections, {stats.odom} odom, "
+        f"wrote {out}: {camera}{stats.images} images, {stats.objects} detections, {stats.odom} odom, "
         f"{stats.scans} scans "
         f"({stats.messages} messages in {stats.seconds:.1f} s)"
     )

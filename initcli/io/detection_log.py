@@ -4,7 +4,11 @@ JSON Lines, one record per line, ordered by time ``t`` (seconds).
 Schema: ``schemas/detection_log.schema.json`` (one line = one instance). Records:
 
 - ``meta`` (first line): version 1, frame ``odom``, camera intrinsics, camera pose on the robot,
-  optional ``depth_window`` n and ``source``.
+  optional ``depth_window`` n and ``source``; ``camera_absent: true`` instead of the camera fields
+  when the robot had no camera (a lidar-only bag or laser log: no ``detections`` then), and
+  optionally ``lidar_mount`` (x, y, yaw), the laser's mount the scans were carried from.
+- ``scan``: a planar scan in the robot's base frame (beams from the base origin, angle 0 along the
+  base's x axis; null: no return), see :mod:`initcli.io.laser`.
 - ``odom``: robot pose (x, y, yaw) in the odometry frame (origin: start pose, x: initial heading).
 - ``detections``: one image's raw detector output, with the odom pose when it was taken; each
   object has ``class``, ``score``, ``bbox`` [u1, v1, u2, v2] and ``depth`` (mean over the
@@ -12,7 +16,7 @@ Schema: ``schemas/detection_log.schema.json`` (one line = one instance). Records
 - ``feature`` (optional): an already aggregated feature in the odom frame; ``source`` says which
   sensor found it: ``camera`` (the default: a log without the field is a camera log) or ``lidar``
   (a wall corner, column corner or opening, see :mod:`initcli.core.lidar.landmark_tracks`).
-- ``scan`` (optional), ``truth`` (optional, simulation only: true pose in the BIM frame).
+- ``truth`` (optional, simulation only: true pose in the BIM frame).
 - ``state``, ``hypotheses`` (optional, written by ``bim-init run``): kept as plain data.
 
 Unknown record types are skipped with one warning (forward compatibility); unknown keys in a
@@ -39,6 +43,8 @@ from initcli.core.geometry.se2 import Pose2D
 from initcli.core.lidar.landmark_tracks import LidarLandmark
 from initcli.io.log_records import (
     LOG_VERSION,
+    NO_CAMERA,
+    NO_MOUNT,
     RECORD_TYPES,
     DetectedObject,
     DetectionLog,
@@ -55,6 +61,7 @@ from initcli.io.log_records import (
 
 __all__ = [
     "LogWriter",
+    "log_camera_absent",
     "MAX_ANGLE",
     "MAX_COORDINATE",
     "MAX_TIME",
@@ -139,6 +146,42 @@ def _parse_meta(o: dict[str, Any]) -> Meta:
     frame = o.get("frame", "odom")
     if frame != "odom":
         raise _Bad(f"meta 'frame' must be \"odom\", got {json.dumps(frame)}")
+    absent = o.get("camera_absent", False)
+    if not isinstance(absent, bool):
+        raise _Bad(f"'camera_absent' must be true or false, got {json.dumps(absent)}")
+    if absent and "camera" not in o and "camera_pose" not in o:
+        intr, mount = NO_CAMERA, NO_MOUNT
+    else:
+        intr, mount = _camera(o)
+    depth_window = o.get("depth_window")
+    if depth_window is not None and (
+        isinstance(depth_window, bool) or not isinstance(depth_window, int) or depth_window < 0
+    ):
+        raise _Bad(f"'depth_window' must be a non-negative integer, got {json.dumps(depth_window)}")
+    source = o.get("source")
+    if source is not None and not isinstance(source, str):
+        raise _Bad(f"'source' must be a string, got {json.dumps(source)}")
+    lidar = None
+    if o.get("lidar_mount") is not None:
+        lm = _obj(o, "lidar_mount")
+        lidar = Pose2D(
+            _coord(lm, "x", "lidar_mount.", bound=10.0),
+            _coord(lm, "y", "lidar_mount.", bound=10.0),
+            _coord(lm, "yaw", "lidar_mount.", bound=MAX_ANGLE, unit="rad"),
+        )
+    return Meta(
+        camera=intr,
+        camera_pose=mount,
+        version=LOG_VERSION,
+        frame="odom",
+        depth_window=depth_window,
+        source=source,
+        camera_absent=absent,
+        lidar_mount=lidar,
+    )
+
+
+def _camera(o: dict[str, Any]) -> tuple[CameraIntrinsics, CameraMount]:
     cam = _obj(o, "camera")
     intr = CameraIntrinsics(
         fx=_num(cam, "fx", "camera."),
@@ -154,22 +197,7 @@ def _parse_meta(o: dict[str, Any]) -> Meta:
         raise _Bad("camera width and height must be positive")
     cp = _obj(o, "camera_pose")
     mount = CameraMount(*(_num(cp, k, "camera_pose.") for k in ("x", "y", "z", "roll", "pitch", "yaw")))
-    depth_window = o.get("depth_window")
-    if depth_window is not None and (
-        isinstance(depth_window, bool) or not isinstance(depth_window, int) or depth_window < 0
-    ):
-        raise _Bad(f"'depth_window' must be a non-negative integer, got {json.dumps(depth_window)}")
-    source = o.get("source")
-    if source is not None and not isinstance(source, str):
-        raise _Bad(f"'source' must be a string, got {json.dumps(source)}")
-    return Meta(
-        camera=intr,
-        camera_pose=mount,
-        version=LOG_VERSION,
-        frame="odom",
-        depth_window=depth_window,
-        source=source,
-    )
+    return intr, mount
 
 
 def _parse_object(o: Any, i: int) -> DetectedObject:
@@ -253,6 +281,19 @@ def parse_record(o: Any) -> Record | None:
     if kind not in RECORD_TYPES:
         return None
     return _parse_body(kind, o)
+
+
+def log_camera_absent(path: Path | str) -> bool:
+    """Whether the log's meta record says the camera was absent (False when it cannot be read)."""
+    try:
+        with open(path, encoding="utf-8-sig") as handle:
+            for raw in handle:
+                if raw.strip():
+                    value = json.loads(raw) if len(raw) <= MAX_LOG_LINE_BYTES else None
+                    return isinstance(value, dict) and value.get("camera_absent") is True
+    except (OSError, ValueError):
+        return False
+    return False
 
 
 def _record_time(rec: Record) -> float | None:
@@ -344,6 +385,8 @@ class _Lines:
                 f"{path}:{number}: missing meta record: the first record must be "
                 f'{{"type":"meta","version":{LOG_VERSION},...}}, got type {value.get("type")!r}'
             )
+        if isinstance(rec, Detections) and self.meta.camera_absent:
+            raise _Bad("a detections record in a log whose meta says camera_absent")
         self.records.append(rec)
         self.lines.append(number)
 
@@ -399,20 +442,29 @@ def record_to_dict(rec: Record) -> dict[str, Any]:
     """A record as the JSON object of its line."""
     if isinstance(rec, Meta):
         c, m = rec.camera, rec.camera_pose
-        out: dict[str, Any] = {
-            "type": "meta",
-            "version": rec.version,
-            "frame": rec.frame,
-            "camera": {
+        out: dict[str, Any] = {"type": "meta", "version": rec.version, "frame": rec.frame}
+        if rec.camera_absent:
+            out["camera_absent"] = True
+        else:
+            out["camera"] = {
                 "fx": c.fx,
                 "fy": c.fy,
                 "cx": c.cx,
                 "cy": c.cy,
                 "width": int(c.width),
                 "height": int(c.height),
-            },
-            "camera_pose": {"x": m.x, "y": m.y, "z": m.z, "roll": m.roll, "pitch": m.pitch, "yaw": m.yaw},
-        }
+            }
+            out["camera_pose"] = {
+                "x": m.x,
+                "y": m.y,
+                "z": m.z,
+                "roll": m.roll,
+                "pitch": m.pitch,
+                "yaw": m.yaw,
+            }
+        if rec.lidar_mount is not None:
+            lm = rec.lidar_mount
+            out["lidar_mount"] = {"x": lm.x, "y": lm.y, "yaw": lm.yaw}
         if rec.depth_window is not None:
             out["depth_window"] = int(rec.depth_window)
         if rec.source is not None:

@@ -19,6 +19,8 @@ __all__ = [
     "HypothesesRecord",
     "LOG_VERSION",
     "Meta",
+    "NO_CAMERA",
+    "NO_MOUNT",
     "Odom",
     "RECORD_TYPES",
     "Record",
@@ -28,6 +30,9 @@ __all__ = [
 ]
 
 LOG_VERSION = 1
+# the camera of a log without one (Meta.camera_absent): a placeholder that sees nothing
+NO_CAMERA = CameraIntrinsics(fx=1.0, fy=1.0, cx=0.5, cy=0.5, width=1, height=1)
+NO_MOUNT = CameraMount(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 RECORD_TYPES = ("meta", "odom", "detections", "feature", "scan", "truth", "state", "hypotheses")
 
 
@@ -39,6 +44,12 @@ class Meta:
     frame: str = "odom"
     depth_window: int | None = None
     source: str | None = None
+    # no camera on the robot (a lidar-only bag or laser log): the file has no camera fields, ``camera``
+    # and ``camera_pose`` are NO_CAMERA / NO_MOUNT, and the log holds no detections
+    camera_absent: bool = False
+    # the laser's mount on the base (x, y, yaw) the scans were carried from; informational: the
+    # scan records are already in the base frame (initcli.io.laser)
+    lidar_mount: Pose2D | None = None
 
 
 @dataclass(frozen=True)

@@ -1,5 +1,10 @@
 """A recorded ROS bag (ROS 1 ``.bag``, ROS 2 ``.db3`` folder or ``.mcap``) -> detection-log records.
 
+A bag without a camera (a LaserScan and odometry only) gives a log of odometry and scans whose meta
+says ``camera_absent``. Scans are carried into the base frame from the laser's frame through
+``/tf_static`` (any offset and yaw; :mod:`initcli.io.laser`); inf, NaN, 0 and ranges outside
+[range_min, range_max) are no returns.
+
 No ROS installation: rosbags reads the bag. The topics are chosen by message type when the bag
 holds exactly one of a kind, otherwise by the options (:mod:`initcli.ros.bag_topics`). Each colour
 image (run through the ONNX detector) or ``Detection2DArray`` becomes a ``detections`` record: the
@@ -26,6 +31,8 @@ from initcli.core.geometry.depth import window_depth
 from initcli.core.geometry.projection import CameraIntrinsics, CameraMount, mount_from_optical
 from initcli.core.geometry.se2 import Pose2D, wrap_angle
 from initcli.io.detection_log import DetectedObject, Detections, Meta, Odom, Record, Scan
+from initcli.io.laser import check_odometry, check_scan_geometry, no_returns, scan_in_base
+from initcli.io.log_records import NO_CAMERA, NO_MOUNT
 from initcli.ros.bag_source import BagSource
 from initcli.ros.bag_topics import choose_topics
 from initcli.ros.messages import (
@@ -37,7 +44,7 @@ from initcli.ros.messages import (
     stamp_seconds,
 )
 from initcli.ros.msgdefs import bbox_centre, detection_fields
-from initcli.ros.records import Bag2LogOptions, Bag2LogStats, BagTopics
+from initcli.ros.records import Bag2LogOptions, Bag2LogStats, BagTopics, Topic
 from initcli.ros.tf import TransformTree, frame_name, quaternion_yaw
 
 __all__ = [
@@ -203,14 +210,21 @@ def bag_to_records(
         topics = choose_topics(source, options)
         tick = _Ticker(topics, stats, progress)
         first = _FirstPass.read(source, topics, tick)  # everything but the images
-        if first.camera_msg is None:
-            raise InputError(f"{topics.camera_info.name}: no CameraInfo message in the bag")
-        camera = intrinsics(first.camera_msg, topics.camera_info.name)
-        optical_frame = frame_name(first.camera_msg.header.frame_id)
+        camera, optical_frame = NO_CAMERA, ""
+        if topics.camera_info is not None:
+            if first.camera_msg is None:
+                raise InputError(f"{topics.camera_info.name}: no CameraInfo message in the bag")
+            camera = intrinsics(first.camera_msg, topics.camera_info.name)
+            optical_frame = frame_name(first.camera_msg.header.frame_id)
         base, odom_samples = _base_odometry(first, topics, options)
-        rotation, translation = first.tree.lookup(base, optical_frame)
-        mount: CameraMount = mount_from_optical(rotation, translation)
+        mount: CameraMount = NO_MOUNT
+        if topics.camera_info is not None:
+            rotation, translation = first.tree.lookup(base, optical_frame)
+            mount = mount_from_optical(rotation, translation)
         trajectory = _Trajectory.of(odom_samples)
+        check_odometry(
+            _odometry_name(topics, base), trajectory.t.tolist(), np.column_stack([trajectory.x, trajectory.y])
+        )
         origin = Pose2D(float(trajectory.x[0]), float(trajectory.y[0]), float(trajectory.yaw[0])).inverse()
 
         records: list[Odom | Scan | Detections] = []  # each with a time stamp t
@@ -218,23 +232,39 @@ def bag_to_records(
             p = origin * Pose2D(float(trajectory.x[i]), float(trajectory.y[i]), float(trajectory.yaw[i]))
             records.append(Odom(float(trajectory.t[i]), p.x, p.y, float(wrap_angle(p.yaw))))
         stats.odom = len(trajectory.t)
-        records.extend(first.scans)
-        stats.scans = len(first.scans)
-        # Pass 2: perception, each with the depth image nearest in time.
-        _PerceptionPass(topics, options, stats, camera, trajectory, origin, records).read(source, tick)
+        scans, lidar_mount = first.scans_in_base(base)
+        records.extend(scans)
+        stats.scans = len(scans)
+        if topics.perception is not None:
+            # Pass 2: perception, each with the depth image nearest in time.
+            _PerceptionPass(topics, options, stats, camera, trajectory, origin, records).read(source, tick)
         if progress is not None:
             progress(tick.total, tick.total)
 
-    _check_images(path, topics, stats)
+    if topics.perception is None:
+        stats.camera_absent = True
+        if not scans:
+            assert topics.scan is not None
+            raise InputError(f"{path}: no camera, and no message on {topics.scan.name}")
+        what = f"no camera, {topics.scan.name if topics.scan else 'no scan'}"
+    else:
+        _check_images(path, topics, stats)
+        what = topics.perception.name
     records.sort(key=lambda r: r.t)
     meta = Meta(
         camera=camera,
         camera_pose=mount,
-        depth_window=options.depth_window,
-        source=f"bim-init bag2log {path.name} ({topics.perception.name}, base frame {base})",
+        depth_window=None if stats.camera_absent else options.depth_window,
+        source=f"bim-init bag2log {path.name} ({what}, base frame {base})",
+        camera_absent=stats.camera_absent,
+        lidar_mount=lidar_mount,
     )
     stats.seconds = time.perf_counter() - started
     return [meta, *records], stats
+
+
+def _odometry_name(topics: BagTopics, base: str) -> str:
+    return topics.odom.name if topics.odom is not None else f"/tf odom -> {base}"
 
 
 class _Ticker:
@@ -275,8 +305,9 @@ class _FirstPass:
     odom_samples: list[tuple[float, Pose2D]] = field(default_factory=list)  # from the odometry topic
     odom_child: str | None = None  # the odometry's child frame
     tf_edges: list[tuple[float, str, str, Pose2D]] = field(default_factory=list)  # t, parent, child, pose
-    scans: list[Scan] = field(default_factory=list)
+    scans: list[_RawScan] = field(default_factory=list)
     clock: dict[str, list[float]] = field(default_factory=dict)  # stamps per topic
+    odom_children: set[str] = field(default_factory=set)  # every child frame the odometry named
 
     @staticmethod
     def read(source: BagSource, topics: BagTopics, tick: Callable[[], None]) -> _FirstPass:
@@ -292,7 +323,7 @@ class _FirstPass:
 
     def add(self, name: str, bag_ns: int, msg: Any) -> None:
         topics = self.topics
-        if name == topics.camera_info.name:
+        if topics.camera_info is not None and name == topics.camera_info.name:
             if self.camera_msg is None:
                 self.camera_msg = msg
             return
@@ -313,22 +344,68 @@ class _FirstPass:
             p, q = msg.pose.pose.position, msg.pose.pose.orientation
             finite(name, "an Odometry pose", p.x, p.y, q.x, q.y, q.z, q.w)
             self.odom_samples.append((t, Pose2D(float(p.x), float(p.y), quaternion_yaw(q.x, q.y, q.z, q.w))))
-            self.odom_child = frame_name(msg.child_frame_id) or self.odom_child
+            child = frame_name(msg.child_frame_id)
+            self.odom_child = child or self.odom_child
+            if child:
+                self.odom_children.add(child)
         elif topics.scan is not None and name == topics.scan.name:
+            where = f"{name} (message {len(self.scans) + 1}, t={t:.3f} s)"
             finite(
-                name, "a LaserScan's angles or range_max", msg.angle_min, msg.angle_increment, msg.range_max
+                where,
+                "a LaserScan's angles or range_max",
+                msg.angle_min,
+                msg.angle_max,
+                msg.angle_increment,
+                msg.range_max,
             )
-            ranges = np.asarray(msg.ranges, dtype=float)  # NaN, inf: no return (the sensor's way)
-            ranges = np.where(np.isfinite(ranges) & (ranges >= float(msg.range_min)), ranges, math.nan)
+            ranges = np.asarray(msg.ranges, dtype=float)
+            span = float(msg.angle_max) - float(msg.angle_min)
+            check_scan_geometry(where, len(ranges), float(msg.angle_min), float(msg.angle_increment), span)
+            range_max = float(msg.range_max)
+            if range_max <= 0:
+                raise InputError(f"{where}: a LaserScan's range_max is {range_max:g}")
+            range_min = float(msg.range_min) if math.isfinite(float(msg.range_min)) else 0.0
             self.scans.append(
-                Scan(
+                _RawScan(
                     t,
+                    frame_name(msg.header.frame_id),
                     float(msg.angle_min),
                     float(msg.angle_increment),
-                    float(msg.range_max),
-                    tuple(ranges.tolist()),
+                    range_max,
+                    no_returns(ranges, range_min, range_max),  # inf, NaN, 0, out of range: no return
                 )
             )
+
+    def scans_in_base(self, base: str) -> tuple[list[Scan], Pose2D | None]:
+        """The scans carried into the base frame (each laser frame's mount from /tf_static), and the
+        mount of the (first) laser (None: no scans)."""
+        mounts: dict[str, tuple[Pose2D, bool]] = {}
+        out = []
+        for s in self.scans:
+            if s.frame not in mounts:
+                if not s.frame or s.frame == base:
+                    mounts[s.frame] = (Pose2D(0.0, 0.0, 0.0), False)
+                else:
+                    r, tr = self.tree.lookup(base, s.frame)
+                    mounts[s.frame] = (_planar(r, tr), bool(r[2, 2] < 0))
+            mount, flipped = mounts[s.frame]
+            out.append(
+                scan_in_base(s.t, s.angle_min, s.angle_increment, s.range_max, s.ranges, mount, flipped)
+            )
+        first = mounts[self.scans[0].frame][0] if self.scans else None
+        return out, first
+
+
+@dataclass
+class _RawScan:
+    """A LaserScan as read, in its own frame (no-returns NaN)."""
+
+    t: float
+    frame: str
+    angle_min: float
+    angle_increment: float
+    range_max: float
+    ranges: np.ndarray
 
 
 def _base_odometry(
@@ -341,6 +418,12 @@ def _base_odometry(
         return _tf_odometry(first, base)
     if not first.odom_samples:
         raise InputError(f"{topics.odom.name}: no odometry message")
+    if len(first.odom_children) > 1:
+        raise InputError(
+            f"{topics.odom.name}: odometry of {len(first.odom_children)} child frames "
+            f"({', '.join(sorted(first.odom_children))}): two publishers interleaved? use --odom-topic "
+            "with a topic of one"
+        )
     base = base or first.odom_child or "base_link"
     odom_child = first.odom_child
     if odom_child and odom_child != base:  # odometry of another frame: carry it to the base
@@ -388,19 +471,23 @@ class _PerceptionPass:
         self.trajectory = trajectory
         self.origin = origin
         self.records = records
+        assert topics.perception is not None and topics.depth is not None
+        self.perception: Topic = topics.perception
+        self.depth: Topic = topics.depth
         self.perceiver = _Perceiver(topics.perception_kind, options, stats, topics.perception.name)
         self.depths: deque[tuple[float, Any]] = deque(maxlen=DEPTH_BUFFER)
         self.pending: deque[tuple[float, Any]] = deque()
 
     def read(self, source: BagSource, tick: Callable[[], None]) -> None:
-        topics, options, depths, pending = self.topics, self.options, self.depths, self.pending
+        options, depths, pending = self.options, self.depths, self.pending
         last_kept = -math.inf
-        seen: dict[str, list[float]] = {topics.perception.name: [], topics.depth.name: []}
-        for name, bag_ns, msg in source.messages([topics.perception.name, topics.depth.name]):
+        perception, depth_topic = self.perception.name, self.depth.name
+        seen: dict[str, list[float]] = {perception: [], depth_topic: []}
+        for name, bag_ns, msg in source.messages([perception, depth_topic]):
             tick()
             t = stamp_seconds(msg, bag_ns)
             seen[name].append(t)
-            if name == topics.depth.name:
+            if name == depth_topic:
                 depths.append((t, msg))
             else:
                 if options.rate is not None and t - last_kept < 1.0 / options.rate - 1e-9:
@@ -433,7 +520,7 @@ class _PerceptionPass:
         depth = decode_depth(best[1])
         if depth.shape != (camera.height, camera.width):
             raise InputError(
-                f"{self.topics.depth.name}: depth image {depth.shape[1]}x{depth.shape[0]} is not aligned "
+                f"{self.depth.name}: depth image {depth.shape[1]}x{depth.shape[0]} is not aligned "
                 f"with the colour camera ({camera.width}x{camera.height})"
             )
         objects = self.perceiver.objects(msg, depth)
@@ -447,6 +534,7 @@ class _PerceptionPass:
 
 def _check_images(path: Path, topics: BagTopics, stats: Bag2LogStats) -> None:
     """No image converted is bad input (saying why); images skipped are warnings."""
+    assert topics.perception is not None and topics.depth is not None
     if stats.images == 0:
         if stats.without_depth:
             raise InputError(

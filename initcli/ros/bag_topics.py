@@ -1,6 +1,7 @@
 """The topics of a bag that ``bag2log`` reads: chosen by message type when the bag holds exactly one
 of a kind (colour and depth images told apart by their encoding), otherwise by the options; an
-:class:`InputError` naming the candidates when the choice is not clear."""
+:class:`InputError` naming the candidates when the choice is not clear. A bag without a camera (no
+colour image, compressed image or Detection2DArray) is read for its laser scan and odometry."""
 
 from __future__ import annotations
 
@@ -68,6 +69,8 @@ def choose_topics(source: BagSource, options: Bag2LogOptions) -> BagTopics:
         raise InputError("give --image-topic or --detections-topic, not both")
     images = [t for t in source.topics.values() if t.msgtype == IMAGE]
     encodings = {t.name: _encoding(source, t) for t in images}
+    if _camera_absent(source, options, images, encodings):
+        return _lidar_topics(source, options)
     depth = _depth_topic(source, options, images, encodings)
     colour_like = [t for t in images if encodings[t.name] not in DEPTH_ENCODINGS]
     perception = _perception_topic(source, options, [t for t in colour_like if t.name != depth.name])
@@ -82,6 +85,14 @@ def choose_topics(source: BagSource, options: Bag2LogOptions) -> BagTopics:
             f"{source.path}: no sensor_msgs/CameraInfo topic: the camera intrinsics are needed "
             f"(the bag has: {_listing(source.topics.values())})"
         )
+    scan = _pick(source, options.scan_topic, (LASER_SCAN,), "laser scan", "--scan-topic", False)
+    return BagTopics(perception, depth, camera_info, *_odometry_topics(source, options), scan)
+
+
+def _odometry_topics(
+    source: BagSource, options: Bag2LogOptions
+) -> tuple[Topic | None, Topic | None, Topic | None]:
+    """The odometry topic (None: /tf odom -> base), /tf and /tf_static."""
     odom = _pick(source, options.odom_topic, (ODOMETRY,), "odometry", "--odom-topic", False)
     tf = source.topics.get("/tf") if source.topics.get("/tf", Topic("", "")).msgtype == TF_MESSAGE else None
     tf_static = (
@@ -91,8 +102,29 @@ def choose_topics(source: BagSource, options: Bag2LogOptions) -> BagTopics:
     )
     if odom is None and tf is None:
         raise InputError(f"{source.path}: no odometry: neither nav_msgs/Odometry nor /tf in the bag")
+    return odom, tf, tf_static
+
+
+def _camera_absent(
+    source: BagSource, options: Bag2LogOptions, images: list[Topic], encodings: dict[str, str]
+) -> bool:
+    """No camera: no colour image, compressed image or Detection2DArray in the bag, and none named."""
+    if options.image_topic or options.detections_topic:
+        return False
+    colour = [t for t in images if encodings[t.name] not in DEPTH_ENCODINGS]
+    others = [t for t in source.topics.values() if t.msgtype in (COMPRESSED_IMAGE, DETECTION_2D_ARRAY)]
+    return not colour and not others
+
+
+def _lidar_topics(source: BagSource, options: Bag2LogOptions) -> BagTopics:
+    """A bag without a camera: its laser scan and odometry (InputError when it has no scan either)."""
     scan = _pick(source, options.scan_topic, (LASER_SCAN,), "laser scan", "--scan-topic", False)
-    return BagTopics(perception, depth, camera_info, odom, tf, tf_static, scan)
+    if scan is None:
+        raise InputError(
+            f"{source.path}: neither a camera (colour image or vision_msgs/Detection2DArray) nor a "
+            f"sensor_msgs/LaserScan; the bag has: {_listing(source.topics.values())}"
+        )
+    return BagTopics(None, None, None, *_odometry_topics(source, options), scan)
 
 
 def _depth_topic(

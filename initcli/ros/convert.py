@@ -1,5 +1,5 @@
-"""A recorded ROS bag as a detection log (``bim-init bag2log``), and a log or a bag taken alike
-(``bim-init match``): no ROS needed."""
+"""A recorded ROS bag or a CARMEN laser log as a detection log (``bim-init bag2log``), and a log, a
+bag or a CARMEN log taken alike (``bim-init match``): no ROS needed."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from bimkit.errors import InputError
+from initcli.io.carmen import CarmenStats, carmen_to_records, is_carmen
 from initcli.io.detection_log import Record, write_log
 from initcli.ros.records import Bag2LogOptions, Bag2LogStats
 
@@ -22,12 +23,16 @@ __all__ = ["BAG_SUFFIXES", "convert_bag", "is_bag", "log_or_bag"]
 
 def convert_bag(
     bag: Path, out: Path, options: Bag2LogOptions, progress: Progress | None = None
-) -> tuple[list[Record], Bag2LogStats]:
-    """Read ``bag`` and write the log to ``out`` atomically; ``progress(done, total)`` after each
-    message read."""
-    from initcli.ros.bag_reader import bag_to_records  # rosbags, only when a bag is read
+) -> tuple[list[Record], Bag2LogStats | CarmenStats]:
+    """Read ``bag`` (a ROS bag or a CARMEN laser log) and write the log to ``out`` atomically;
+    ``progress(done, total)`` after each message of a bag read."""
+    stats: Bag2LogStats | CarmenStats
+    if is_carmen(bag):
+        records, stats = carmen_to_records(bag)
+    else:
+        from initcli.ros.bag_reader import bag_to_records  # rosbags, only when a bag is read
 
-    records, stats = bag_to_records(bag, options, progress)
+        records, stats = bag_to_records(bag, options, progress)
     out = Path(out)
     tmp = out.with_name(f".{out.name}.partial")
     try:
@@ -57,12 +62,12 @@ def log_or_bag(
     path: Path, options: Bag2LogOptions | None = None, progress: Progress | None = None
 ) -> Iterator[Path]:
     """``path`` itself for a detection log; for a bag, the log converted into a temporary folder
-    (an error about that log names the bag, not the temporary file)."""
-    if not is_bag(Path(path)):
+    (an error about that log names the bag, not the temporary file); a CARMEN laser log alike."""
+    if not is_bag(Path(path)) and not is_carmen(Path(path)):
         yield Path(path)
         return
     with tempfile.TemporaryDirectory(prefix="bim-init-bag2log-") as tmp:
-        log = Path(tmp) / f"{Path(path).stem}.jsonl"
+        log = Path(tmp) / f"{Path(path).name.split('.')[0] or 'log'}.jsonl"
         convert_bag(Path(path), log, options or Bag2LogOptions(), progress)
         try:
             yield log

@@ -72,18 +72,24 @@ class Topic:
 
 @dataclass(frozen=True)
 class BagTopics:
-    """The topics of a bag that ``bag2log`` reads."""
+    """The topics of a bag that ``bag2log`` reads (no perception, depth and camera info: a bag
+    without a camera, read for its scans and odometry)."""
 
-    perception: Topic  # Image, CompressedImage or Detection2DArray
-    depth: Topic
-    camera_info: Topic
+    perception: Topic | None  # Image, CompressedImage or Detection2DArray
+    depth: Topic | None
+    camera_info: Topic | None
     odom: Topic | None  # nav_msgs/Odometry; None: odometry from /tf
     tf: Topic | None
     tf_static: Topic | None
     scan: Topic | None
 
     @property
+    def camera_absent(self) -> bool:
+        return self.perception is None
+
+    @property
     def perception_kind(self) -> str:
+        assert self.perception is not None
         return {IMAGE: "image", COMPRESSED_IMAGE: "compressed", DETECTION_2D_ARRAY: "detections"}[
             self.perception.msgtype
         ]
@@ -128,6 +134,7 @@ class Bag2LogStats:
     outside_odometry: int = 0
     skipped_rate: int = 0
     seconds: float = 0.0
+    camera_absent: bool = False  # no camera in the input: the log has scans and odometry only
     warnings: list[str] = field(default_factory=list)
 
 
