@@ -41,7 +41,7 @@ def twin_masks(eval_config: Path, names: set[str], workdir: Path) -> dict[str, A
     from initcli.config.building import choose_storey, prepare_site
     from initcli.eval.config import load_eval_config
     from initcli.match.pipeline import site_class_map
-    from initcli.survey.survey import SurveyParams, plan_storey
+    from initcli.survey.plan import SurveyParams, plan_storey
 
     plans: dict[str, Any] = {}
     models: dict[Path, Any] = {}  # by IFC model: one extraction for all its storeys

@@ -40,6 +40,7 @@ from _oracle import algorithm1, algorithm1_with_outliers  # noqa: E402
 from bimtools.site.load import Site, load_site  # noqa: E402
 from initcli.core.geometry.se2 import Pose2D  # noqa: E402
 from initcli.core.hypotheses.matching import BimIndex, Matcher  # noqa: E402
+from initcli.core.hypotheses.ranking import Verdict  # noqa: E402
 from initcli.io.detection_log import read_log, write_log  # noqa: E402
 from initcli.match.pipeline import MatchOptions, match_log, site_class_map  # noqa: E402
 from initcli.sim.synthetic_floor import SyntheticFloor, doors_along, make_floor, write_site_folder  # noqa: E402
@@ -326,7 +327,7 @@ def section_accuracy(quick: bool, tmp: Path, extra: list[Path]) -> None:
                 m: match_log(log, site, MatchOptions(pose_method=m), site_class_map(site))
                 for m in ("paper", "rigid")
             }
-            if any(r.exit_code != 0 for r in reports.values()):
+            if any(r.outcome is not Verdict.UNIQUE for r in reports.values()):
                 continue
             if reports["rigid"].hypotheses[0].pose.distance_to(truth) > 2.0:
                 continue
@@ -374,9 +375,9 @@ def section_outliers(quick: bool, tmp: Path, extra: list[Path]) -> None:
                 for k in (0, 1):
                     r = match_log(log, site, MatchOptions(max_outliers=k, top=100_000), site_class_map(site))
                     has = any(h.pose.distance_to(truth) < 1.5 for h in r.hypotheses)
-                    if r.exit_code == 0:
+                    if r.outcome is Verdict.UNIQUE:
                         tallies[k]["unique-correct" if has else "unique-WRONG"] += 1
-                    elif r.exit_code == 3:
+                    elif r.outcome is Verdict.AMBIGUOUS:
                         tallies[k]["ambiguous+truth" if has else "ambiguous-truth"] += 1
                     else:
                         tallies[k]["no match"] += 1

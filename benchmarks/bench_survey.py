@@ -34,15 +34,11 @@ def main() -> None:
     from initcli.eval.trial import trial_seed
     from initcli.executor import LocalExecutor
     from initcli.sim.build import build_sim
-    from initcli.survey.survey import (
-        plan_storey,
-        sample_views,
-        sequences,
-        suggest_landmarks,
-        summarise,
-        survey_storey,
-        unique_distances,
-    )
+    from initcli.survey.landmarks import suggest_landmarks
+    from initcli.survey.plan import plan_storey
+    from initcli.survey.run import survey_storey, unique_distances
+    from initcli.survey.sequences import sample_views, sequences
+    from initcli.survey.summary import summarise
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--workers", type=int, default=2)

@@ -385,8 +385,9 @@ def test_results_table_counts_the_records():
 
 def test_results_pages_come_from_committed_records_with_their_provenance():
     pages = {p.path: p for p in docgen.results_pages(ROOT)}
-    files = sorted((ROOT / "benchmarks/results").glob("**/results.jsonl"))
+    files = [folder / "results.jsonl" for folder in docgen.record_folders(ROOT)]
     assert files, "no results.jsonl under benchmarks/results/"
+    assert not any(path.startswith("results/archive") for path in pages), "archived records got pages"
     for path in files:
         name = path.parent.relative_to(ROOT / "benchmarks/results").as_posix().replace("/", "-")
         page = pages[f"results/{name}.md"].content
@@ -395,3 +396,50 @@ def test_results_pages_come_from_committed_records_with_their_provenance():
             info = json.loads((path.parent / "provenance.json").read_text(encoding="utf-8"))
             assert info["command"] in page and info["commit"] in page
         assert f"results/{name}-success.png" in pages
+
+
+def _record(site: str, success: bool, distance: float, wrong: bool = False, **extra) -> str:
+    return json.dumps(
+        {"site": site, "method": "bim+pf", "success": success, "confident_wrong": wrong,
+         "distance_m": distance, **extra}
+    )  # fmt: skip
+
+
+def test_records_tables_are_read_from_the_records_and_the_archive_is_left_out(tmp_path):
+    base = tmp_path / "benchmarks/results"
+    (base / "old").mkdir(parents=True)
+    (base / "old/results.jsonl").write_text(
+        "\n".join([_record("a", True, 10.0), _record("a", False, 150.0, True), _record("b", True, 4.0),
+                   _record("b", True, 99.0, sweep_key="k", sweep_value="1")]) + "\n"
+    )  # fmt: skip
+    (base / "old/provenance.json").write_text('{"command": "bim-init eval", "commit": "abcdef0123"}')
+    (base / "archive/older").mkdir(parents=True)
+    (base / "archive/older/results.jsonl").write_text(_record("a", True, 1.0) + "\n")
+    assert [f.name for f in docgen.record_folders(tmp_path)] == ["old"]
+    table = docgen.records_table(["old"], tmp_path).splitlines()
+    head = [c.strip() for c in table[0].strip("|").split("|")]
+    assert head[-2:] == ["a: success, mean distance", "b: success, mean distance"]
+    cells = [c.strip() for c in table[2].strip("|").split("|")]
+    assert cells[:6] == ["[old](../results/old.md)", "`abcdef0`", "`bim+pf`", "3", "2/3 (67 %)", "1"]
+    assert cells[6:] == ["1/2, 10.0 m", "1/1, 4.0 m"]  # sweeps left out; distances of successes
+    (tmp_path / "docs/topic").mkdir(parents=True)
+    (tmp_path / "docs/topic/page.md").write_text("# Topic\n\n<!-- records: old -->\n\nold is cited.\n")
+    (tmp_path / "docs/top.md").write_text("# Top\n\n<!-- records: old -->\n")
+    (tmp_path / "docs/plain.md").write_text("# Plain\n")
+    pages = {p.path: p for p in docgen.expanded_pages(tmp_path)}
+    assert sorted(pages) == ["top.md", "topic/page.md"] and pages["top.md"].source == "docs/top.md"
+    assert "| [old](../results/old.md) |" in pages["topic/page.md"].content  # links from the page
+    assert "| [old](results/old.md) |" in pages["top.md"].content
+    assert "<!-- records" not in pages["topic/page.md"].content
+    assert docgen.cited_records(tmp_path) == {"old": ["docs/top.md", "docs/topic/page.md"]}
+
+
+def test_every_record_the_results_folder_keeps_is_cited_and_listed_in_its_readme():
+    """benchmarks/results/ holds only records the docs cite (the rest is in its archive/), and its
+    README lists each; every record a page's table names exists there."""
+    cited = docgen.cited_records(ROOT)
+    readme = (ROOT / "benchmarks/results/README.md").read_text(encoding="utf-8")
+    listed = set(re.findall(r"^\| \[`([\w/-]+)`\]", readme, re.M))
+    assert sorted(name for name, where in cited.items() if not where) == [], "cited nowhere: archive them"
+    assert listed == set(cited), "benchmarks/results/README.md does not list the records kept"
+    assert docgen.expanded_pages(ROOT), "no page builds a table from the records"

@@ -21,7 +21,7 @@ from initcli.core.geometry.se2 import Pose2D
 from initcli.drivers.base import SensorFrame
 from initcli.sim.build import SimSetup
 from initcli.sim.markers import Marker, MarkerDetector, MarkerParams, place_markers
-from initcli.sim.scenario import Circulation
+from initcli.storey.circulation import Circulation
 
 __all__ = ["MarkerAttempt", "MarkerParams", "deploy_markers", "run_markers"]
 

@@ -19,7 +19,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from bimkit.cli import error_line
+from bimkit.cli import fail
 from bimkit.errors import InputError
 from bimkit.outputs import OutputFile, check_outputs
 from bimkit.settings import describe, settings_of
@@ -37,21 +37,20 @@ from initcli.cli.bag_options import (
     ScanTopic,
     bag_options,
 )
+from initcli.cli.exit_codes import match_exit_code
 from initcli.cli.progress import message_progress
+from initcli.config.matching import MatchOptions
 from initcli.core.geometry.se2 import Pose2D
 from initcli.core.lidar.registration_params import RegistrationParams
 from initcli.core.verify.checks import TRACK_HYPOTHESES, Verification
-from initcli.match.pipeline import EXIT_BAD_INPUT, MatchOptions, MatchReport, run_match
+from initcli.io.detection_log import log_camera_absent
+from initcli.match.pipeline import run_match
+from initcli.match.report import MatchReport
 from initcli.match.report_file import report_to_dict
 from initcli.ros.convert import log_or_bag
 from initcli.verify.registration import check_and_register
 
 __all__ = ["match", "print_report"]
-
-
-def _fail(message: object) -> typer.Exit:
-    typer.echo(error_line(PROG, message), err=True)
-    return typer.Exit(EXIT_BAD_INPUT)
 
 
 def _fmt_pose(p: Pose2D | None) -> str:
@@ -221,16 +220,19 @@ def match(
             options.validate()
             listed = replace(options, top=max(top, TRACK_HYPOTHESES)) if verify else options
             report = run_match(log_path, site, listed, source=log)
+            camera_absent = log_camera_absent(log_path)
             if verify:
                 registration = RegistrationParams(enabled=options.registration)
                 checks = check_and_register(log_path, site, report, options.skip_bad, top, registration)
     except InputError as exc:
-        raise _fail(str(exc)) from None
+        fail(PROG, exc)
 
     for warning in report.warnings:
         typer.echo(f"bim-init: warning: {warning}", err=True)
+    code = match_exit_code(report.outcome)
     if json_out:
-        typer.echo(json.dumps(report_to_dict(report, checks), indent=2))
+        doc = {**report_to_dict(report, checks, exit_code=code), "camera_absent": camera_absent}
+        typer.echo(json.dumps(doc, indent=2))
     else:
         console = Console(width=None if sys.stdout.isatty() else 200, soft_wrap=False)
         print_report(report, console, checks or ())
@@ -240,8 +242,8 @@ def match(
         try:
             plot_hypotheses(report, plot)
         except OSError as exc:
-            raise _fail(f"{plot}: cannot write the plot: {exc.strerror or exc}") from None
-    raise typer.Exit(report.exit_code)
+            fail(PROG, f"{plot}: cannot write the plot: {exc.strerror or exc}")
+    raise typer.Exit(code)
 
 
 # The command's parameters: the ones above, then an option per setting of MatchOptions (typer reads

@@ -19,7 +19,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from bimkit.atomic import write_bytes_atomic  # noqa: E402
-from initcli.match.pipeline import MatchReport  # noqa: E402
+from initcli.match.report import MatchReport  # noqa: E402
 
 PLOT_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")  # the formats --plot writes
 MARKERS = {"door": "s", "lift": "^", "stairs": "D"}

@@ -22,16 +22,10 @@ from initcli.config import SessionConfig, camera_of, followed_side, load_config
 from initcli.core.features.visibility import CameraModel
 from initcli.executor import Executor, make_executor
 from initcli.match.pipeline import site_class_map
-from initcli.survey.survey import (
-    Landmark,
-    StoreyPlan,
-    StoreySurvey,
-    SurveyParams,
-    plan_storey,
-    suggest_landmarks,
-    summarise,
-    survey_storey,
-)
+from initcli.survey.landmarks import Landmark, suggest_landmarks
+from initcli.survey.plan import StoreyPlan, SurveyParams, plan_storey
+from initcli.survey.run import StoreySurvey, survey_storey
+from initcli.survey.summary import summarise
 from initcli.survey.uniqueness import UniquenessParams
 
 __all__ = ["EXIT_INTERRUPTED", "SURVEY_MARKERS", "SURVEY_VERSION", "survey", "survey_params"]

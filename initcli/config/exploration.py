@@ -5,6 +5,7 @@ setting written once with its unit, range and default (:mod:`bimkit.settings`)."
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import StrEnum
 
 from bimkit.settings import section, setting
 from initcli.config.matching import D_THRE
@@ -16,7 +17,15 @@ __all__ = [
     "LoopSettings",
     "ShuttleSettings",
     "TargetSettings",
+    "WallSide",
 ]
+
+
+class WallSide(StrEnum):
+    """The wall random exploration follows (``exploration.wall_side``)."""
+
+    LEFT = "left"
+    RIGHT = "right"
 
 
 @dataclass
@@ -164,7 +173,9 @@ class TargetSettings:
 
 @dataclass
 class ExplorationSection:
-    wall_side: str = setting("left", "the wall random exploration follows", enum=("left", "right"))
+    wall_side: str = setting(
+        WallSide.LEFT.value, "the wall random exploration follows", enum=tuple(s.value for s in WallSide)
+    )
     wall_distance: float = setting(0.7, "m kept to the followed wall", above=0, maximum=10)
     front_clearance: float = setting(
         0.2,

@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+from initcli.config.exploration import WallSide
 from initcli.config.matching import MatchingSettings, MatchOptions
 from initcli.config.session import SessionConfig
 from initcli.config.sim import AsBuiltParams, PersistentDetectorErrors
@@ -56,7 +57,7 @@ def match_options(config: SessionConfig, storey: str | None) -> MatchOptions:
 
 def followed_side(config: SessionConfig) -> int:
     """+1: follow the left wall, -1: the right one (random exploration, §3.3.4)."""
-    return 1 if config.exploration.wall_side == "left" else -1
+    return 1 if config.exploration.wall_side == WallSide.LEFT else -1
 
 
 def wall_follow_params(config: SessionConfig) -> WallFollowParams:

@@ -30,7 +30,7 @@ from initcli.eval.sweep import Sweep, apply_sweep, sweep_label
 from initcli.session.result import CANNOT_LEAVE, SessionResult
 from initcli.session.simulated import sim_session
 from initcli.sim.build import SimSetup, build_sim
-from initcli.sim.scenario import NoFreeSpace
+from initcli.storey.circulation import NoFreeSpace
 
 __all__ = ["TrialJob", "run_trial", "session_outcomes", "trial_seed"]
 

@@ -1,15 +1,15 @@
-"""Rendering of a :class:`~initcli.match.pipeline.MatchReport`: the console tables and the JSON document.
+"""The JSON document of a :class:`~initcli.match.report.MatchReport` (``bim-init match --json``).
 
-The JSON document follows ``schemas/match_result.schema.json``.
+The JSON document follows ``schemas/match_result.schema.json``; its poses are rounded to
+:data:`~initcli.core.geometry.se2.MATCH_DIGITS`.
 """
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
-from initcli.core.geometry.se2 import Pose2D
-from initcli.match.pipeline import MatchReport
+from initcli.core.geometry.se2 import MATCH_DIGITS, Pose2D, pose_json
+from initcli.match.report import MatchReport
 
 __all__ = ["RESULT_FORMAT", "report_to_dict"]
 
@@ -17,27 +17,24 @@ RESULT_FORMAT = "bim-init.match/1"
 
 
 def _pose(p: Pose2D | None) -> dict[str, float] | None:
-    if p is None:
-        return None
-    return {
-        "x": round(p.x, 6),
-        "y": round(p.y, 6),
-        "yaw": round(p.yaw, 6),
-        "yaw_deg": round(math.degrees(p.yaw), 4),
-    }
+    return None if p is None else pose_json(p, MATCH_DIGITS)
 
 
-def report_to_dict(report: MatchReport, verifications: list[Any] | None = None) -> dict[str, Any]:
-    """The ``--json`` document; ``verifications``: one check per hypothesis (or None) to include."""
+def report_to_dict(
+    report: MatchReport, verifications: list[Any] | None = None, *, exit_code: int
+) -> dict[str, Any]:
+    """The ``--json`` document; ``verifications``: one check per hypothesis (or None) to include;
+    ``exit_code``: the command's exit code for the report's outcome, which the document records
+    (the command's to tell: ``initcli.cli.exit_codes``)."""
     o = report.options
     checks = verifications if verifications is not None else [None] * len(report.hypotheses)
     return {
         "format": RESULT_FORMAT,
         "verdict": report.verdict,
-        "exit_code": report.exit_code,
+        "exit_code": exit_code,
         "decided_by": report.decided_by,
         "paper_verdict": report.paper_verdict or report.verdict,
-        "registration": report.registration,
+        "registration": None if report.registration is None else report.registration.as_dict(),
         "n_hypotheses": report.n_hypotheses,
         "storey": report.storey,
         "storeys_searched": list(report.storeys),

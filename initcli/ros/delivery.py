@@ -23,7 +23,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from initcli.core.geometry.motion import Alphas, carry_covariance
-from initcli.core.geometry.se2 import Pose2D
+from initcli.core.geometry.se2 import SESSION_DIGITS, Pose2D, pose_json
 from initcli.ros.nav2 import covariance_6x6, initial_pose_message, state_message
 from initcli.ros.records import (
     INITIALPOSE_TOPIC,
@@ -56,13 +56,7 @@ Odometry = Callable[[], Sequence[tuple[float, Pose2D]]]  # (robot-clock stamp, o
 
 def pose_record(stamp: float, pose: Pose2D, covariance: np.ndarray | None = None) -> dict[str, Any]:
     """A pose with its robot-clock stamp, as ``summary.json`` keeps it."""
-    doc: dict[str, Any] = {
-        "stamp": round(stamp, 6),
-        "x": round(pose.x, 4),
-        "y": round(pose.y, 4),
-        "yaw": round(pose.yaw, 5),
-        "yaw_deg": round(math.degrees(pose.yaw), 3),
-    }
+    doc: dict[str, Any] = {"stamp": round(stamp, 6), **pose_json(pose, SESSION_DIGITS)}
     if covariance is not None:
         doc["covariance"] = [[round(float(v), 8) for v in row] for row in covariance]
     return doc

@@ -4,6 +4,8 @@ One module per job:
 
 - :mod:`~initcli.session.runner` -- the state machine of §3.3.4 (explore, match, active, recovery,
   coarse, fine, done) that drives the robot;
+- :mod:`~initcli.session.states` -- its states and their transitions, kept in the result and the log;
+- :mod:`~initcli.session.assembly` -- its collaborators, built from the session config in one place;
 - :mod:`~initcli.session.perception` -- the detection log it writes, the sightings (Eq. 1-2) and
   confirmed features (Eq. 3), and the match step (Algorithm 1) on the log so far;
 - :mod:`~initcli.session.claims` -- the checks a unique match passes before it is claimed (its

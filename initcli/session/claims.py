@@ -15,11 +15,13 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
 from bimtools.site.load import Site
 from initcli.config.session import VerificationSection
+from initcli.core.features.detection_filter import ConfirmedFeature
 from initcli.core.geometry.se2 import Pose2D
 from initcli.core.lidar.registration import Candidate, Registration
 from initcli.core.verify.checks import (
@@ -35,7 +37,8 @@ from initcli.core.verify.checks import (
 from initcli.drivers.base import SensorFrame
 from initcli.match.pipeline import Hypothesis, MatchReport
 from initcli.session.perception import Perception
-from initcli.session.result import SessionResult
+from initcli.session.result import DecidedBy, SessionResult
+from initcli.session.states import SessionState
 from initcli.verify.evidence import (
     StoreyEvidence,
     claim_params,
@@ -43,11 +46,34 @@ from initcli.verify.evidence import (
     verify_transform,
     without_landmark_misses,
 )
-from initcli.verify.registration import registration_record
+from initcli.verify.registration import SubmapRegistration, registered_hypothesis, registration_record
 
-__all__ = ["ClaimChecks", "Note"]
+__all__ = ["Claim", "ClaimChecks", "Note"]
 
 Note = Callable[[float, str], None]  # log why the session stays in its state (t, why)
+
+
+@dataclass(frozen=True)
+class Claim:
+    """A unique match that passed the checks: ``best`` (of ``features``), its ``verdict``, what made
+    it unique, and where the recent scans fit the BIM best near it (``aligned``, odom -> BIM)."""
+
+    best: Hypothesis
+    features: list[ConfirmedFeature]
+    verdict: str
+    decided_by: DecidedBy
+    aligned: Pose2D | None = None
+
+    def record(self) -> dict[str, object]:
+        """What the session's ``coarse`` state record says about it."""
+        best = self.best
+        return {
+            "verdict": self.verdict,
+            "decided_by": self.decided_by,
+            "pose": [round(v, 4) for v in best.pose.as_tuple()],
+            "rectified_pose": [round(v, 4) for v in best.reported_pose.as_tuple()],
+            "matches": best.matches,
+        }
 
 
 class ClaimChecks:
@@ -116,7 +142,13 @@ class ClaimChecks:
         return track_transform(start, self.evidence_of(h.storey), self.perception.path, self.checks, wide)
 
     def record(
-        self, frame: SensorFrame, stage: str, storey: str, pose: Pose2D, check: Verification, **extra: object
+        self,
+        frame: SensorFrame,
+        stage: SessionState,
+        storey: str,
+        pose: Pose2D,
+        check: Verification,
+        **extra: object,
     ) -> None:
         """Keep a verification for summary.json and write it to the log."""
         doc = {
@@ -255,7 +287,9 @@ class ClaimChecks:
             else:
                 self.note(frame.t, f"{why}: none passes the checks")
         along = {"track_fit": [round(float(f), 4) for f in tracked[0]]} if tracked else {}
-        self.record(frame, "coarse", hypothesis.storey, pose, check, outranked_rivals=outranked, **along)
+        self.record(
+            frame, SessionState.COARSE, hypothesis.storey, pose, check, outranked_rivals=outranked, **along
+        )
         if check.passed:
             return True, check.aligned, []
         self.result.rejected += 1
@@ -324,12 +358,32 @@ class ClaimChecks:
         where the recent scans fit best."""
         storey = claim.storey
         check = self.verify(storey, transform)
-        extra = registration_record(claim, found, self.blind())
-        self.record(frame, "coarse", storey, transform * frame.odom, check, **extra)
+        extra = registration_record(claim, found, self.blind()).as_dict()
+        self.record(frame, SessionState.COARSE, storey, transform * frame.odom, check, **extra)
         if check.passed or not self.checks.enabled:
             return True, check.aligned
         self.result.rejected += 1
         return False, None
+
+    def by_registration(self, frame: SensorFrame, registration: SubmapRegistration) -> Claim | None:
+        """Register the lidar submap of the recent path over the BIM map (no camera claim so far):
+        the claim of a unique registration that passes the checks, or None."""
+        found, last = registration.attempt(self.perception.path, self.perception.travel)
+        self.note(frame.t, f"lidar registration: {found.why}")
+        best = found.best
+        if best is None or last is None:
+            return None
+        if not found.unique:
+            # Places that fit the submap alike are not told apart by the lidar along the path here:
+            # it picked a place 40-60 m off in the test halls (CHANGELOG, lidar registration).
+            return None
+        transform = best.pose * last.inverse()
+        verified, aligned = self.registered(frame, best, transform, found)
+        if not verified:
+            return None
+        hypothesis = registered_hypothesis(best.storey, transform, frame.odom)
+        verdict = f"unique pose by lidar registration ({found.why})"
+        return Claim(hypothesis, [], verdict, DecidedBy.REGISTRATION, aligned)
 
     # -- the end -------------------------------------------------------------------------------------
 
@@ -344,7 +398,7 @@ class ClaimChecks:
         check = self.verify(storey, pose * frame.odom.inverse(), fine=True)
         off_m, off_rad = pose.distance_to(carried), pose.yaw_error(carried)
         apart = off_m > c.agree_distance or off_rad > math.radians(c.agree_turn)
-        self.record(frame, "fine", storey, pose, check, agrees_with_coarse=not apart)
+        self.record(frame, SessionState.FINE, storey, pose, check, agrees_with_coarse=not apart)
         if check.passed and not apart:
             return None
         why = (

@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from initcli.config.exploration import FrontierSettings, LapSettings, LoopSettings, ShuttleSettings
+from initcli.config.exploration import FrontierSettings, LapSettings, LoopSettings, ShuttleSettings, WallSide
 from initcli.core.navigation.bug_navigation import (
     GAP_SPEED,
     BugNavigator,
@@ -76,19 +76,20 @@ def open_point(frame: SensorFrame, scan: ScanView | None, loops: LoopSettings) -
 
 class Escapes:
     """The watches for loops and shuttling, the local map of what the lidar has seen, and the escape
-    or crossing under way (counted in ``result``)."""
+    or crossing under way (counted in ``result``); ``long_walls``: ``exploration.long_walls``."""
 
     def __init__(
         self,
         loops: LoopSettings,
         shuttles: ShuttleSettings,
         frontier: FrontierSettings,
+        laps: LapSettings,
+        long_walls: bool,
         follow: WallFollowParams,
         result: SessionResult,
-        laps: LapSettings | None = None,
     ) -> None:
         self.settings = loops
-        self.lap_settings = laps or LapSettings()
+        self.lap_settings = laps
         self.frontier = frontier
         self.follow = follow
         self.result = result
@@ -100,7 +101,7 @@ class Escapes:
         lap = self.lap_settings
         self.laps = LapWatch(min_lap=lap.length, radius=lap.radius, turn=math.radians(lap.turn))
         self.lap_target: np.ndarray | None = None  # the opening the last lap sent the robot to
-        self.to_long_walls = False  # out of a circle round a column to a long wall (long_walls)
+        self.to_long_walls = long_walls  # out of a circle round a column to a long wall
 
     def see(self, frame: SensorFrame, step: int) -> None:
         """Write every ``frontier.scan_every``-th scan into the local map (every ``beam_step``-th beam)."""
@@ -141,7 +142,7 @@ class Escapes:
         Returns why, for the log."""
         heading = exploring and self.head_for_frontier(frame)
         then = "heading for an unexplored opening, then " if heading else ""
-        wall = "left" if side > 0 else "right"
+        wall = WallSide.LEFT if side > 0 else WallSide.RIGHT
         return f"shuttling over the same ground; {then}following the {wall} wall"
 
     def out_of_loop(self, frame: SensorFrame, scan: ScanView | None) -> None:

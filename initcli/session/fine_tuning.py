@@ -11,10 +11,11 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Literal
+from enum import StrEnum
 
 import numpy as np
 
+from bimtools.site.load import StoreyModel
 from bimtools.site.records import Feature, OccupancyGrid
 from initcli.config.session import FineTuningSection
 from initcli.core.features.detection_filter import ConfirmedFeature
@@ -29,10 +30,27 @@ from initcli.core.geometry.motion import motion_delta
 from initcli.core.geometry.se2 import Pose2D, wrap_angle
 from initcli.core.navigation.wall_following import ScanView, WallFollowParams, wall_follow
 from initcli.drivers.base import RobotDriver, SensorFrame
+from initcli.session.result import SessionResult
 
-__all__ = ["FineLost", "FineTuned", "FineTuning", "FineTuningHooks", "Settlement", "matched_pairs", "settle"]
+__all__ = [
+    "FineLost",
+    "FineStage",
+    "FineTuned",
+    "FineTuning",
+    "FineTuningHooks",
+    "Settlement",
+    "matched_pairs",
+    "settle",
+]
 
-Settlement = Literal["keep rectified", "reseed", "lost", "accept"]
+
+class Settlement(StrEnum):
+    """What to do once the filter settled (:func:`settle`)."""
+
+    KEEP_RECTIFIED = "keep rectified"
+    RESEED = "reseed"
+    LOST = "lost"
+    ACCEPT = "accept"
 
 
 def settle(
@@ -52,11 +70,11 @@ def settle(
     ) > math.radians(params.drifted_turn)
     if apart and carried_fit >= max(fit + params.keep_rectified_margin, min_scan_fit):
         # A filter that drifted off a good coarse result fits the scan worse than the carried pose.
-        return "keep rectified"
+        return Settlement.KEEP_RECTIFIED
     if fit < min_scan_fit:
         # The cloud settled where only the beams it kept agree (the far side of a wall, say).
-        return "lost" if reseeded else "reseed"
-    return "accept"
+        return Settlement.LOST if reseeded else Settlement.RESEED
+    return Settlement.ACCEPT
 
 
 @dataclass(frozen=True)
@@ -182,14 +200,14 @@ class FineTuning:
             carried = transform * frame.odom
             carried_fit = scan_fit(carried, scan.angles, scan.ranges, scan.range_max, pf.field)
             verdict = settle(estimate.pose, fit, carried, carried_fit, reseeded, cfg, self.min_scan_fit)
-            if verdict == "keep rectified":
+            if verdict is Settlement.KEEP_RECTIFIED:
                 hooks.note(
                     frame.t, f"filter drifted (scan fit {fit:.0%}); rectified pose kept ({carried_fit:.0%})"
                 )
                 return FineTuned(frame, carried, cov, converged=False)
-            if verdict == "lost":
+            if verdict is Settlement.LOST:
                 return FineLost(frame, f"lost during fine tuning (only {fit:.0%} of the scan fits the map)")
-            if verdict == "reseed":
+            if verdict is Settlement.RESEED:
                 # Spread the cloud wider around the estimate and track again.
                 reseeded = True
                 hooks.note(frame.t, f"scan fit {fit:.0%}, reseeded")
@@ -197,3 +215,54 @@ class FineTuning:
                 start_distance, converged_at = driver.distance, None
                 continue
             return FineTuned(frame, estimate.pose, cov, converged=converged_at is not None)
+
+
+class FineStage:
+    """The fine stage after each claim: fine tuning on the claimed storey's grid (``fine_tuning``
+    enabled), and the stages that failed (the ``fine_tuning.tries``-th ends the session)."""
+
+    def __init__(
+        self,
+        params: FineTuningSection,
+        min_scan_fit: float,
+        rng: np.random.Generator,
+        follow: WallFollowParams,
+    ) -> None:
+        self.params = params
+        self.min_scan_fit = min_scan_fit  # verification.min_fine_scan_fit
+        self.rng = rng
+        self.follow = follow
+        self.failures = 0  # fine stages that failed
+        self.failed_why = ""  # why the last one failed
+
+    def tunes(self, model: StoreyModel) -> bool:
+        """Does the fine stage on ``model`` run the filter (else the coarse pose is carried on)?"""
+        return self.params.enabled and model.grid is not None
+
+    def run(
+        self,
+        driver: RobotDriver,
+        frame: SensorFrame,
+        model: StoreyModel,
+        transform: Pose2D,
+        side: int,
+        result: SessionResult,
+        hooks: FineTuningHooks,
+    ) -> FineTuned | FineLost:
+        """Fine-tune the claim of ``result`` (odom -> BIM ``transform``) on ``model``'s grid, seeded at
+        the rectified pose and weighted by its matched features, following the wall on ``side``."""
+        assert model.grid is not None
+        tuning = FineTuning(self.params, self.min_scan_fit, model.grid, self.rng, side, self.follow)
+        landmarks = matched_pairs(result.features, result.matched_ids, model.features)
+        return tuning.run(driver, frame, transform * frame.odom, transform, landmarks, hooks)
+
+    def failed(self, reason: str) -> bool:
+        """A fine stage failed for ``reason``: was it the last try?"""
+        self.failures += 1
+        self.failed_why = reason
+        return self.failures >= self.params.tries
+
+    @property
+    def earlier_failure(self) -> str:
+        """Why the last fine stage failed ("" if none did)."""
+        return self.failed_why if self.failures else ""

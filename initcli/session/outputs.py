@@ -9,21 +9,14 @@ from pathlib import Path
 import numpy as np
 
 from bimtools.site.load import StoreyModel
-from initcli.core.geometry.se2 import Pose2D
+from initcli.core.geometry.se2 import SESSION_DIGITS, Pose2D, pose_json
 from initcli.session.result import SessionResult
 
 __all__ = ["render_report", "summary_document", "write_summary"]
 
 
 def _pose(p: Pose2D | None) -> dict | None:
-    if p is None:
-        return None
-    return {
-        "x": round(p.x, 4),
-        "y": round(p.y, 4),
-        "yaw": round(p.yaw, 5),
-        "yaw_deg": round(math.degrees(p.yaw), 3),
-    }
+    return None if p is None else pose_json(p, SESSION_DIGITS)
 
 
 def summary_document(result: SessionResult, simulated: bool, extra: dict | None = None) -> dict:

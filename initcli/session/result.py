@@ -5,20 +5,24 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from enum import StrEnum
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from initcli.core.features.detection_filter import ConfirmedFeature
 from initcli.core.geometry.se2 import Pose2D, wrap_angle
+from initcli.match.pipeline import DECIDED_BY_LIDAR, DECIDED_BY_PAPER
+from initcli.verify.registration import DECIDED_BY_REGISTRATION
 
 if TYPE_CHECKING:
     from initcli.config.session import LimitsSection
-    from initcli.match.pipeline import Hypothesis
+    from initcli.match.pipeline import Hypothesis, MatchReport
 
 __all__ = [
     "CANNOT_LEAVE",
     "CoarseClaim",
+    "DecidedBy",
     "MatchStep",
     "SHUT_IN",
     "SHUT_IN_ADVICE",
@@ -38,6 +42,14 @@ SHUT_IN = "shut in"  # the reason of a session that stopped shut in (a stable wo
 SHUT_IN_ADVICE = "open a door or move the robot"
 
 
+class DecidedBy(StrEnum):
+    """What made a claim unique (summary.json's ``decided_by``)."""
+
+    PAPER = DECIDED_BY_PAPER  # one place by the features alone (Algorithm 1)
+    LIDAR = DECIDED_BY_LIDAR  # one of several hypotheses, picked by the lidar along the path
+    REGISTRATION = DECIDED_BY_REGISTRATION  # the lidar submap alone
+
+
 @dataclass
 class MatchStep:
     """One matching step, for the report: time, features so far, hypotheses' current poses."""
@@ -46,6 +58,11 @@ class MatchStep:
     features: int
     verdict: str
     poses: list[tuple[float, float, float]]  # (x m, y m, yaw rad) in the BIM frame
+
+    @classmethod
+    def of(cls, t: float, report: MatchReport) -> MatchStep:
+        """The step that gave ``report`` at ``t``."""
+        return cls(t, len(report.features), report.verdict, [h.pose.as_tuple() for h in report.hypotheses])
 
 
 @dataclass(frozen=True)
@@ -114,9 +131,7 @@ class SessionResult:
     # last claim, which differs after a failed fine stage and a second claim).
     first_claim: CoarseClaim | None = None
     shut_in: ShutIn | None = None  # the session stopped shut in (reason SHUT_IN)
-    # what made the last claim unique: "algorithm 1", "lidar along the path" (of several
-    # hypotheses) or "lidar registration" (the lidar submap alone); None: no claim
-    decided_by: str | None = None
+    decided_by: DecidedBy | None = None  # what made the last claim unique; None: no claim
     laps: int = 0  # laps without a new feature after which the robot headed for an opening
 
     def claimed(

@@ -12,7 +12,8 @@ hypothesis, with the modified bug algorithm (Eq. 15-16); no new feature within t
 Each step lives in its own module: what the robot sees and logs in :mod:`.perception`, the checks
 of a claim and its rivals in :mod:`.claims`, loop and shuttle escapes and floor crossings in
 :mod:`.escapes`, looks round in :mod:`.looks`, active exploration in :mod:`.exploration`, fine
-tuning in :mod:`.fine_tuning`, the outcome in :mod:`.result`; their tuning is the session config's.
+tuning in :mod:`.fine_tuning`, the outcome in :mod:`.result`, the states in :mod:`.states`; they are
+built from the session config in :mod:`.assembly`.
 The session writes every record it acts on to its detection log, and decides by running the same
 pipeline as ``bim-init match`` (:func:`initcli.match.pipeline.match_log`) on the log so far, so the
 log replays to the same coarse verdict and pose.
@@ -27,35 +28,29 @@ from pathlib import Path
 import numpy as np
 
 from bimtools.site.load import Site
-from initcli.config import (
-    SessionConfig,
-    followed_side,
-    match_options,
-    turn_in_place_speed,
-    wall_follow_params,
-)
-from initcli.config.building import twin_reason
-from initcli.core.features.classes import ClassMap
-from initcli.core.features.detection_filter import ConfirmedFeature
-from initcli.core.geometry.se2 import Pose2D
+from initcli.config import SessionConfig, turn_in_place_speed
 from initcli.core.navigation.wall_following import MovingObstacleWait, ScanView, wall_follow
-from initcli.core.verify.checks import TRACK_HYPOTHESES, CameraView
+from initcli.core.verify.checks import TRACK_HYPOTHESES
 from initcli.drivers.base import RobotDriver, SensorFrame
-from initcli.io.detection_log import Meta, State
-from initcli.match.landmarks import site_tracker
-from initcli.match.pipeline import DECIDED_BY_LIDAR, DECIDED_BY_PAPER, Hypothesis, MatchReport
-from initcli.session.claims import ClaimChecks
-from initcli.session.escapes import Escapes, path_points
-from initcli.session.exploration import ActiveExploration, unseen_features
-from initcli.session.fine_tuning import FineLost, FineTuning, FineTuningHooks, matched_pairs
-from initcli.session.looks import Looks
-from initcli.session.perception import Perception
-from initcli.session.result import SHUT_IN, MatchStep, SessionResult, limit_reason
-from initcli.verify.registration import DECIDED_BY_REGISTRATION, SubmapRegistration, registered_hypothesis
+from initcli.match.pipeline import Hypothesis, MatchReport
+from initcli.session.assembly import assemble
+from initcli.session.claims import Claim
+from initcli.session.escapes import path_points
+from initcli.session.exploration import unseen_features
+from initcli.session.fine_tuning import FineLost, FineTuningHooks
+from initcli.session.result import SHUT_IN, DecidedBy, MatchStep, SessionResult, limit_reason
+from initcli.session.states import SessionState
 
 __all__ = ["Observer", "Session"]
 
 Observer = Callable[[dict], None]
+
+EXPLORE, LOOK, ACTIVE, RECOVERY = (
+    SessionState.EXPLORE,
+    SessionState.LOOK,
+    SessionState.ACTIVE,
+    SessionState.RECOVERY,
+)
 
 
 class Session:
@@ -72,61 +67,41 @@ class Session:
         observer: Observer | None = None,
         meta_source: str = "bim-init run",
     ):
-        self.config = config
-        self.site = site
-        self.storey = storey  # None: match against every storey
-        self.driver = driver
-        self.rng = rng
-        self.observer = observer
-        self.options = match_options(config, storey)
-        meta = Meta(driver.camera, driver.mount, depth_window=driver.depth_window, source=meta_source)
-        cmap, m = ClassMap(config.detector.classes), config.matching
-        tracker = site_tracker(site) if self.options.landmarks else None
-        self.perception = Perception(
-            meta, log_path, cmap, self.options, m.drift_window, config.lidar.log_every, tracker
+        self.config, self.site, self.storey = config, site, storey  # storey None: every storey
+        self.driver, self.observer = driver, observer
+        parts = assemble(config, site, storey, driver, log_path, rng, meta_source)
+        self.options, self.perception, self.result = parts.options, parts.perception, parts.result
+        self.states, self.claims, self.registration, self.fine = (
+            parts.states,
+            parts.claims,
+            parts.registration,
+            parts.fine,
         )
-        self.side = followed_side(config)
-        self.follow = wall_follow_params(config)
+        self.side, self.follow, self.twins = parts.side, parts.follow, parts.twins
+        self.exploration, self.escapes, self.looks = parts.exploration, parts.escapes, parts.looks
+        self.hooks = FineTuningHooks(self._record_frame, self.states.note, self._emit)
+        self.checks = config.verification
         self.waiting = MovingObstacleWait()
-        self.state = "explore"
-        self.result = SessionResult(False, "", storey)
-        self.exploration = ActiveExploration(config, site, self.follow)
-        x = config.exploration
-        self.escapes = Escapes(x.loops, x.shuttles, x.frontier, self.follow, self.result, x.laps)
-        self.escapes.to_long_walls = x.long_walls
         self.finished = False  # the session ended while choosing a command (shut in)
-        self.looks = Looks(x)
         self.last_feature_t = 0.0  # s: when the last new feature was confirmed
         self.hypotheses = 0  # of the last match step
         # its hypotheses when no more than exploration.targets.hypotheses (exploration.feature_walls)
         self.last_hypotheses: list[Hypothesis] = []
         self.decided_at = 0.0  # m of travel at the last match step
         self.storeys_left: list[str] = []  # storeys the last match step's hypotheses lie on
-        self.checks = config.verification
-        view = CameraView(driver.camera, driver.mount, self.options.min_depth)
-        self.claims = ClaimChecks(self.checks, site, self.perception, view, self.result, self._note)
-        self.registration = SubmapRegistration(config.registration, site, storey, self.checks.scan_tolerance)
         self.cannot_leave: str | None = None  # set when the start is known to be closed in
-        # every storey matched maps onto itself turned: no reading tells a pose from its twin
-        self.twins = twin_reason(site, storey)
-        self.fine_failures = 0  # fine stages that failed
-        self.fine_failed_why = ""  # why the last one failed
         self.resume_from: SensorFrame | None = None  # the last frame of a fine stage that failed
         self._started = time.perf_counter()
+
+    @property
+    def state(self) -> SessionState:
+        """The state the session is in."""
+        return self.states.now
 
     # -- records -------------------------------------------------------------------------------------
 
     def close(self) -> None:
         self.perception.close()
-
-    def _set_state(self, t: float, state: str, **data: object) -> None:
-        self.state = state
-        self.result.states.append((t, state))
-        self.perception.write(State(round(t, 3), {"state": state, **data}))
-
-    def _note(self, t: float, why: str) -> None:
-        """Log why the session stays in its state."""
-        self.perception.write(State(round(t, 3), {"state": self.state, "why": why}))
 
     def _record_frame(self, frame: SensorFrame, step: int) -> None:
         self.perception.record_frame(frame, step)
@@ -159,10 +134,10 @@ class Session:
         if self.config.exploration.initial_look:
             # Turn once on the spot first: features behind the robot cost no distance (§3.3.4's
             # recovery rotation, done before the first metre).
-            self._set_state(frame.t, "look")
+            self.states.enter(frame.t, LOOK)
             self.looks.count += 1
         else:
-            self._set_state(frame.t, "explore")
+            self.states.enter(frame.t, EXPLORE)
         self.hypotheses, self.storeys_left = 0, []
         self.last_feature_t = frame.t
         self.looks.begin()
@@ -195,11 +170,11 @@ class Session:
     def _command(self, frame: SensorFrame) -> tuple[float, float]:
         """The velocity command (v m/s, w rad/s) for this period, by state (which it may change)."""
         scan = ScanView.of(frame.scan.angles, frame.scan.ranges, frame.scan.range_max) if frame.scan else None
-        if self.state == "explore":
+        if self.state is EXPLORE:
             return self._explore(frame, scan)
-        if self.state == "active":
+        if self.state is ACTIVE:
             return self._active(frame, scan)
-        if self.state in ("look", "recovery"):
+        if self.state.turning:
             return self._turn(frame, scan)
         raise RuntimeError(f"unexpected state {self.state}")
 
@@ -224,7 +199,7 @@ class Session:
             # to the nearest unexplored opening the lidar has seen, else out along the most open
             # direction; then resume.
             self.escapes.out_of_loop(frame, scan)
-            self._note(frame.t, "loop escape")
+            self.states.note(frame.t, "loop escape")
         self._watch_laps(frame)
         return v, w
 
@@ -233,13 +208,10 @@ class Session:
         robot can pass, or, with none left, the session stops shut in (``exploration.laps``)."""
         lap = self.escapes.lap(frame, self.perception.travel, len(self.perception.confirmed))
         if isinstance(lap, str):
-            self._note(frame.t, lap)
+            self.states.note(frame.t, lap)
         elif lap is not None:
             self.result.shut_in = lap
-            self._set_state(
-                frame.t, "failed", reason=SHUT_IN, message=lap.message, explored_m2=lap.explored_m2
-            )
-            self.result.failed(SHUT_IN, frame.truth, frame.t, self.driver.distance, self.perception.confirmed)
+            self._fail(frame, SHUT_IN, message=lap.message, explored_m2=lap.explored_m2)
             self.finished = True
 
     def _look_again(self, frame: SensorFrame, scan: ScanView) -> bool:
@@ -248,7 +220,7 @@ class Session:
         if not self.looks.again(self.perception.travel, scan, self.side):
             return False
         every = self.config.exploration.look_every
-        self._set_state(frame.t, "look", why=f"{every:g} m without a new feature, open space beside")
+        self.states.enter(frame.t, LOOK, why=f"{every:g} m without a new feature, open space beside")
         return True
 
     def _active(self, frame: SensorFrame, scan: ScanView | None) -> tuple[float, float]:
@@ -259,20 +231,20 @@ class Session:
         if why is None:
             return v, w
         if self.config.exploration.recovery:
-            self._set_state(frame.t, "recovery", why=why)
+            self.states.enter(frame.t, RECOVERY, why=why)
             self.result.recoveries += 1
             self.looks.begin()
         elif self.exploration.exhausted or not self._next_target(frame):
-            self._set_state(frame.t, "explore", why=why)
+            self.states.enter(frame.t, EXPLORE, why=why)
         return 0.0, 0.0
 
     def _turn(self, frame: SensorFrame, scan: ScanView | None) -> tuple[float, float]:
         """The initial look, a look on an open floor or the recovery rotation: turn in place, then
         carry on (across the floor after a look on an open floor)."""
         if self.looks.done:
-            if self.state == "look":
+            if self.state is LOOK:
                 why = "look done" if self.looks.open_floor else "initial look done"
-                self._set_state(frame.t, "explore", why=why)
+                self.states.enter(frame.t, EXPLORE, why=why)
                 if self.looks.open_floor and scan is not None:
                     predicted = unseen_features(self.site, self.last_hypotheses, frame.odom)
                     crossing = self.looks.cross(
@@ -285,14 +257,14 @@ class Session:
                         path_points(self.result),
                     )
                     if crossing is not None:
-                        self._note(frame.t, f"crossing the open floor ({crossing.reach:.1f} m)")
+                        self.states.note(frame.t, f"crossing the open floor ({crossing.reach:.1f} m)")
             elif self.exploration.exhausted:
                 # Targets keep failing (blocked routes, a symmetric layout): wall following
                 # covers new ground until a new feature changes the hypotheses (§3.3.4).
                 why = f"{self.exploration.fruitless} targets in a row brought nothing new"
-                self._set_state(frame.t, "explore", why=why)
+                self.states.enter(frame.t, EXPLORE, why=why)
             elif not self._next_target(frame):
-                self._set_state(frame.t, "explore", why="nothing detected after recovery")
+                self.states.enter(frame.t, EXPLORE, why="nothing detected after recovery")
         return 0.0, turn_in_place_speed(self.config)
 
     def _perceive(self, frame: SensorFrame) -> bool:
@@ -314,8 +286,8 @@ class Session:
         self.exploration.fruitless = 0
         self.result.features_detected = features
         if features < self.options.min_inliers:
-            if self.state == "recovery":
-                self._set_state(frame.t, "explore", why="new feature")
+            if self.state is RECOVERY:
+                self.states.enter(frame.t, EXPLORE, why="new feature")
             return False
         return self._decide(frame)
 
@@ -333,11 +305,11 @@ class Session:
         if claim is not None:
             verified, aligned, rivals = self.claims.verified(frame, claim, picked=not unique)
             if verified:
-                by = DECIDED_BY_PAPER if unique else DECIDED_BY_LIDAR
+                by = DecidedBy.PAPER if unique else DecidedBy.LIDAR
                 return self._coarse_done(
-                    frame, claim.hypotheses[0], claim.features, claim.verdict, by, aligned
+                    frame, Claim(claim.hypotheses[0], claim.features, claim.verdict, by, aligned)
                 )
-            if self.state == "look":
+            if self.state is LOOK:
                 return False  # the look turns all the way round first: what is behind costs no distance
             if rivals and self._active_below(len(rivals)):
                 # Rivals with a few more outliers: go and look where the claim and they disagree,
@@ -345,38 +317,23 @@ class Session:
                 self.exploration.validate([claim.hypotheses[0], *rivals])
                 if self._next_target(frame):
                     return False
-            if self.state != "explore":
-                self._set_state(frame.t, "explore", why="the unique match failed verification")
+            self.states.explore(frame.t, "the unique match failed verification")
             return False
-        if self.state == "look":
+        if self.state is LOOK:
             return False
         if 1 < report.n_hypotheses and self._active_below(report.n_hypotheses):
             self.exploration.validate(report.hypotheses)
-            if not self._next_target(frame) and self.state != "explore":
-                self._set_state(frame.t, "explore", why="no target left to validate")
-        elif self.state != "explore":
-            self._set_state(frame.t, "explore", why=report.verdict)
+            if not self._next_target(frame):
+                self.states.explore(frame.t, "no target left to validate")
+        else:
+            self.states.explore(frame.t, report.verdict)
         return False
 
     def _register(self, frame: SensorFrame) -> bool:
-        """Register the lidar submap of the recent path over the BIM map (no camera claim so far);
-        claim a unique registration that passes the checks. True once the session is over."""
-        found, last = self.registration.attempt(self.perception.path, self.perception.travel)
-        self._note(frame.t, f"lidar registration: {found.why}")
-        best = found.best
-        if best is None or last is None:
-            return False
-        if not found.unique:
-            # Places that fit the submap alike are not told apart by the lidar along the path here:
-            # it picked a place 40-60 m off in the test halls (CHANGELOG, lidar registration).
-            return False
-        transform = best.pose * last.inverse()
-        verified, aligned = self.claims.registered(frame, best, transform, found)
-        if not verified:
-            return False
-        hypothesis = registered_hypothesis(best.storey, transform, frame.odom)
-        verdict = f"unique pose by lidar registration ({found.why})"
-        return self._coarse_done(frame, hypothesis, [], verdict, DECIDED_BY_REGISTRATION, aligned)
+        """Claim a unique registration of the lidar submap that passes the checks
+        (:meth:`ClaimChecks.by_registration`); True once the session is over."""
+        claim = self.claims.by_registration(frame, self.registration)
+        return claim is not None and self._coarse_done(frame, claim)
 
     def _active_below(self, hypotheses: int) -> bool:
         """Go and look where ``hypotheses`` disagree (§3.3.4: fewer than m_thre of them)?"""
@@ -384,9 +341,7 @@ class Session:
 
     def _match(self, t: float) -> MatchReport:
         report = self.perception.match(t, self.site)
-        self.result.match_steps.append(
-            MatchStep(t, len(report.features), report.verdict, [h.pose.as_tuple() for h in report.hypotheses])
-        )
+        self.result.match_steps.append(MatchStep.of(t, report))
         return report
 
     def _next_target(self, frame: SensorFrame) -> bool:
@@ -395,7 +350,7 @@ class Session:
         if target is None:
             return False
         self.result.active_explorations += 1
-        self._set_state(frame.t, "active", **target.record())
+        self.states.enter(frame.t, ACTIVE, **target.record())
         return True
 
     def _watch_shuttling(self, frame: SensorFrame) -> None:
@@ -405,12 +360,12 @@ class Session:
             return
         self.side = -self.side
         self.exploration.navigator = None
-        why = self.escapes.after_shuttling(frame, self.side, self.state == "explore")
-        self._set_state(frame.t, "explore", why=why)
+        why = self.escapes.after_shuttling(frame, self.side, self.state is EXPLORE)
+        self.states.enter(frame.t, EXPLORE, why=why)
 
     def _out_of_limits(self, frame: SensorFrame) -> bool:
         """Fail once the session drove or took longer than its limits allow."""
-        p, earlier = self.perception, self.fine_failed_why if self.fine_failures else ""
+        p, earlier = self.perception, self.fine.earlier_failure
         why = limit_reason(
             self.config.limits, p.travel, frame.t, p.n_features, self.hypotheses, self.storeys_left, earlier
         )
@@ -420,53 +375,30 @@ class Session:
 
     # -- the end -------------------------------------------------------------------------------------
 
-    def _fail(self, frame: SensorFrame, reason: str) -> None:
-        self._set_state(frame.t, "failed", reason=reason)
-        self.result.failed(reason, frame.truth, frame.t, self.driver.distance, self.perception.confirmed)
+    def _fail(self, frame: SensorFrame, reason: str, **data: object) -> None:
+        self.states.fail(frame, reason, self.driver.distance, self.perception.confirmed, **data)
 
-    def _coarse_done(
-        self,
-        frame: SensorFrame,
-        best: Hypothesis,
-        features: list[ConfirmedFeature],
-        verdict: str,
-        decided_by: str,
-        aligned: Pose2D | None = None,
-    ) -> bool:
-        """The unique match ``best`` (of ``features``; ``decided_by`` what made it unique): record the
-        coarse and rectified poses (Eq. 17), fine-tune (Eq. 18); True once the session is over (False:
-        the fine stage failed and exploration goes on)."""
-        cfg = self.config
-        r = self.result
+    def _coarse_done(self, frame: SensorFrame, claim: Claim) -> bool:
+        """Claim the unique match ``claim``: record the coarse and rectified poses (Eq. 17), fine-tune
+        (Eq. 18); True once the session is over (False: the fine stage failed and exploration goes on)."""
+        r, best = self.result, claim.best
         elapsed = time.perf_counter() - self._started
-        r.claimed(best, frame.truth, self.driver.distance, elapsed, features)
-        r.decided_by = decided_by
+        r.claimed(best, frame.truth, self.driver.distance, elapsed, claim.features)
+        r.decided_by = claim.decided_by
         # Fine tuning starts where the recent scans fit the BIM best near the coarse pose (``aligned``,
         # the verification's search: decimetres, degrees): a coarse pose from doors built off their
         # place can be 15 degrees off, which a filter seeded 10 degrees wide may not recover.
-        transform = aligned if aligned is not None else best.reported_pose * frame.odom.inverse()
+        transform = claim.aligned if claim.aligned is not None else best.reported_pose * frame.odom.inverse()
         r.transform = transform
         # The log's detections end here, so that it replays to this verdict (they go on after a
         # failed fine stage, up to the next claim).
         self.perception.detecting = False
-        self._set_state(
-            frame.t,
-            "coarse",
-            verdict=verdict,
-            decided_by=decided_by,
-            pose=[round(v, 4) for v in best.pose.as_tuple()],
-            rectified_pose=[round(v, 4) for v in best.reported_pose.as_tuple()],
-            matches=best.matches,
-        )
+        self.states.enter(frame.t, SessionState.COARSE, **claim.record())
         model = self.site.storeys[best.storey]
         cov: np.ndarray | None = None
-        if cfg.fine_tuning.enabled and model.grid is not None:
-            self._set_state(frame.t, "fine")
-            fit = self.checks.min_fine_scan_fit
-            tuning = FineTuning(cfg.fine_tuning, fit, model.grid, self.rng, self.side, self.follow)
-            hooks = FineTuningHooks(self._record_frame, self._note, self._emit)
-            landmarks = matched_pairs(r.features, r.matched_ids, model.features)
-            outcome = tuning.run(self.driver, frame, transform * frame.odom, transform, landmarks, hooks)
+        if self.fine.tunes(model):
+            self.states.enter(frame.t, SessionState.FINE)
+            outcome = self.fine.run(self.driver, frame, model, transform, self.side, r, self.hooks)
             frame = outcome.frame
             if isinstance(outcome, FineLost):
                 return self._fine_failed(frame, outcome.reason)
@@ -478,7 +410,7 @@ class Session:
         if failed is not None:
             return self._fine_failed(frame, failed)
         r.initialised(pose, cov, frame.odom, frame.truth, frame.t, self.driver.distance)
-        self._set_state(frame.t, "done", pose=[round(v, 4) for v in pose.as_tuple()])
+        self.states.enter(frame.t, SessionState.DONE, pose=[round(v, 4) for v in pose.as_tuple()])
         return True
 
     def _fine_failed(self, frame: SensorFrame, reason: str) -> bool:
@@ -488,9 +420,7 @@ class Session:
         go on, and the match steps on (a new feature, or ``matching.redecide`` m) may claim the same
         place again, fine-tuned from where the robot is then (hoardings and stacks that hide the
         walls here may not be there). True once the session is over."""
-        self.fine_failures += 1
-        self.fine_failed_why = reason
-        if self.fine_failures >= self.config.fine_tuning.tries:
+        if self.fine.failed(reason):
             self._fail(frame, reason)
             return True
         self.resume_from = frame  # the main loop goes on from where the fine stage ended
@@ -498,5 +428,5 @@ class Session:
         self.decided_at = self.perception.travel
         self.escapes.cancel()  # a loop escape or crossing under way at the claim led from elsewhere
         self.result.transform, self.result.fine_converged = None, None
-        self._set_state(frame.t, "explore", why=f"{reason}: exploring on")
+        self.states.enter(frame.t, EXPLORE, why=f"{reason}: exploring on")
         return False

@@ -4,7 +4,8 @@
 - :mod:`~initcli.sim.driver` -- the simulated robot behind the driver interface (lidar, camera, odometry);
 - :mod:`~initcli.sim.world` -- the world: the storey's obstacles plus clutter and walking workers;
 - :mod:`~initcli.sim.as_built` -- the site as built, not as designed (doors missing, shifted, open);
-- :mod:`~initcli.sim.scenario` -- the circulation area, random starts, clutter and workers;
+- :mod:`~initcli.sim.scenario` -- random starts in the circulation area (:mod:`initcli.storey`),
+  clutter and workers;
 - :mod:`~initcli.sim.robot` -- true motion and wheel odometry that drifts;
 - :mod:`~initcli.sim.camera` -- the simulated RGB-D camera and detector with realistic errors;
 - :mod:`~initcli.sim.rendered_camera`, :mod:`~initcli.sim.onnx_camera` -- a rendered view and the

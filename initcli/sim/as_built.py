@@ -33,17 +33,17 @@ width.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from bimtools.site.records import UNKNOWN, Feature, Obstacle
+from bimtools.site.records import UNKNOWN, Obstacle
 from initcli.config.sim import AsBuiltParams
 from initcli.core.geometry.raycast import ray_segment_distances
-from initcli.sim.scenario import Circulation
 from initcli.sim.synthetic_log import SimFeature
-from initcli.sim.world import polygon_edges
+from initcli.storey.circulation import Circulation
+from initcli.storey.doors import closed_doors, door_leaf
+from initcli.storey.outlines import box_ring, polygon_edges
 
 __all__ = [
     "AsBuiltWorld",
@@ -51,23 +51,16 @@ __all__ = [
     "DOOR_CLASSES",
     "HOARDING_CLASS",
     "HOARDING_THICKNESS",
-    "LEAF_CLASS",
-    "LEAF_THICKNESS",
     "MIN_PASSAGE",
     "STAND_OUT",
-    "closed_doors",
     "corridor_length",
     "derive_as_built",
-    "door_ids",
-    "door_leaf",
     "is_exterior",
     "stand_out",
 ]
 
 CORRIDOR_WIDTH = 2.0  # m: circulation area / this = corridor length for the per-100 m rates
 HOARDING_THICKNESS = 0.1  # m
-LEAF_THICKNESS = 0.04  # m: a closed door leaf
-LEAF_CLASS = "DoorLeaf"
 HOARDING_CLASS = "Hoarding"
 DOOR_CLASSES = ("door",)  # canonical feature classes that can be missing, shifted or open
 
@@ -96,36 +89,6 @@ def _shift(obstacle: Obstacle, dx: float, dy: float) -> Obstacle:
     ring = tuple((x + dx, y + dy) for x, y in obstacle.exterior)
     holes = tuple(tuple((x + dx, y + dy) for x, y in h) for h in obstacle.holes)
     return replace(obstacle, exterior=ring, holes=holes)
-
-
-def _box(centre: np.ndarray, along: np.ndarray, half_length: float, half_depth: float) -> np.ndarray:
-    across = np.array([-along[1], along[0]])
-    c = [
-        centre - along * half_length - across * half_depth,
-        centre + along * half_length - across * half_depth,
-        centre + along * half_length + across * half_depth,
-        centre - along * half_length + across * half_depth,
-    ]
-    return np.vstack([c, c[:1]])
-
-
-def door_leaf(f: SimFeature) -> Obstacle:
-    """A closed leaf across the opening of door feature ``f``, just behind its face."""
-    along = np.array([-f.norm_y, f.norm_x])
-    centre = np.array([f.x, f.y]) - (LEAF_THICKNESS / 2 + 0.01) * np.array([f.norm_x, f.norm_y])
-    ring = _box(centre, along, max(f.width, 0.6) / 2, LEAF_THICKNESS / 2)
-    return Obstacle("", f.id, LEAF_CLASS, tuple(map(tuple, ring[:-1].tolist())))
-
-
-def door_ids(features: Iterable[Feature]) -> frozenset[str]:
-    """Ids of the BIM features that are doors with a leaf (IfcDoor; not lifts, stairs or openings)."""
-    return frozenset(f.id for f in features if f.ifc_class == "IfcDoor")
-
-
-def closed_doors(features: Iterable[SimFeature], doors: frozenset[str]) -> list[Obstacle]:
-    """A closed :func:`door_leaf` for each of ``features`` whose id is in ``doors``: the design's doors
-    as the simulated world has them (the map leaves door openings free)."""
-    return [door_leaf(f) for f in features if f.id in doors]
 
 
 def is_exterior(f: SimFeature, circulation: Circulation) -> bool:
@@ -182,13 +145,13 @@ def _hoarding(
         direction = np.array([math.cos(angles[k]), math.sin(angles[k])])
         centre = origin + direction * (fwd[k] - back[k]) / 2
         half = (fwd[k] + back[k]) / 2 - 0.01
-        return _box(centre, direction, half, HOARDING_THICKNESS / 2)
+        return box_ring(centre, direction, half, HOARDING_THICKNESS / 2)
     w = walls[int(rng.integers(len(walls)))]
     length = min(float(rng.uniform(3.0, 6.0)), w.length)
     s = rng.uniform(length / 2, w.length - length / 2) / w.length
     along = np.array([w.x2 - w.x1, w.y2 - w.y1]) / w.length
     centre = np.array([w.x1 + s * (w.x2 - w.x1), w.y1 + s * (w.y2 - w.y1)]) + 0.4 * np.array(w.normal)
-    return _box(centre, along, length / 2, HOARDING_THICKNESS / 2)
+    return box_ring(centre, along, length / 2, HOARDING_THICKNESS / 2)
 
 
 @dataclass

@@ -20,21 +20,16 @@ from initcli.config.checks import detector_profile
 from initcli.core.features.classes import ClassMap
 from initcli.core.geometry.se2 import Pose2D
 from initcli.io.detection_log import DetectedObject
-from initcli.sim.as_built import (
-    HOARDING_CLASS,
-    LEAF_CLASS,
-    AsBuiltWorld,
-    derive_as_built,
-    door_ids,
-    stand_out,
-)
+from initcli.sim.as_built import HOARDING_CLASS, AsBuiltWorld, derive_as_built, stand_out
 from initcli.sim.camera import CameraNoise, SimulatedDetector
 from initcli.sim.driver import LidarSpec, SimDriver
 from initcli.sim.fence import site_fence
 from initcli.sim.robot import DiffDriveRobot, OdometryNoise
-from initcli.sim.scenario import Circulation, place_clutter, place_workers, random_start
+from initcli.sim.scenario import place_clutter, place_workers, random_start
 from initcli.sim.synthetic_log import sim_features_from_bim
 from initcli.sim.world import SimWorld, world_edges
+from initcli.storey.circulation import Circulation
+from initcli.storey.doors import LEAF_CLASS, door_ids
 
 __all__ = ["SimSetup", "build_sim", "check_clearance", "check_start"]
 

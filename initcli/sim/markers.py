@@ -26,8 +26,8 @@ from initcli.core.features.marker_pose import tag_object_points, tag_rotation
 from initcli.core.geometry.projection import CameraIntrinsics, CameraMount, odom_to_optical
 from initcli.core.geometry.raycast import ray_segment_distances, sight_blocked
 from initcli.core.geometry.se2 import Pose2D
-from initcli.sim.scenario import Circulation
 from initcli.sim.world import SimWorld
+from initcli.storey.circulation import Circulation
 
 __all__ = [
     "FEATURE_CLEARANCE",

@@ -32,7 +32,8 @@ from initcli.detector.synth.scene import (
     camera_pose_in_world,
 )
 from initcli.io.detection_log import DetectedObject
-from initcli.sim.world import SimWorld, box_edges
+from initcli.sim.world import SimWorld
+from initcli.storey.outlines import box_edges
 
 __all__ = [
     "Observation",

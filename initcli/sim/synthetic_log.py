@@ -21,14 +21,19 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from initcli.core.features.classes import ClassMap
-from initcli.core.geometry.projection import CameraIntrinsics, CameraMount, box_for_point, odom_to_pixel
+from initcli.core.geometry.projection import (
+    DEFAULT_CAMERA,
+    DEFAULT_MOUNT,
+    CameraIntrinsics,
+    CameraMount,
+    box_for_point,
+    odom_to_pixel,
+)
 from initcli.core.geometry.raycast import sight_blocked
 from initcli.core.geometry.se2 import Pose2D, wrap_angle
 from initcli.io.detection_log import DetectedObject, Detections, Meta, Odom, Record, Truth
 
 __all__ = [
-    "DEFAULT_CAMERA",
-    "DEFAULT_MOUNT",
     "SimFeature",
     "SyntheticLog",
     "SyntheticParams",
@@ -38,9 +43,6 @@ __all__ = [
     "render_image",
     "sim_features_from_bim",
 ]
-
-DEFAULT_CAMERA = CameraIntrinsics(fx=615.0, fy=615.0, cx=320.0, cy=240.0, width=640, height=480)
-DEFAULT_MOUNT = CameraMount(x=0.2, y=0.0, z=1.0, roll=0.0, pitch=0.0, yaw=0.0)
 
 
 @dataclass(frozen=True)

@@ -16,34 +16,18 @@ from initcli.core.geometry.raycast import (
     ray_segment_params,
     segment_directions,
 )
+from initcli.storey.outlines import closed_ring, polygon_edges
 
 __all__ = [
     "GLASS_ECHO_DEG",
     "NEAR_CACHE_SIZE",
     "SimWorld",
     "Worker",
-    "box_edges",
-    "closed_ring",
     "glass_echoes",
-    "polygon_edges",
     "world_edges",
 ]
 
 NEAR_CACHE_SIZE = 256  # blocks of grid cells whose segment indices SimWorld keeps
-
-
-def polygon_edges(ring: np.ndarray) -> np.ndarray:
-    """(n, 2) closed ring -> (n-1, 4) segments x1, y1, x2, y2."""
-    ring = np.asarray(ring, dtype=float)
-    return np.column_stack([ring[:-1], ring[1:]])
-
-
-def closed_ring(points: object) -> np.ndarray:
-    """(n, 2) points of an outline, with the first repeated at the end when it is not already."""
-    ring = np.asarray(points, dtype=float).reshape(-1, 2)
-    if len(ring) > 1 and not np.array_equal(ring[0], ring[-1]):
-        ring = np.vstack([ring, ring[:1]])
-    return ring
 
 
 def world_edges(obstacles: list[Obstacle], boxes: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -58,15 +42,6 @@ def world_edges(obstacles: list[Obstacle], boxes: list[np.ndarray]) -> tuple[np.
     glazed += [np.zeros(len(b) - 1, dtype=bool) for b in boxes]
     static = np.concatenate(parts) if parts else np.zeros((0, 4))
     return static, (np.concatenate(glazed) if glazed else np.zeros(0, dtype=bool))
-
-
-def box_edges(cx: float, cy: float, half_w: float, half_h: float, yaw: float = 0.0) -> np.ndarray:
-    c, s = math.cos(yaw), math.sin(yaw)
-    corners = np.array(
-        [[-half_w, -half_h], [half_w, -half_h], [half_w, half_h], [-half_w, half_h], [-half_w, -half_h]]
-    )
-    rot = corners @ np.array([[c, s], [-s, c]]) + [cx, cy]
-    return polygon_edges(rot)
 
 
 GLASS_ECHO_DEG = 10.0  # a lidar beam returns from glass only this close to the pane's normal

@@ -9,7 +9,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from bimkit.atomic import write_bytes_atomic
-from initcli.survey.survey import SHUT_IN_LABEL, Landmark, StoreySurvey
+from initcli.survey.landmarks import Landmark
+from initcli.survey.run import StoreySurvey
+from initcli.survey.spaces import SHUT_IN_LABEL
 
 LIDAR_TWIN_LABEL = "lidar twin, doors shut: camera off, alike to the lidar"
 

@@ -21,7 +21,6 @@ from initcli.core.features.classes import ClassMap
 from initcli.core.features.detection_filter import Sighting
 from initcli.core.filters.particle_filter import LikelihoodField, likelihood_field
 from initcli.core.geometry.se2 import Pose2D
-from initcli.core.hypotheses.ranking import verdict_text
 from initcli.core.lidar.scan_fit import ScanSample
 from initcli.core.verify.checks import (
     TRACK_HYPOTHESES,
@@ -38,14 +37,8 @@ from initcli.core.verify.checks import (
 )
 from initcli.core.verify.params import VerificationParams
 from initcli.io.detection_log import DetectionLog, Detections, Odom, Scan, read_log
-from initcli.match.pipeline import (
-    DECIDED_BY_LIDAR,
-    DECIDED_BY_PAPER,
-    EXIT_NO_MATCH,
-    EXIT_UNIQUE,
-    MatchReport,
-    site_class_map,
-)
+from initcli.match.load import site_class_map
+from initcli.match.report import DECIDED_BY_LIDAR, DECIDED_BY_PAPER, MatchReport
 from initcli.match.sightings import sightings_from_log
 
 __all__ = [
@@ -493,9 +486,9 @@ def check_loaded(log: DetectionLog, site: Site, report: MatchReport, shown: int)
 def refuse_unique(report: MatchReport, check: Verification) -> None:
     """Algorithm 1 left one place, but it fails the checks a session's claim must pass (the lidar
     does not fit the walls there, or it should have seen doors it did not): no pose is claimed,
-    the verdict is ``no consistent match`` (exit 4), ``paper_verdict`` keeps ``unique match``."""
+    the verdict is ``no consistent match`` (``Verdict.NONE``), ``paper_verdict`` keeps ``unique match``."""
     report.paper_verdict = report.verdict
-    report.verdict, report.exit_code = verdict_text(0), EXIT_NO_MATCH
+    report.decide(0)
     report.decided_by = None
     report.notes.append(
         "Algorithm 1's unique match fails the checks a session's claim must pass ("
@@ -516,7 +509,7 @@ def lidar_unique(
     was = report.hypotheses[favoured].rank
     report.hypotheses = [replace(report.hypotheses[i], rank=k) for k, i in enumerate(order, 1)]
     report.paper_verdict = report.verdict
-    report.verdict, report.exit_code = verdict_text(1), EXIT_UNIQUE
+    report.decide(1)
     report.decided_by = DECIDED_BY_LIDAR
     moved = f" (was {was})" if was != 1 else ""
     report.notes.append(

@@ -28,7 +28,7 @@ from initcli.config.building import twin_reason
 from initcli.core.features.classes import ClassMap
 from initcli.core.filters.particle_filter import likelihood_field
 from initcli.core.geometry.se2 import Pose2D
-from initcli.core.hypotheses.ranking import verdict_text
+from initcli.core.hypotheses.ranking import Verdict
 from initcli.core.lidar.registration import (
     GRID,
     Candidate,
@@ -43,7 +43,8 @@ from initcli.core.lidar.scan_fit import BeamEnds, ScanSample
 from initcli.core.verify.checks import CameraView, Verification
 from initcli.core.verify.params import VerificationParams
 from initcli.io.detection_log import DetectionLog, Scan, read_log
-from initcli.match.pipeline import EXIT_UNIQUE, Hypothesis, MatchReport, site_class_map
+from initcli.match.load import site_class_map
+from initcli.match.report import DECIDED_BY_REGISTRATION, Hypothesis, MatchReport, RegistrationRecord
 from initcli.match.sightings import sightings_from_log
 from initcli.verify.evidence import PathEvidence, StoreyEvidence, check_loaded, claim_params, verify_transform
 
@@ -56,8 +57,6 @@ __all__ = [
     "registration_record",
     "replay_registration",
 ]
-
-DECIDED_BY_REGISTRATION = "lidar registration"  # summary.json's decided_by for such a claim
 
 
 class SubmapRegistration:
@@ -146,22 +145,20 @@ def registered_hypothesis(storey: str, transform: Pose2D, odom: Pose2D) -> Hypot
     )
 
 
-def registration_record(claim: Candidate, found: Registration, blind: bool) -> dict[str, object]:
-    """What a registration claim adds to its coarse verification (summary.json) and to ``bim-init
-    match``'s report: what decided it, its fit, its best distinct rival's fit, whether negative
+def registration_record(claim: Candidate, found: Registration, blind: bool) -> RegistrationRecord:
+    """What a registration claim adds to its coarse verification (summary.json, its ``as_dict``)
+    and to ``bim-init match``'s report: its fit, its best distinct rival's fit, whether negative
     evidence counted (not when the camera is ``blind``) and, when places alike were ruled out by
     their beams through walls, the shares of such beams (the claim's, then theirs)."""
     rival = next((c for c in found.candidates if c is not claim), None)
-    record: dict[str, object] = {
-        "decided_by": DECIDED_BY_REGISTRATION,
-        "registration_fit": round(claim.fit, 4),
-        "registration_rival_fit": None if rival is None else round(rival.fit, 4),
-        "negative_evidence": not blind,
-    }
-    if found.contested and found.through:  # places alike ruled out by their beams through walls
-        record["registration_through"] = [round(share, 4) for share in found.through]
-        record["registration_doors_open"] = found.doors_open
-    return record
+    ruled_out = bool(found.contested and found.through)  # places alike, by their beams through walls
+    return RegistrationRecord(
+        fit=claim.fit,
+        rival_fit=None if rival is None else rival.fit,
+        negative_evidence=not blind,
+        through=found.through if ruled_out else None,
+        doors_open=found.doors_open if ruled_out else None,
+    )
 
 
 def check_and_register(
@@ -200,7 +197,7 @@ def replay_registration(
     claimed)."""
     if (
         not params.enabled
-        or report.exit_code == EXIT_UNIQUE
+        or report.outcome is Verdict.UNIQUE
         or report.odom_pose is None
         or not log.of_type(Scan)
     ):
@@ -233,7 +230,8 @@ def replay_registration(
         )
         if check.passed or not verification.enabled:
             claimed = registered_hypothesis(best.storey, transform, report.odom_pose)
-            _claim(report, claimed, registration_record(best, found, blind), travel, shown)
+            record = replace(registration_record(best, found, blind), travel=travel, t=t)
+            _claim(report, claimed, record, travel, shown)
             return [check, *checks][:shown]
         why = f"{why}, but it fails the checks ({'; '.join(check.reasons)})"
     report.notes.append(
@@ -244,18 +242,19 @@ def replay_registration(
 
 
 def _claim(
-    report: MatchReport, claimed: Hypothesis, record: dict[str, object], travel: float, shown: int
+    report: MatchReport, claimed: Hypothesis, record: RegistrationRecord, travel: float, shown: int
 ) -> None:
     """``report`` made a unique match on the registration's place ``claimed`` (at ``travel`` m)."""
     below = " (its hypotheses listed below)" if report.hypotheses else ""
     report.hypotheses = [claimed, *(replace(h, rank=h.rank + 1) for h in report.hypotheses)][:shown]
     report.paper_verdict = report.paper_verdict or report.verdict
-    report.verdict, report.exit_code = verdict_text(1), EXIT_UNIQUE
+    report.decide(1)
     report.decided_by, report.storey = DECIDED_BY_REGISTRATION, claimed.storey
     report.n_hypotheses += 1
     report.registration = record
+    written = record.as_dict()
     report.notes.append(
         f"unique by lidar registration at {travel:.1f} m of travel, as a session claims it (fit"
-        f" {record['registration_fit']}, the best distinct place {record['registration_rival_fit']});"
+        f" {written['registration_fit']}, the best distinct place {written['registration_rival_fit']});"
         f" Algorithm 1 left {report.paper_verdict}{below}"
     )

@@ -25,6 +25,8 @@ from initcli.core.geometry.se2 import Pose2D
 __all__ = [
     "CameraIntrinsics",
     "CameraMount",
+    "DEFAULT_CAMERA",
+    "DEFAULT_MOUNT",
     "R_BODY_OPTICAL",
     "base_to_odom",
     "bbox_centre",
@@ -75,6 +77,11 @@ class CameraMount:
     @property
     def translation(self) -> np.ndarray:
         return np.array([self.x, self.y, self.z])
+
+
+# The camera of the synthetic logs, the simulator and the survey where no config sets one.
+DEFAULT_CAMERA = CameraIntrinsics(fx=615.0, fy=615.0, cx=320.0, cy=240.0, width=640, height=480)
+DEFAULT_MOUNT = CameraMount(x=0.2, y=0.0, z=1.0, roll=0.0, pitch=0.0, yaw=0.0)
 
 
 def rpy_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:

@@ -13,7 +13,17 @@ from typing import overload
 
 import numpy as np
 
-__all__ = ["Pose2D", "poses_to_array", "rot2", "transform_poses", "wrap_angle"]
+__all__ = [
+    "MATCH_DIGITS",
+    "SESSION_DIGITS",
+    "Pose2D",
+    "PoseDigits",
+    "pose_json",
+    "poses_to_array",
+    "rot2",
+    "transform_poses",
+    "wrap_angle",
+]
 
 
 @overload
@@ -120,3 +130,28 @@ def transform_poses(transform: Pose2D, poses: np.ndarray) -> np.ndarray:
     return np.column_stack(
         [transform.x + c * x - s * y, transform.y + s * x + c * y, wrap_angle(transform.yaw + poses[:, 2])]
     )
+
+
+@dataclass(frozen=True)
+class PoseDigits:
+    """The decimal places a pose is written to JSON with: x and y (m), yaw (rad), yaw_deg (degrees)."""
+
+    xy: int
+    yaw: int
+    yaw_deg: int
+
+
+# The two roundings the JSON documents use, each for every pose of its documents:
+MATCH_DIGITS = PoseDigits(xy=6, yaw=6, yaw_deg=4)  # bim-init match --json (match_result.schema.json)
+SESSION_DIGITS = PoseDigits(xy=4, yaw=5, yaw_deg=3)  # summary.json: the session's poses, the delivered one
+
+
+def pose_json(pose: Pose2D, digits: PoseDigits) -> dict[str, float]:
+    """``pose`` as a JSON object ``{x, y, yaw, yaw_deg}``, rounded to ``digits`` (:data:`MATCH_DIGITS`
+    or :data:`SESSION_DIGITS`, the rounding of the document it goes in)."""
+    return {
+        "x": round(pose.x, digits.xy),
+        "y": round(pose.y, digits.xy),
+        "yaw": round(pose.yaw, digits.yaw),
+        "yaw_deg": round(math.degrees(pose.yaw), digits.yaw_deg),
+    }

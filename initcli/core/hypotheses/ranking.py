@@ -40,6 +40,7 @@ unique match.
 
 from __future__ import annotations
 
+import enum
 import math
 from collections import defaultdict
 
@@ -51,6 +52,7 @@ from initcli.core.hypotheses.matching import OUTLIER
 __all__ = [
     "VERDICT_NONE",
     "VERDICT_UNIQUE",
+    "Verdict",
     "confidences",
     "distinct_places",
     "drop_dominated",
@@ -62,6 +64,23 @@ __all__ = [
 
 VERDICT_UNIQUE = "unique match"
 VERDICT_NONE = "no consistent match"
+
+
+class Verdict(enum.StrEnum):
+    """Rule 4's outcome: one place, several, or none. UNIQUE and NONE are their verdict lines; the
+    line of AMBIGUOUS names the count (:func:`verdict_text`). The command's exit code for each is
+    ``initcli.cli.exit_codes``'s, not the library's."""
+
+    UNIQUE = VERDICT_UNIQUE
+    AMBIGUOUS = "ambiguous"
+    NONE = VERDICT_NONE
+
+    @classmethod
+    def of(cls, count: int) -> Verdict:
+        """The outcome of ``count`` pose-distinct hypotheses (the one :func:`verdict_text` words)."""
+        if count <= 0:
+            return cls.NONE
+        return cls.UNIQUE if count == 1 else cls.AMBIGUOUS
 
 
 def verdict_text(count: int) -> str:

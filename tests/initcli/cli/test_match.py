@@ -343,6 +343,7 @@ def test_a_unique_match_the_lidar_refutes_is_not_claimed(symmetric_session) -> N
     """Algorithm 1's one hypothesis is still checked: alone at the true place it stays unique; moved
     to a place where the scans do not fit the walls, the verdict is no consistent match (exit 4)."""
     from initcli.core.geometry.se2 import Pose2D
+    from initcli.core.hypotheses.ranking import Verdict
     from initcli.match.pipeline import DECIDED_BY_PAPER, MatchOptions, run_match
     from initcli.verify.evidence import check_hypotheses
 
@@ -357,18 +358,31 @@ def test_a_unique_match_the_lidar_refutes_is_not_claimed(symmetric_session) -> N
         )
         h = dataclasses.replace(h, pose=moved * h.pose, rectified_pose=None, rank=1)
         report.hypotheses, report.n_hypotheses = [h], 1
-        report.verdict, report.exit_code, report.decided_by = "unique match", 0, DECIDED_BY_PAPER
+        report.decide(1)
+        report.decided_by = DECIDED_BY_PAPER
         checks = check_hypotheses(log, site, report, False, 1)
         return report, checks
 
     kept, checks = alone(Pose2D(0.0, 0.0, 0.0))
-    assert kept.exit_code == 0 and kept.decided_by == DECIDED_BY_PAPER and checks[0].passed
+    assert kept.outcome is Verdict.UNIQUE and kept.decided_by == DECIDED_BY_PAPER and checks[0].passed
     refused, checks = alone(Pose2D(0.0, 3.0, 0.0))  # 3 m across the corridor: into the walls
     assert not checks[0].passed
-    assert refused.exit_code == 4 and refused.verdict == "no consistent match"
+    assert refused.outcome is Verdict.NONE and refused.verdict == "no consistent match"
     assert refused.paper_verdict == "unique match" and refused.decided_by is None
     assert any("fails the checks" in n for n in refused.notes)
 
 
 def _pose(p) -> dict:
     return {"x": p.x, "y": p.y, "yaw": p.yaw}
+
+
+def test_each_outcome_maps_to_one_exit_code() -> None:
+    """The library's outcome becomes the command's exit code in initcli.cli.exit_codes alone; bad
+    input is bimkit's code 2, not a second definition."""
+    from bimkit.errors import EXIT_BAD_INPUT
+    from initcli.cli import exit_codes
+    from initcli.core.hypotheses.ranking import Verdict
+
+    assert [exit_codes.match_exit_code(Verdict.of(n)) for n in (0, 1, 2, 7)] == [4, 0, 3, 3]
+    assert exit_codes.EXIT_BAD_INPUT is EXIT_BAD_INPUT and EXIT_BAD_INPUT == 2
+    assert Verdict.UNIQUE == "unique match" and Verdict.NONE == "no consistent match"

@@ -10,6 +10,7 @@ import jsonschema
 import pytest
 
 from bimkit.errors import InputError
+from initcli.core.geometry.projection import DEFAULT_CAMERA, DEFAULT_MOUNT
 from initcli.core.geometry.se2 import Pose2D
 from initcli.io.detection_log import (
     DetectedObject,
@@ -24,7 +25,6 @@ from initcli.io.detection_log import (
     read_log,
     write_log,
 )
-from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
 from tests.helpers import SCHEMAS
 
 SCHEMA = json.loads((SCHEMAS / "detection_log.schema.json").read_text())

@@ -15,18 +15,19 @@ from bimtools.site.manifest import SiteManifest
 from bimtools.site.records import LIDAR, Feature
 from initcli.config.session import VerificationSection
 from initcli.core.features.classes import ClassMap
+from initcli.core.geometry.projection import DEFAULT_CAMERA, DEFAULT_MOUNT
 from initcli.core.geometry.se2 import Pose2D
+from initcli.core.hypotheses.ranking import Verdict
 from initcli.core.lidar.landmark_tracks import LandmarkTracker, ScanInput
 from initcli.core.lidar.scan_landmarks import ScanLandmarkParams
 from initcli.core.verify.checks import CameraView, VerificationParams
 from initcli.drivers.base import LaserScan, SensorFrame
 from initcli.io.detection_log import DetectionLog, FeatureRecord, Meta, Odom, Record, Scan, read_log
 from initcli.match.landmarks import feature_records, log_landmarks, site_tracker, travel_at
-from initcli.match.pipeline import EXIT_AMBIGUOUS, MatchOptions, match_log
+from initcli.match.pipeline import MatchOptions, match_log
 from initcli.session.claims import ClaimChecks
 from initcli.session.perception import Perception
 from initcli.session.result import SessionResult
-from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
 from initcli.verify.evidence import PathEvidence, StoreyEvidence, verify_transform, without_landmark_misses
 from tests.landmark_worlds import RANGE_MAX, SETTINGS, walled
 
@@ -240,7 +241,7 @@ def test_corners_the_bim_lacks_never_single_out_a_wrong_place(tmp_path) -> None:
     )
     report = match_log(log, site, MatchOptions(), ClassMap())
     camera_alone = match_log(log, site, MatchOptions(landmarks=False), ClassMap())
-    assert report.exit_code == EXIT_AMBIGUOUS and report.n_hypotheses == camera_alone.n_hypotheses
+    assert report.outcome is Verdict.AMBIGUOUS and report.n_hypotheses == camera_alone.n_hypotheses
     # the two places without a camera outlier: the turned one with the clutter seen after its second
     # door fitted, the true one
     best = {tuple(h.matches) for h in report.hypotheses if h.n_outliers == 0}
@@ -305,7 +306,7 @@ def test_landmarks_alone_claim_one_place_only_if_every_landmark_may_be_clutter(t
         Path("w.jsonl"), Meta(DEFAULT_CAMERA, DEFAULT_MOUNT), records, list(range(len(records)))
     )
     report = match_log(log, site, MatchOptions(), ClassMap())
-    assert report.exit_code == EXIT_AMBIGUOUS, [h.matches for h in report.hypotheses]
+    assert report.outcome is Verdict.AMBIGUOUS, [h.matches for h in report.hypotheses]
     assert any("unique match within the lidar landmarks' outlier budget" in n for n in report.notes)
     places = {tuple(h.matches) for h in report.hypotheses}
     assert (None, None, *(f"t{i}-CC1" for i in range(6))) in places

@@ -11,6 +11,7 @@ import pytest
 from bimtools.site.load import load_site
 from initcli.core.features.classes import ClassMap
 from initcli.core.geometry.se2 import Pose2D
+from initcli.core.hypotheses.ranking import Verdict
 from initcli.io.detection_log import read_log, write_log
 from initcli.match.pipeline import MatchOptions, MatchReport, match_log, site_class_map
 from initcli.sim.synthetic_floor import write_site_folder
@@ -98,7 +99,7 @@ def distinct_csv(tmp_path: Path) -> Path:
 def test_noise_free_log_gives_the_exact_match_and_pose(tmp_path, distinct_csv, method, waypoints) -> None:
     # The paper's alpha: at the default 0.8 the second pass is still ambiguous at its end.
     report, truth = run(tmp_path, distinct_csv, corridor(), waypoints, pose_method=method, alpha=0.5)
-    assert report.verdict == "unique match" and report.exit_code == 0
+    assert report.verdict == "unique match" and report.outcome is Verdict.UNIQUE
     (h,) = report.hypotheses
     to_bim = Pose2D(
         waypoints[0][0],
@@ -141,7 +142,7 @@ def test_periodic_doors_are_ambiguous(tmp_path) -> None:
     feats += [SimFeature(f"t{i}", "door", 2.0 + 4 * i, 2.0, 0.0, -1.0) for i in range(20)]
     csv = table1_csv(tmp_path / "periodic.csv", feats)
     report, truth = run(tmp_path, csv, feats, [(24.0, 1.0), (40.0, 1.0)])
-    assert report.exit_code == 3 and report.n_hypotheses > 2
+    assert report.outcome is Verdict.AMBIGUOUS and report.n_hypotheses > 2
     assert report.verdict == f"{report.n_hypotheses} hypotheses"
     assert any(h.pose.distance_to(truth) < 1e-3 for h in report.hypotheses) or report.n_hypotheses > 5
 
@@ -156,8 +157,8 @@ def test_point_symmetric_layout_is_never_unique(tmp_path) -> None:
         x1 = x0 + float(rng.uniform(8, 19))
         waypoints = [(x0, 1.0), (x1, 1.0)] if k % 2 == 0 else [(40 - x0, 1.0), (40 - x1, 1.0)]
         report, truth = run(tmp_path, csv, feats, waypoints, seed=k)
-        assert report.exit_code in (3, 4), report.verdict
-        if report.exit_code == 3:
+        assert report.outcome in (Verdict.AMBIGUOUS, Verdict.NONE), report.verdict
+        if report.outcome is Verdict.AMBIGUOUS:
             assert report.n_hypotheses >= 2
             assert any(h.pose.distance_to(truth) < 1e-3 for h in report.hypotheses)
 
@@ -171,7 +172,7 @@ def test_a_persistent_false_positive_is_tolerated_with_one_outlier(tmp_path, dis
     assert not any(
         h.pose.distance_to(truth) < 0.5 for h in strict.hypotheses
     )  # the paper's algorithm loses it
-    assert strict.exit_code != 0 or strict.hypotheses[0].pose.distance_to(truth) > 0.5
+    assert strict.outcome is not Verdict.UNIQUE or strict.hypotheses[0].pose.distance_to(truth) > 0.5
     tolerant, truth = run(tmp_path, distinct_csv, corridor(), waypoints, phantoms=[poster], max_outliers=1)
     assert tolerant.verdict == "unique match"
     (h,) = tolerant.hypotheses
@@ -208,8 +209,8 @@ def test_noisy_log_still_matches(tmp_path, distinct_csv) -> None:
         report, truth = run(
             tmp_path, distinct_csv, corridor(), [(1.0, 1.0), (30.0, 1.0)], params=noisy, seed=seed
         )
-        assert report.exit_code in (0, 3)
-        if report.exit_code == 0:
+        assert report.outcome in (Verdict.UNIQUE, Verdict.AMBIGUOUS)
+        if report.outcome is Verdict.UNIQUE:
             assert report.hypotheses[0].pose.distance_to(truth) < 0.3
         assert any(h.pose.distance_to(truth) < 0.3 for h in report.hypotheses)
 
@@ -217,7 +218,7 @@ def test_noisy_log_still_matches(tmp_path, distinct_csv) -> None:
 def test_too_few_features_is_no_match_with_a_note(tmp_path, distinct_csv) -> None:
     report, _ = run(tmp_path, distinct_csv, corridor(), [(1.0, 1.0), (3.5, 1.0)])
     assert len(report.features) < 3
-    assert report.verdict == "no consistent match" and report.exit_code == 4
+    assert report.verdict == "no consistent match" and report.outcome is Verdict.NONE
     assert any("at least 3" in n for n in report.notes)
 
 
@@ -230,7 +231,7 @@ def test_storey_auto_reports_the_storey(tmp_path) -> None:
     assert report.storeys == ["L1", "L2"]
     assert report.verdict == "unique match" and report.storey == "L2" and report.hypotheses[0].storey == "L2"
     only_l1, _ = run(tmp_path, site, corridor(), [(1.0, 1.0), (22.0, 1.0)], storey="L1")
-    assert only_l1.exit_code == 4 and only_l1.storeys == ["L1"]
+    assert only_l1.outcome is Verdict.NONE and only_l1.storeys == ["L1"]
 
 
 def test_identical_storeys_are_ambiguous(tmp_path) -> None:
@@ -262,8 +263,8 @@ def test_rectification_with_walls(tmp_path) -> None:
 
 
 def test_feature_records_of_an_aggregating_robot(tmp_path, distinct_csv) -> None:
+    from initcli.core.geometry.projection import DEFAULT_CAMERA, DEFAULT_MOUNT
     from initcli.io.detection_log import FeatureRecord, Meta, Odom
-    from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
 
     start = Pose2D(30.0, 1.0, math.pi)  # walking west from x = 30
     bim = {f.id: f for f in corridor()}
@@ -288,8 +289,8 @@ def test_three_detections_with_a_false_one_are_never_a_wrong_unique_match(tmp_pa
     above L2-L3 exactly as D is above L1-L2: the paper's algorithm (no outliers) finds the one full
     match (L1, L2, D), a wrong unique match; with --max-outliers 1 the alternative "the door was
     false" (L2, L3, -) is enumerated and the verdict is ambiguous."""
+    from initcli.core.geometry.projection import DEFAULT_CAMERA, DEFAULT_MOUNT
     from initcli.io.detection_log import FeatureRecord, Meta, Odom
-    from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
 
     feats = [
         SimFeature("L1", "lift", 0.0, 0.0, 0.0, 1.0),
@@ -308,7 +309,7 @@ def test_three_detections_with_a_false_one_are_never_a_wrong_unique_match(tmp_pa
     paper = match_log(log, site, MatchOptions(max_outliers=0), ClassMap())
     assert paper.verdict == "unique match" and paper.hypotheses[0].matches == ["L1", "L2", "D"]  # wrong
     tolerant = match_log(log, site, MatchOptions(max_outliers=1, top=50), ClassMap())
-    assert tolerant.exit_code == 3
+    assert tolerant.outcome is Verdict.AMBIGUOUS
     assert ["L2", "L3", None] in [h.matches for h in tolerant.hypotheses]
 
 

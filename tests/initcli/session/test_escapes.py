@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from initcli.config.exploration import FrontierSettings, LoopSettings, ShuttleSettings
+from initcli.config.exploration import FrontierSettings, LapSettings, LoopSettings, ShuttleSettings
 from initcli.core.geometry.raycast import ray_segment_distances
 from initcli.core.geometry.se2 import Pose2D
 from initcli.core.navigation.bug_navigation import BugNavigator, BugParams
@@ -23,10 +23,13 @@ ANGLES = np.linspace(-math.pi, math.pi, 360, endpoint=False)
 
 
 def escapes(
-    loops: LoopSettings = LOOPS, shuttles: ShuttleSettings = SHUTTLES
+    loops: LoopSettings = LOOPS, shuttles: ShuttleSettings = SHUTTLES, to_long_walls: bool = False
 ) -> tuple[Escapes, SessionResult]:
+    """Escapes with these settings (out of a circle round a column to a long wall: ``to_long_walls``)."""
     result = SessionResult(False, "", None)
-    return Escapes(loops, shuttles, FRONTIER, WallFollowParams(), result), result
+    return Escapes(
+        loops, shuttles, FRONTIER, LapSettings(), to_long_walls, WallFollowParams(), result
+    ), result
 
 
 def scan_of(
@@ -162,11 +165,20 @@ def _lap_in(
     """Integrate the scans from ``seen_from`` and along ``path`` (odom = world) among ``walls`` into
     the local map, then drive ``path`` as the lap watch sees it, 0 features: what
     :meth:`Escapes.lap` returns."""
-    e, result = escapes()
-    e.to_long_walls = to_long_walls
+    return lap_in(*escapes(to_long_walls=to_long_walls), walls, path, seen_from)
+
+
+def lap_in(
+    e: Escapes,
+    result: SessionResult,
+    walls: list[tuple[float, float, float, float]],
+    path: list[tuple[float, float]],
+    seen_from: list[tuple[float, float]] = (),
+):
+    """:func:`_lap_in` with the escapes ``e`` that count in ``result``."""
     poses = [Pose2D(x, y, 0.0) for x, y in path]
     for step, at in enumerate([Pose2D(x, y, 0.0) for x, y in seen_from] + poses):
-        e.see(SensorFrame(0.1 * step, at, scan_of(walls, at)), step * FRONTIER.scan_every)
+        e.see(SensorFrame(0.1 * step, at, scan_of(walls, at)), step * e.frontier.scan_every)
     travel, why = 0.0, None
     for k, at in enumerate(poses):
         travel += 0.0 if k == 0 else math.hypot(at.x - poses[k - 1].x, at.y - poses[k - 1].y)
@@ -199,14 +211,16 @@ def test_a_circle_in_a_closed_hall_is_not_shut_in_a_lap_round_a_closed_room_is()
     assert result.crossings == 0
 
 
+COLUMN = [(9.7, 4.7, 10.3, 4.7), (10.3, 4.7, 10.3, 5.3), (10.3, 5.3, 9.7, 5.3), (9.7, 5.3, 9.7, 4.7)]
+HALL = [(0.0, 0.0, 20.0, 0.0), (20.0, 0.0, 20.0, 14.0), (20.0, 14.0, 0.0, 14.0), (0.0, 14.0, 0.0, 0.0)]
+ROUND_THE_COLUMN = [(10.0 + math.cos(a * math.pi / 20), 5.0 + math.sin(a * math.pi / 20)) for a in range(46)]
+ALL_OVER_THE_HALL = [(x, y) for x in np.arange(2.0, 19.0, 2.0) for y in np.arange(2.0, 13.0, 2.0)]
+
+
 def test_out_of_a_circle_round_a_column_to_the_nearest_long_wall() -> None:
     """exploration.long_walls: round a column in the middle of a 20 x 14 m hall (the wall
     follower took it for a wall) the robot heads for the nearest long wall, the hall's south wall
     4.2 m away (the column, 0.6 m wide, is no wall)."""
-    column = [(9.7, 4.7, 10.3, 4.7), (10.3, 4.7, 10.3, 5.3), (10.3, 5.3, 9.7, 5.3), (9.7, 5.3, 9.7, 4.7)]
-    hall = [(0.0, 0.0, 20.0, 0.0), (20.0, 0.0, 20.0, 14.0), (20.0, 14.0, 0.0, 14.0), (0.0, 14.0, 0.0, 0.0)]
-    round_it = [(10.0 + math.cos(a * math.pi / 20), 5.0 + math.sin(a * math.pi / 20)) for a in range(46)]
-    everywhere = [(x, y) for x in np.arange(2.0, 19.0, 2.0) for y in np.arange(2.0, 13.0, 2.0)]
-    why, result = _lap_in(hall + column, round_it, everywhere, to_long_walls=True)
+    why, result = _lap_in(HALL + COLUMN, ROUND_THE_COLUMN, ALL_OVER_THE_HALL, to_long_walls=True)
     assert why == "a 6 m circle without a new feature: heading for the nearest long wall"
     assert result.crossings == 1

@@ -63,7 +63,7 @@ def test_the_robot_looks_again_only_with_open_space_beside_and_far_enough_on() -
 def test_the_floor_is_crossed_after_cross_after_fruitless_looks() -> None:
     result = SessionResult(False, "", None)
     x = EXPLORATION
-    escapes = Escapes(x.loops, x.shuttles, x.frontier, WallFollowParams(), result)
+    escapes = Escapes(x.loops, x.shuttles, x.frontier, x.laps, x.long_walls, WallFollowParams(), result)
     looks = Looks(dataclasses.replace(EXPLORATION, cross_after=2))
     frame = SensorFrame(1.0, Pose2D(0.0, 0.0, 0.0))
     assert looks.cross(frame, HALL, 1, escapes, travel=20.0) is None and result.crossings == 0
@@ -81,7 +81,7 @@ def test_the_floor_is_crossed_after_cross_after_fruitless_looks() -> None:
 def test_with_hypotheses_a_fruitless_look_crosses_to_the_wall_that_holds_their_features() -> None:
     result = SessionResult(False, "", None)
     x = EXPLORATION
-    escapes = Escapes(x.loops, x.shuttles, x.frontier, WallFollowParams(), result)
+    escapes = Escapes(x.loops, x.shuttles, x.frontier, x.laps, x.long_walls, WallFollowParams(), result)
     looks = Looks(dataclasses.replace(EXPLORATION, feature_walls=True))  # cross_after 6: none yet without
     frame = SensorFrame(1.0, Pose2D(0.0, 0.0, 0.0))
     door = (np.array([[0.0, -8.9]]), np.array([[0.0, 1.0]]), np.array([0]))  # on the far wall, facing us

@@ -12,10 +12,10 @@ import pytest
 
 from bimtools.site.load import Site
 from initcli.config import load_config
+from initcli.core.geometry.projection import DEFAULT_CAMERA, DEFAULT_MOUNT
 from initcli.core.geometry.se2 import Pose2D
 from initcli.drivers.base import LaserScan, SensorFrame
 from initcli.session.runner import Session
-from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT
 from tests.helpers import SAMPLES
 
 
@@ -283,6 +283,15 @@ def test_crosses_to_the_wall_where_the_hypotheses_put_an_unseen_door(
 
 @pytest.mark.parametrize("long_walls", [True, False])
 def test_long_walls_reaches_the_escapes(config, long_walls) -> None:
+    """exploration.long_walls as the config says (true by default): the escapes the session is
+    assembled with head out of a circle round a column to the nearest long wall, or not."""
+    from initcli.session.assembly import assemble
+    from tests.initcli.session.test_escapes import ALL_OVER_THE_HALL, COLUMN, HALL, ROUND_THE_COLUMN, lap_in
+
+    assert config.exploration.long_walls  # the default
     exploration = dataclasses.replace(config.exploration, long_walls=long_walls)
-    session, _ = _session(dataclasses.replace(config, exploration=exploration))
-    assert session.escapes.to_long_walls is long_walls
+    config = dataclasses.replace(config, exploration=exploration)
+    parts = assemble(config, Site(SAMPLES, {}), None, BlindDriver(), None, np.random.default_rng(0), "test")
+    why, result = lap_in(parts.escapes, parts.result, HALL + COLUMN, ROUND_THE_COLUMN, ALL_OVER_THE_HALL)
+    to_the_wall = why == "a 6 m circle without a new feature: heading for the nearest long wall"
+    assert to_the_wall is long_walls and result.crossings == int(long_walls)

@@ -11,15 +11,15 @@ from bimtools.extract.output import write_site
 from bimtools.extract.pipeline import extract_site
 from bimtools.site.load import StoreyModel, load_site
 from initcli.sim.as_built import (
-    LEAF_CLASS,
     AsBuiltParams,
     corridor_length,
     derive_as_built,
     is_exterior,
     stand_out,
 )
-from initcli.sim.scenario import Circulation
 from initcli.sim.synthetic_log import sim_features_from_bim
+from initcli.storey.circulation import Circulation
+from initcli.storey.doors import LEAF_CLASS
 
 SAMPLES = Path(__file__).resolve().parents[3] / "sample_models"
 

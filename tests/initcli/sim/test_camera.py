@@ -5,10 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from initcli.core.geometry.projection import DEFAULT_CAMERA, DEFAULT_MOUNT
 from initcli.core.geometry.se2 import Pose2D
 from initcli.detector.profile import DetectorProfile, RecallTable
 from initcli.sim.camera import CameraNoise, SimulatedDetector
-from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT, SimFeature
+from initcli.sim.synthetic_log import SimFeature
 from initcli.sim.world import SimWorld
 
 EXACT = CameraNoise(

@@ -22,8 +22,8 @@ from initcli.sim.markers import (
     detect_markers,
     place_markers,
 )
-from initcli.sim.scenario import Circulation
 from initcli.sim.world import SimWorld
+from initcli.storey.circulation import Circulation
 from tests.helpers import SAMPLES
 
 CAMERA = CameraIntrinsics(320.0, 320.0, 320.0, 240.0, 640, 480)

@@ -8,7 +8,7 @@ from bimtools.site.records import FREE, Feature
 from initcli.config import load_config
 from initcli.config.building import choose_storey, prepare_site
 from initcli.sim.build import build_sim
-from initcli.sim.scenario import Circulation
+from initcli.storey.circulation import Circulation
 from tests.helpers import SAMPLES
 
 

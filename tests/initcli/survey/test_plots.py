@@ -11,8 +11,10 @@ import pytest
 
 from bimtools.site.load import StoreyModel
 from bimtools.site.records import FREE, OCCUPIED, Feature, OccupancyGrid, WallSegment
+from initcli.survey.landmarks import suggest_landmarks
+from initcli.survey.plan import SurveyParams, plan_storey
 from initcli.survey.plots import _panel, survey_png
-from initcli.survey.survey import StoreySurvey, SurveyParams, plan_storey, suggest_landmarks, survey_storey
+from initcli.survey.run import StoreySurvey, survey_storey
 
 matplotlib.use("Agg")
 

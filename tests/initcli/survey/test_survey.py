@@ -1,5 +1,6 @@
-"""initcli.survey.survey on a tiny walled room: features, occluders, the start plan, one small
-survey, its per-position numbers and the summary of survey.json."""
+"""The survey (initcli.survey.plan, sequences, run, summary, landmarks) on a tiny walled room:
+features, occluders, the start plan, one small survey, its per-position numbers and the summary of
+survey.json."""
 
 from __future__ import annotations
 
@@ -13,20 +14,11 @@ import pytest
 from bimtools.site.load import StoreyModel
 from bimtools.site.records import FREE, OCCUPIED, Feature, Obstacle, OccupancyGrid, WallSegment
 from initcli.core.features.classes import ClassMap
-from initcli.survey.survey import (
-    StoreySurvey,
-    SurveyParams,
-    _cumulative,
-    landmark_candidates,
-    occluders_of,
-    plan_storey,
-    sample_views,
-    sequences,
-    storey_features,
-    suggest_landmarks,
-    summarise,
-    survey_storey,
-)
+from initcli.survey.landmarks import landmark_candidates, suggest_landmarks
+from initcli.survey.plan import SurveyParams, cumulative_sightings, occluders_of, plan_storey, storey_features
+from initcli.survey.run import StoreySurvey, survey_storey
+from initcli.survey.sequences import sample_views, sequences
+from initcli.survey.summary import summarise
 
 RES = 0.1
 W, H = 8.0, 5.0  # m: the room's inside
@@ -79,7 +71,7 @@ def test_occluders_are_walls_unless_there_are_obstacles() -> None:
 
 def test_cumulative_counts_over_two_laps() -> None:
     vis = np.array([[1, 0], [0, 1], [1, 1]], dtype=bool)
-    cum = _cumulative(vis)
+    cum = cumulative_sightings(vis)
     assert cum.shape == (7, 2)
     assert cum[:, 0].tolist() == [0, 1, 1, 2, 3, 3, 4]
     assert cum[:, 1].tolist() == [0, 0, 1, 2, 2, 3, 4]

@@ -13,7 +13,7 @@ from bimtools.extract.output import write_site
 from bimtools.extract.pipeline import extract_site
 from bimtools.site.load import load_site
 from initcli.cli.main import app
-from initcli.survey.survey import SurveyParams, plan_storey
+from initcli.survey.plan import SurveyParams, plan_storey
 from tests.helpers import SAMPLES, SCHEMAS
 
 

@@ -10,8 +10,9 @@ import pytest
 
 from bimtools.site.records import FREE, OCCUPIED, OccupancyGrid
 from initcli.core.features.visibility import CameraModel, FeatureArrays, visible
+from initcli.core.geometry.projection import DEFAULT_CAMERA, DEFAULT_MOUNT
 from initcli.core.geometry.se2 import Pose2D
-from initcli.sim.synthetic_log import DEFAULT_CAMERA, DEFAULT_MOUNT, SimFeature, SyntheticParams, render_image
+from initcli.sim.synthetic_log import SimFeature, SyntheticParams, render_image
 from initcli.survey.exploration import follow_loops, join_loop, look_round
 from initcli.survey.uniqueness import UniquenessParams, first_unique
 

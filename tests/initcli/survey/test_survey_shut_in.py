@@ -14,7 +14,7 @@ from bimtools.extract.pipeline import extract_site
 from bimtools.samples.worlds import world, write_plan
 from bimtools.site.load import load_site
 from initcli.cli.main import app
-from initcli.survey.survey import SurveyParams, plan_storey
+from initcli.survey.plan import SurveyParams, plan_storey
 from tests.helpers import SCHEMAS
 
 

@@ -8,7 +8,6 @@ from pathlib import Path
 
 import jsonschema
 import numpy as np
-from tests.initcli.core.lidar.test_registration import FLOOR, HALF_TURN, RES, drive, grid_of, line, thick_wall
 
 from bimkit.schemas import schema_path
 from bimtools.site.load import Site, StoreyModel
@@ -26,6 +25,7 @@ from initcli.verify.registration import (
     registration_record,
 )
 from tests.helpers import walls_grid
+from tests.initcli.core.lidar.test_registration import FLOOR, HALF_TURN, RES, drive, grid_of, line, thick_wall
 
 
 def _found(walls, path):
@@ -42,7 +42,7 @@ def _schema() -> dict:
 def test_a_claim_that_ruled_out_places_alike_records_their_beams_through_walls() -> None:
     found = _found(HALF_TURN, line(2.0, 1.2, 28.0, 1.2))
     assert found.unique and found.best is not None and found.contested
-    record = registration_record(found.best, found, blind=True)
+    record = registration_record(found.best, found, blind=True).as_dict()
     jsonschema.validate(record, _schema())
     assert record["decided_by"] == DECIDED_BY_REGISTRATION and record["negative_evidence"] is False
     assert record["registration_through"] == [round(s, 4) for s in found.through]
@@ -53,7 +53,7 @@ def test_a_claim_that_ruled_out_places_alike_records_their_beams_through_walls()
 def test_a_claim_unique_by_its_fit_records_no_beams_through_walls() -> None:
     found = _found(FLOOR, line(8.0, 2.5, 8.0, 6.0) + line(8.0, 6.0, 18.0, 6.0))
     assert found.unique and found.best is not None and not found.contested
-    record = registration_record(found.best, found, blind=False)
+    record = registration_record(found.best, found, blind=False).as_dict()
     jsonschema.validate(record, _schema())
     assert "registration_through" not in record and record["negative_evidence"] is True
 

@@ -9,7 +9,7 @@ import numpy as np
 from initcli.core.geometry.se2 import Pose2D
 from initcli.core.navigation.bug_navigation import BugNavigator, BugParams, around_side
 from initcli.core.navigation.wall_following import ScanView
-from initcli.sim.world import box_edges
+from initcli.storey.outlines import box_edges
 
 
 def scan_of(points: np.ndarray) -> ScanView:

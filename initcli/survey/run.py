@@ -1,0 +1,85 @@
+"""The survey's run: the matching of every start's sequence, in chunks on an executor, to the
+distance at which it becomes unique, and the survey of one storey that holds those distances."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from initcli.executor import Executor, LocalExecutor, map_unordered
+from initcli.survey.plan import StoreyPlan, SurveyParams
+from initcli.survey.sequences import SampleViews, sample_views, sequences
+from initcli.survey.uniqueness import UniquenessParams, first_unique
+
+__all__ = ["StoreySurvey", "survey_storey", "unique_distances"]
+
+
+def _match_chunk(
+    xy: np.ndarray, classes: tuple[str, ...], seqs: list[tuple[int, ...]], params: UniquenessParams
+) -> list[int]:
+    return first_unique(xy, classes, seqs, params)
+
+
+def unique_distances(
+    plan: StoreyPlan,
+    seqs: list[tuple[int, ...]],
+    dists: list[np.ndarray],
+    params: SurveyParams,
+    executor: Executor | None = None,
+    on_done: Callable[[int], None] | None = None,
+    chunks: int | None = None,
+) -> np.ndarray:
+    """(S,) metres driven to a unique match per start; ``inf``: never unique within the limit."""
+    order = sorted(range(len(seqs)), key=lambda i: seqs[i])
+    executor = executor or LocalExecutor(1)
+    n_chunks = chunks or max(1, min(len(order), 8 * executor.slots))
+    size = math.ceil(len(order) / n_chunks) if order else 1
+    parts = [order[lo : lo + size] for lo in range(0, len(order), size)]
+    out = np.full(len(seqs), np.inf)
+    calls = [
+        (_match_chunk, plan.features.xy, plan.features.cls, [seqs[i] for i in p], params.matching)
+        for p in parts
+    ]
+    for k, counts in map_unordered(executor, calls):
+        for i, n in zip(parts[k], counts, strict=True):
+            if n > 0:
+                out[i] = float(dists[i][n - 1])
+        if on_done is not None:
+            on_done(len(parts[k]))
+    return out
+
+
+@dataclass
+class StoreySurvey:
+    """The survey of one storey: the plan, the per-start distances, the per-position map values."""
+
+    plan: StoreyPlan
+    distance: np.ndarray  # (S,) m, inf: never unique
+    params: SurveyParams
+
+    @property
+    def position_distance(self) -> np.ndarray:
+        """(M,) mean over headings of the distance capped at the limit."""
+        capped = np.minimum(self.distance, self.params.limit_m)
+        return np.bincount(self.plan.position, capped, len(self.plan.positions)) / self.params.headings
+
+    @property
+    def position_never(self) -> np.ndarray:
+        """(M,) share of the headings that never become unique."""
+        never = ~np.isfinite(self.distance)
+        return np.bincount(self.plan.position, never, len(self.plan.positions)) / self.params.headings
+
+
+def survey_storey(
+    plan: StoreyPlan,
+    params: SurveyParams,
+    executor: Executor | None = None,
+    on_done: Callable[[int], None] | None = None,
+) -> tuple[StoreySurvey, SampleViews]:
+    views = sample_views(plan, params)
+    seqs, dists = sequences(plan, views, params)
+    distance = unique_distances(plan, seqs, dists, params, executor, on_done)
+    return StoreySurvey(plan, distance, params), views
