@@ -9,7 +9,11 @@ Nothing here is hand-copied: every page is derived at build time from a file in 
   package or module added or moved later appears without editing the docs.
 * Settings reference: every key of ``site_config.schema.json`` (and ``eval_config.schema.json``)
   with its type, default, unit, range and description; the file formats of the other schemas.
-* Results: tables and figures from every ``results.jsonl`` under ``benchmarks/results/``.
+* Results: tables and figures from every ``results.jsonl`` under ``benchmarks/results/`` (the
+  superseded records in ``benchmarks/results/archive/`` are left out).
+* Record tables: a hand-written page's line ``<!-- records: NAME ... -->`` becomes a table of
+  those record folders (success, confident wrong and mean distance per site), read from their
+  ``results.jsonl`` at build time (``expanded_pages``).
 * Copies: ``CHANGELOG.md``, the detector's model card and the default categories file.
 """
 
@@ -32,9 +36,13 @@ from typing import Any
 __all__ = [
     "Page",
     "api_pages",
+    "cited_records",
     "copied_pages",
+    "expanded_pages",
     "generated_pages",
     "package_modules",
+    "record_folders",
+    "records_table",
     "results_pages",
     "schema_pages",
     "settings_table",
@@ -43,6 +51,7 @@ __all__ = [
 ROOT = Path(__file__).resolve().parents[2]
 SCHEMA_DIR = Path("bimkit/schemas")
 RESULTS_DIR = Path("benchmarks/results")
+ARCHIVE = "archive"  # benchmarks/results/archive/: superseded records, no page, cited nowhere
 API_DIR = "reference/api"
 RESULTS_PAGES = "results"
 
@@ -381,13 +390,19 @@ def schema_pages(root: Path = ROOT) -> list[Page]:
 _LINK = re.compile(r"(?<!!)\[([^\]]+)\]\(([^)\s]+)\)")
 
 
-def _unlink_relative(text: str) -> str:
-    """Relative links of a file copied into the docs point into the source tree: keep their text."""
+def _unlink_relative(text: str, docs_prefix: str | None = None) -> str:
+    """Relative links of a file copied into the docs point into the source tree: keep their text.
+
+    With ``docs_prefix`` (the way from the file to ``docs/``, as ``"docs/"`` from the repository's
+    root), a link into the docs stays a link, to the page as the site has it (the copy lands at
+    the site's root)."""
 
     def repl(match: re.Match[str]) -> str:
         target = match.group(2)
         if re.match(r"^[a-z]+:|^#", target):
             return match.group(0)
+        if docs_prefix and target.startswith(docs_prefix) and ".md" in target:
+            return f"[{match.group(1)}]({target.removeprefix(docs_prefix)})"
         return match.group(1)
 
     return _LINK.sub(repl, text)
@@ -398,7 +413,7 @@ def copied_pages(root: Path = ROOT) -> list[Page]:
     pages = [
         Page(
             "changelog.md",
-            _unlink_relative((root / "CHANGELOG.md").read_text(encoding="utf-8")),
+            _unlink_relative((root / "CHANGELOG.md").read_text(encoding="utf-8"), "docs/"),
             "CHANGELOG.md",
         )
     ]
@@ -594,12 +609,14 @@ def results_pages(root: Path = ROOT, figures: bool = True) -> list[Page]:
         "paper's rule (a result within the evaluation's distance limit and error bound); "
         "*confident wrong* counts claimed poses beyond the wrong-pose bound of the evaluation "
         "config ([eval.yaml](../reference/eval-config.md)). Distances and errors are over "
-        "successful trials, as in the paper. How the numbers changed from version to version: "
-        "[Changelog](../changelog.md).",
+        "successful trials, as in the paper. What each record measured, beside the records "
+        "before it: [Measurements](../measurements/index.md); which page cites each record: "
+        "`benchmarks/results/README.md`. Superseded records are kept in "
+        "`benchmarks/results/archive/` and get no page here.",
         "",
     ]
     nav = []
-    files = sorted((root / RESULTS_DIR).glob("**/results.jsonl"))
+    files = [folder / "results.jsonl" for folder in record_folders(root)]
     if not files:
         index.append("No results.jsonl is committed under `benchmarks/results/` yet.")
     for path in files:
@@ -637,6 +654,114 @@ def results_pages(root: Path = ROOT, figures: bool = True) -> list[Page]:
     return pages
 
 
+# --------------------------------------------------------------------------------------------------
+# Record tables inside hand-written pages
+# --------------------------------------------------------------------------------------------------
+
+RECORDS_MARK = re.compile(r"^<!--\s*records:\s*(.*?)\s*-->[ \t]*$", re.M)
+
+
+def record_folders(root: Path = ROOT) -> list[Path]:
+    """Every folder under benchmarks/results/ with a results.jsonl, sorted; the archive left out."""
+    base = root / RESULTS_DIR
+    return [
+        path.parent
+        for path in sorted(base.glob("**/results.jsonl"))
+        if path.parent.relative_to(base).parts[0] != ARCHIVE
+    ]
+
+
+def _site_cell(group: list[dict]) -> str:
+    ok = [r for r in group if r.get("success")]
+    distance = _mean(_numbers(ok, "distance_m"), 1)
+    return f"{len(ok)}/{len(group)}" + (f", {distance} m" if ok else "")
+
+
+def records_table(names: list[str], root: Path = ROOT, link: str = "../results/") -> str:
+    """One row per record folder (and method): its code, trials, success, confident wrong and, per
+    site, successes and the mean distance of the successful trials (over every site when a
+    record has more than four). Sweep trials and refused starts are left out."""
+    rows: list[tuple[str, str, list[dict]]] = []
+    for name in names:
+        path = root / RESULTS_DIR / name / "results.jsonl"
+        if not path.is_file():
+            raise ValueError(f"records table: no {path.relative_to(root)}")
+        records = [r for r in read_records(path) if not r.get("sweep_key") and not r.get("refused")]
+        info_file = path.parent / "provenance.json"
+        info = json.loads(info_file.read_text(encoding="utf-8")) if info_file.is_file() else {}
+        commit = str(info.get("commit", ""))[:7]
+        methods = sorted({str(r.get("method")) for r in records})
+        for method in methods:
+            rows.append((name, commit, [r for r in records if str(r.get("method")) == method]))
+    sites = sorted({str(r.get("site")) for _, _, group in rows for r in group})
+    per_site = len(sites) <= 4
+    head = ["record", "code", "method", "trials", "success", "confident wrong"]
+    head += [f"{site}: success, mean distance" for site in sites] if per_site else ["mean distance"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for name, commit, group in rows:
+        ok = [r for r in group if r.get("success")]
+        slug = name.replace("/", "-")
+        cells = [
+            f"[{name}]({link}{slug}.md)",
+            f"`{commit}`" if commit else "",
+            f"`{group[0].get('method') if group else ''}`",
+            str(len(group)),
+            f"{len(ok)}/{len(group)} ({100 * len(ok) / len(group):.0f} %)" if group else "-",
+            str(sum(1 for r in group if r.get("confident_wrong"))),
+        ]
+        if per_site:
+            for site in sites:
+                at = [r for r in group if str(r.get("site")) == site]
+                cells.append(_site_cell(at) if at else "")
+        else:
+            cells.append(f"{_mean(_numbers(ok, 'distance_m'), 1)} m")
+        lines.append("| " + " | ".join(_cell(c) for c in cells) + " |")
+    return "\n".join(lines)
+
+
+def _hand_written(root: Path) -> Iterator[Path]:
+    docs = root / "docs"
+    for path in sorted(docs.rglob("*.md")):
+        if path.relative_to(docs).parts[0] != "gen":
+            yield path
+
+
+def expanded_pages(root: Path = ROOT) -> list[Page]:
+    """The hand-written pages holding ``<!-- records: ... -->`` lines, each line replaced by its
+    records table (the page's links to the Results pages made relative to the page)."""
+    pages = []
+    for path in _hand_written(root):
+        text = path.read_text(encoding="utf-8")
+        if not RECORDS_MARK.search(text):
+            continue
+        rel = path.relative_to(root / "docs").as_posix()
+        link = "../" * rel.count("/") + "results/"
+        expanded = RECORDS_MARK.sub(lambda m, to=link: records_table(m.group(1).split(), root, to), text)
+        pages.append(Page(rel, expanded, path.relative_to(root).as_posix()))
+    return pages
+
+
+def cited_records(root: Path = ROOT) -> dict[str, list[str]]:
+    """Each record folder of ``record_folders`` -> the files that name it: docs pages, README.md,
+    CHANGELOG.md (a folder cited nowhere belongs in the archive)."""
+    sources = {p.relative_to(root).as_posix(): p.read_text(encoding="utf-8") for p in _hand_written(root)}
+    for name in ("README.md", "CHANGELOG.md"):
+        if (root / name).is_file():
+            sources[name] = (root / name).read_text(encoding="utf-8")
+    out: dict[str, list[str]] = {}
+    for folder in record_folders(root):
+        name = folder.relative_to(root / RESULTS_DIR).as_posix()
+        pattern = re.compile(rf"(?<!\w){re.escape(name)}(?!\w)")
+        out[name] = [where for where, text in sources.items() if pattern.search(text)]
+    return out
+
+
 def generated_pages(root: Path = ROOT, figures: bool = True) -> list[Page]:
     """Every generated file of the docs build."""
-    return api_pages(root) + schema_pages(root) + copied_pages(root) + results_pages(root, figures)
+    return (
+        api_pages(root)
+        + schema_pages(root)
+        + copied_pages(root)
+        + results_pages(root, figures)
+        + expanded_pages(root)
+    )
