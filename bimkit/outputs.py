@@ -21,7 +21,7 @@ import fnmatch
 import os
 import stat
 import tempfile
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -38,6 +38,9 @@ class OutputFile:
     path: Path
     option: str
     suffixes: tuple[str, ...] = ()  # the accepted suffixes (lower case, with the dot); () any
+    # an existing file is written over only when this says the tool wrote it (None: any file) ...
+    owned: Callable[[Path], bool] | None = None
+    kind: str = "file"  # ... a file of this kind (for the message)
 
 
 @dataclass(frozen=True)
@@ -140,6 +143,13 @@ def _check_file(out: OutputFile, inputs: list[_Input]) -> None:
         if not stat.S_ISREG(mode):
             raise _refuse(out.option, path, "is a device, pipe or socket, expected a file name")
     _against_inputs(out.option, path, inputs, folder=False)
+    if out.owned is not None and os.path.isfile(path) and not out.owned(Path(path)):
+        raise _refuse(
+            out.option,
+            path,
+            f"exists and is not a {out.kind} this tool wrote; nothing it did not write is written over:"
+            " choose another name",
+        )
     if out.suffixes and Path(path).suffix.lower() not in out.suffixes:
         raise _refuse(out.option, path, f"expected a file name ending in {' or '.join(out.suffixes)}")
     _probe(out.option, path, parent if not os.path.exists(path) else _absolute(path).parent)

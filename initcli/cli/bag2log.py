@@ -29,6 +29,7 @@ from initcli.cli.bag_options import (
     bag_options,
 )
 from initcli.cli.progress import message_progress
+from initcli.io.detection_log import is_detection_log
 from initcli.ros.convert import convert_bag
 
 __all__ = ["bag2log"]
@@ -58,7 +59,10 @@ def bag2log(
     A bag or log without a camera (a laser scan and odometry only) gives a log of scans and odometry
     whose meta says ``camera_absent``."""
     try:
-        check_outputs([bag, None if model == "default" else Path(model)], [OutputFile(out, "-o/--out")])
+        check_outputs(
+            [bag, None if model == "default" else Path(model)],
+            [OutputFile(out, "-o/--out", owned=is_detection_log, kind="detection log")],
+        )
         options = bag_options(
             image_topic,
             detections_topic,

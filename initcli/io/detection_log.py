@@ -60,6 +60,7 @@ from initcli.io.log_records import (
 )
 
 __all__ = [
+    "is_detection_log",
     "LogWriter",
     "log_camera_absent",
     "MAX_ANGLE",
@@ -97,6 +98,7 @@ def _num(obj: dict[str, Any], key: str, where: str = "") -> float:
 MAX_COORDINATE = 1e6  # m: odometry, poses and features in the log (a building is far smaller)
 MAX_ANGLE = 1e4  # rad: headings (unwrapped odometry yaw may grow, but not without bound)
 MAX_TIME = 1e10  # s
+MAX_META_LINE = 1 << 20  # bytes of a log's first line read to tell a detection log
 
 
 def _coord(
@@ -281,6 +283,18 @@ def parse_record(o: Any) -> Record | None:
     if kind not in RECORD_TYPES:
         return None
     return _parse_body(kind, o)
+
+
+def is_detection_log(path: Path | str) -> bool:
+    """Does the file start as a detection log does (its first line a meta record)? What ``-o``
+    may write over: a log an earlier run wrote, never another file."""
+    try:
+        with open(path, "rb") as f:
+            first = f.readline(MAX_META_LINE)
+        doc = json.loads(first)
+    except (OSError, ValueError):
+        return False
+    return isinstance(doc, dict) and doc.get("type") == "meta" and "version" in doc
 
 
 def log_camera_absent(path: Path | str) -> bool:

@@ -54,3 +54,26 @@ def test_match_json_says_the_camera_was_absent(tmp_path, site_a):
     result = runner.invoke(app, ["match", str(path), "--site", str(site_a), "--json"])
     assert result.exit_code in (0, 3, 4), result.output
     assert json.loads(result.stdout)["camera_absent"] is True
+
+
+def test_bag2log_never_writes_over_a_file_it_did_not_write(tmp_path):
+    """-o onto a user's IFC model or a site's features.csv is refused and the file kept; onto a
+    detection log an earlier run wrote it is written again."""
+    path = tmp_path / "run.log"
+    path.write_text(_flaser(stamps=[1.0 + i for i in range(20)]))
+    model = tmp_path / "model.ifc"
+    model.write_text("ISO-10303-21;\nHEADER;\n")
+    features = tmp_path / "site" / "features.csv"
+    features.parent.mkdir()
+    features.write_text("ID,Category,X,Y\n")
+    for target in (model, features):
+        before = target.read_bytes()
+        result = runner.invoke(app, ["bag2log", str(path), "-o", str(target)])
+        assert result.exit_code == 2, result.output
+        assert "is not a detection log this tool wrote" in result.stderr
+        assert len(result.stderr.strip().splitlines()) == 1
+        assert target.read_bytes() == before
+    out = tmp_path / "log.jsonl"
+    for _ in range(2):  # the second run writes over the first's log
+        result = runner.invoke(app, ["bag2log", str(path), "-o", str(out)])
+        assert result.exit_code == 0, result.output
