@@ -3,19 +3,29 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
+CORE_STAMP := $(VENV)/.installed-core
 DOCS_STAMP := $(VENV)/.installed-docs
 
 .PHONY: install run test lint schemas docs fuzz wheel-check samples bench bench-quick train-detector eval eval-real eval-construction clean sample-bag profiles
 
 install: $(STAMP)
 
+# The package alone (what `make run` needs): no test tools, no torch, no Ray, no rosbridge client.
+$(CORE_STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e .
+	touch $(CORE_STAMP)
+
+# Every extra the tests and the other targets need: [test] (pytest, ruff, mypy), [train] (torch, the
+# detector's training), [ros] (roslibpy, the live link), [cluster] (Ray).
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e ".[test,train,ros,cluster]"
 	touch $(STAMP)
 
-run: install
+run: $(CORE_STAMP)
 	$(BIN)/bim-extract sample_models/block_a.ifc -o runs/block_a_site
 	$(BIN)/bim-init run --config sample_models/block_a.site.yaml --out runs/block_a_session
 
@@ -78,7 +88,7 @@ samples: install
 	$(BIN)/python -m bimtools.samples --out sample_models
 
 # Every benchmark, benchmarks/bench_NAME.py (tests/benchmarks checks that this names them all).
-BENCHMARKS := bag2log claims detector eval extract lidar_twins match matcher_scale offline_match raycast session survey
+BENCHMARKS := bag2log claims detector eval extract lidar_twins match matcher_scale offline_match raycast real_lidar registration_scale session survey
 
 # Each benchmark whole (bench_claims alone takes about 40 min on 2 cores; bench_extract also
 # measures the real models in ../shared/ifc where that folder is).

@@ -41,6 +41,8 @@ __all__ = [
     "expanded_pages",
     "generated_pages",
     "package_modules",
+    "real_lidar_page",
+    "real_lidar_table",
     "record_folders",
     "records_table",
     "results_pages",
@@ -54,6 +56,7 @@ RESULTS_DIR = Path("benchmarks/results")
 ARCHIVE = "archive"  # benchmarks/results/archive/: superseded records, no page, cited nowhere
 API_DIR = "reference/api"
 RESULTS_PAGES = "results"
+REAL_LIDAR = RESULTS_DIR / "real_lidar" / "real_lidar.json"  # bench_real_lidar.py --out
 
 # A description starting with one of these words (then ":" or ",") names the setting's unit.
 UNITS = (
@@ -649,9 +652,78 @@ def results_pages(root: Path = ROOT, figures: bool = True) -> list[Page]:
         pages.append(Page(f"{RESULTS_PAGES}/{slug}.md", "\n".join(body), path.relative_to(root).as_posix()))
         index.append(f"* [{name}]({slug}.md): {len(records)} trials")
         nav.append(f"* [{name}]({slug}.md)")
+    if (root / REAL_LIDAR).is_file():
+        index.append("* [Real laser logs](real-lidar.md): the lidar alone on real robots' logs, beside AMCL")
+        nav.insert(0, "* [Real laser logs](real-lidar.md)")
     pages.append(Page(f"{RESULTS_PAGES}/index.md", "\n".join(index) + "\n"))
     pages.append(Page(f"{RESULTS_PAGES}/SUMMARY.md", "* [Results](index.md)\n" + "\n".join(nav) + "\n"))
     return pages
+
+
+def _share(count: int, total: int) -> str:
+    return f"{count}/{total} ({100 * count / total:.0f} %)" if total else "-"
+
+
+def real_lidar_table(rows: list[dict[str, Any]], amcl: bool) -> str:
+    """Per log and map kind, then over every log: windows, right, confident wrong, imprecise,
+    undecided, mean metres to the claim and seconds per window (and AMCL's right and wrong)."""
+    head = ["log", "map", "windows", "right", "confident wrong", "imprecise", "undecided"]
+    head += ["m to the claim", "s per window"] + (["AMCL right", "AMCL wrong"] if amcl else [])
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    keys = sorted({(str(r["log"]), str(r["map"])) for r in rows})
+    keys += [("all", kind) for kind in sorted({str(r["map"]) for r in rows}, reverse=True)]
+    for log, kind in keys:
+        mine = [r for r in rows if r["map"] == kind and log in ("all", r["log"])]
+        n = len(mine)
+
+        def count(outcome: str, key: str = "outcome", group: list[dict[str, Any]] = mine) -> int:
+            return sum(r.get(key) == outcome for r in group)
+
+        travel = _mean(
+            [float(r["travel_to_claim_m"]) for r in mine if r.get("travel_to_claim_m") is not None], 1
+        )
+        seconds = _mean([float(r["seconds"]) for r in mine], 1)
+        cells = [log if log != "all" else "**all**", kind, str(n), _share(count("right"), n)]
+        cells += [str(count("wrong")), str(count("imprecise")), str(count("undecided")), travel, seconds]
+        if amcl:
+            cells += [_share(count("right", "amcl"), n), str(count("wrong", "amcl"))]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def real_lidar_page(root: Path = ROOT) -> list[Page]:
+    """results/real-lidar.md from ``benchmarks/results/real_lidar/real_lidar.json`` (none without it)."""
+    path = root / REAL_LIDAR
+    if not path.is_file():
+        return []
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    rows = doc["rows"]
+    amcl = any("amcl" in r for r in rows)
+    info = doc.get("provenance", {})
+    body = [
+        "# Real laser logs",
+        "",
+        f"Generated at build time from `{REAL_LIDAR.as_posix()}`, written by "
+        f"`{info.get('command', 'python benchmarks/bench_real_lidar.py --out ...')}`"
+        f" at commit `{str(info.get('commit', ''))[:7]}` ({info.get('machine', 'this machine')}).",
+        "",
+        "Real robots' CARMEN laser logs of real buildings (furniture, people, glass; the Radish data"
+        " sets' corrected versions, whose poses serve as the truth), each matched against two maps made"
+        " from the log: the whole log's occupancy map and a walls-only map (its long straight"
+        " structures, as a BIM draws walls, while the scans still see everything else). Windows of"
+        f" {info.get('window_m', 60)} m from starts spread over each log, odometry with drift added, are"
+        " matched as `bim-init match WINDOW --site SITE` matches them (the camera absent: the lidar"
+        " registration replayed along the window). *Right*: unique within"
+        f" {info.get('right_m', 0.5)} m and {info.get('right_deg', 5)} degrees of the truth where the claim"
+        f" was made; *confident wrong*: unique and more than {info.get('wrong_m', 2)} m or"
+        f" {info.get('wrong_deg', 30)} degrees off; *undecided*: no claim, an honest failure. AMCL: global"
+        " localisation (5000 particles) on the same windows, odometry and map; right when it converges"
+        " within the same bounds. How the benchmark works: `benchmarks/bench_real_lidar.py`.",
+        "",
+        real_lidar_table(rows, amcl),
+        "",
+    ]
+    return [Page(f"{RESULTS_PAGES}/real-lidar.md", "\n".join(body), REAL_LIDAR.as_posix())]
 
 
 # --------------------------------------------------------------------------------------------------
@@ -763,5 +835,6 @@ def generated_pages(root: Path = ROOT, figures: bool = True) -> list[Page]:
         + schema_pages(root)
         + copied_pages(root)
         + results_pages(root, figures)
+        + real_lidar_page(root)
         + expanded_pages(root)
     )

@@ -18,8 +18,22 @@ from bimkit.errors import InputError
 from initcli.config.session import SessionConfig
 from initcli.config.sim import PROFILE_REPLACES
 from initcli.detector.profile import DetectorProfile, read_profile, resolve_profile
+from initcli.io.lidar_profile import (
+    LIDAR_PROFILE_REPLACES,
+    LidarProfile,
+    read_lidar_profile,
+    resolve_lidar_profile,
+)
 
-__all__ = ["CHECKS", "check_config", "detector_profile", "given_paths", "problems", "profile_path"]
+__all__ = [
+    "CHECKS",
+    "check_config",
+    "detector_profile",
+    "given_paths",
+    "lidar_profile",
+    "problems",
+    "profile_path",
+]
 
 Check = Callable[[SessionConfig, set[str]], str | None]
 
@@ -46,6 +60,15 @@ def detector_profile(config: SessionConfig) -> DetectorProfile | None:
     """The measured profile the simulated detector draws from (``sim.detector.profile``), or None."""
     path = profile_path(config)
     return None if path is None else read_profile(path)
+
+
+def lidar_profile(config: SessionConfig) -> LidarProfile | None:
+    """The measured lidar profile the simulator takes its lidar noise, dropout and clutter from
+    (``lidar.profile``: a shipped profile's name, or a file relative to the config's folder), or None."""
+    name = config.lidar.profile
+    if not name:
+        return None
+    return read_lidar_profile(resolve_lidar_profile(name, config.source.parent if config.source else None))
 
 
 def _n(value: float) -> str:
@@ -140,6 +163,22 @@ def profile_file(c: SessionConfig, given: set[str]) -> str | None:
     return None
 
 
+def lidar_profile_or_values(c: SessionConfig, given: set[str]) -> str | None:
+    if not c.lidar.profile:
+        return None
+    both = [k for k in LIDAR_PROFILE_REPLACES if k in given]
+    if both:
+        return (
+            f"lidar.profile replaces {', '.join(both)}: set the profile or the value"
+            f"{'s' if len(both) > 1 else ''}, not both"
+        )
+    try:
+        lidar_profile(c)
+    except InputError as exc:
+        return f"lidar.profile: {exc}"
+    return None
+
+
 CHECKS: tuple[Check, ...] = (
     depth_limits,
     principal_point,
@@ -149,6 +188,7 @@ CHECKS: tuple[Check, ...] = (
     fine_travel,
     profile_or_rates,
     profile_file,
+    lidar_profile_or_values,
 )
 
 

@@ -64,16 +64,27 @@ class RosbridgeSection:  # robot.driver: rosbridge (initcli/ros/rosbridge_driver
         "/camera/color/camera_info", "sensor_msgs/CameraInfo: the intrinsics (camera: is the fallback)"
     )
     tf_static_topic: str = setting(
-        "/tf_static", "tf2_msgs/TFMessage: the camera mount (camera.pose is the fallback)"
+        "/tf_static",
+        "tf2_msgs/TFMessage: the camera mount (camera.pose is the fallback) and the laser's mount (the"
+        " LaserScan's frame_id resolved to the base frame)",
     )
     base_frame: str = setting(
-        "", "the robot's base frame for the camera mount (empty: the odometry's child frame)"
+        "", "the robot's base frame for the camera and laser mounts (empty: the odometry's child frame)"
     )
     camera_wait: float = setting(
         3.0,
-        "s: how long to wait for CameraInfo and /tf_static before the site config's camera",
+        "s: how long to wait for CameraInfo and /tf_static before the site config's camera (and for the"
+        " laser's mount before the scans are taken as from the base origin)",
         minimum=0,
         maximum=60,
+    )
+    camera: str = setting(
+        "auto",
+        "absent: the robot has no camera, the session runs on the lidar alone (no detections or depth"
+        " subscribed); present: it has one (the site config's camera: where no CameraInfo comes); auto:"
+        " absent when rosapi lists no publisher of detections_topic, with one warning (without rosapi:"
+        " present)",
+        enum=("auto", "present", "absent"),
     )
 
 
@@ -137,6 +148,14 @@ class LidarSection:
     max_range: float = setting(20.0, "m: the farthest range the lidar reads", minimum=1, maximum=200)
     noise: float = setting(0.02, "m: range noise standard deviation", minimum=0, maximum=5)
     dropout: float = setting(0.01, "fraction of beams returning nothing", minimum=0, maximum=1)
+    profile: str = setting(
+        "",
+        "a lidar profile measured on real laser logs (benchmarks/measure_lidar_profile.py): real-logs"
+        " (the one shipped in the package) or a JSON file, relative to this file; the simulator then"
+        " takes lidar.noise, lidar.dropout and sim.clutter (material stacks, for the beams that end off"
+        " the BIM's walls) from it (a config that sets one of those and a profile is refused); empty:"
+        " those three",
+    )
     log_every: int = setting(
         5,
         "control periods between the scans written to the detection log and kept for verification (2 Hz"

@@ -1,13 +1,23 @@
 """``robot.driver: rosbridge``: a real robot behind the :class:`~initcli.drivers.base.RobotDriver`
 interface, over rosbridge.
 
-It subscribes to the robot's odometry, laser scan, detections (``vision_msgs/Detection2DArray``,
-the robot's own detector) and aligned depth image; each :meth:`step` sends the command as
-``geometry_msgs/Twist`` on ``cmd_vel`` (``robot.drive: false``: nothing is sent, a person drives),
-waits one control period and reports what arrived. The robot is stopped (a zero Twist) on any
-error, on Ctrl-C and when the driver is closed. The session publishes its hypotheses
-(``/bim_init/hypotheses``) and its state (``/bim_init/state``) through :meth:`publish_hypotheses`
-and :meth:`publish_state`; the result goes out through :mod:`initcli.ros.delivery`.
+It subscribes to the robot's odometry, laser scan, ``/tf_static``, detections
+(``vision_msgs/Detection2DArray``, the robot's own detector) and aligned depth image (not the last
+two on a robot without a camera: :meth:`RosbridgeDriver.listen_camera` is then never called); each
+:meth:`step` sends the command as ``geometry_msgs/Twist`` on ``cmd_vel`` (``robot.drive: false``:
+nothing is sent, a person drives), waits one control period and reports what arrived. The robot
+is stopped (a zero Twist) on any error, on Ctrl-C and when the driver is closed. The session
+publishes its hypotheses (``/bim_init/hypotheses``) and its state (``/bim_init/state``) through
+:meth:`publish_hypotheses` and :meth:`publish_state`; the result goes out through
+:mod:`initcli.ros.delivery`.
+
+Scans: the LaserScan's ``frame_id`` is resolved through ``/tf_static`` to the base frame
+(``robot.rosbridge.base_frame`` or the odometry's child frame) and each scan is carried into the
+base frame (:func:`initcli.io.laser.scan_in_base`, any offset and yaw); inf, NaN (``null`` in
+rosbridge's JSON), 0 and ranges outside [range_min, range_max) are no returns. A scan whose
+geometry is broken (:func:`initcli.io.laser.check_scan_geometry`) is dropped, with one warning for
+the first; a laser frame with no chain to the base in ``camera_wait`` s is taken as at the base
+origin, facing ahead (one warning).
 
 Time: a frame's session time is the robot's clock (its odometry's ``header.stamp``) since the
 first frame (:attr:`clock_origin`), so a logged pose is the odometry at its stamp; what is sent
@@ -21,6 +31,8 @@ import math
 import threading
 import time
 from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
 from types import SimpleNamespace
 from typing import Any
 
@@ -32,15 +44,25 @@ from initcli.core.geometry.projection import CameraIntrinsics, CameraMount
 from initcli.core.geometry.se2 import Pose2D
 from initcli.drivers.base import LaserScan, SensorFrame
 from initcli.io.detection_log import DetectedObject
-from initcli.ros.bag_reader import DEPTH_SYNC_S
-from initcli.ros.messages import decode_depth
+from initcli.io.laser import check_scan_geometry, no_returns, scan_in_base
+from initcli.ros.bag_reader import DEPTH_SYNC_S, _planar
+from initcli.ros.messages import checked_transform, decode_depth
 from initcli.ros.msgdefs import bbox_centre, detection_fields
 from initcli.ros.nav2 import pose_array_message, state_message
-from initcli.ros.records import HYPOTHESES_TOPIC, POSE_ARRAY, STATE_TOPIC, STRING, TWIST
+from initcli.ros.records import HYPOTHESES_TOPIC, POSE_ARRAY, STATE_TOPIC, STRING, TF_MESSAGE, TWIST
 from initcli.ros.rosbridge import RosbridgeLink
-from initcli.ros.tf import quaternion_yaw
+from initcli.ros.tf import TransformTree, frame_name, quaternion_yaw
 
-__all__ = ["CONTROL_RATE", "ODOM_HISTORY", "ODOM_TIMEOUT_S", "RosbridgeDriver", "header_stamp", "json_depth"]
+__all__ = [
+    "CONTROL_RATE",
+    "ODOM_HISTORY",
+    "ODOM_TIMEOUT_S",
+    "LaserMount",
+    "RosbridgeDriver",
+    "StaticTransforms",
+    "header_stamp",
+    "json_depth",
+]
 
 CONTROL_RATE = 10.0  # Hz
 ODOM_TIMEOUT_S = 1.0  # s without odometry: the robot is stopped and the session ends
@@ -69,6 +91,77 @@ def json_depth(msg: dict[str, Any]) -> np.ndarray:
     return decode_depth(SimpleNamespace(**{**msg, "data": raw}))
 
 
+def _number(value: Any) -> float:
+    """A JSON number; ``null`` (rosbridge's NaN and inf) as NaN."""
+    return math.nan if value is None else float(value)
+
+
+def _checked_scan(where: str, msg: dict[str, Any]) -> _RawScan:
+    """A LaserScan message checked (:func:`initcli.io.laser.check_scan_geometry`, range_max), its
+    no-returns NaN; InputError naming ``where`` when broken."""
+    ranges = np.array([_number(r) for r in msg.get("ranges") or []], dtype=float)
+    angle_min, increment = _number(msg.get("angle_min")), _number(msg.get("angle_increment"))
+    angle_max = msg.get("angle_max", "absent")
+    span = None if angle_max == "absent" else _number(angle_max) - angle_min
+    check_scan_geometry(where, len(ranges), angle_min, increment, span)
+    range_max = _number(msg.get("range_max"))
+    if not (math.isfinite(range_max) and range_max > 0):
+        raise InputError(f"{where}: a LaserScan's range_max is {range_max:g}")
+    range_min = _number(msg.get("range_min", 0.0))
+    range_min = range_min if math.isfinite(range_min) else 0.0
+    frame = str((msg.get("header") or {}).get("frame_id") or "")
+    return _RawScan(frame, angle_min, increment, range_max, no_returns(ranges, range_min, range_max))
+
+
+class StaticTransforms:
+    """``/tf_static`` as it arrives (latched: each subscriber is sent it once, so the driver holds
+    the one subscription): the transform tree, under a lock; :attr:`changed` is set on each message."""
+
+    def __init__(self, topic: str) -> None:
+        self.topic = topic
+        self.tree = TransformTree()
+        self.changed = threading.Event()
+        self._lock = threading.Lock()
+
+    def on_message(self, msg: dict[str, Any]) -> None:
+        with self._lock:
+            for stamped in getattr(_ns(msg), "transforms", None) or []:
+                try:
+                    self.tree.add(checked_transform(self.topic, stamped))
+                except (InputError, AttributeError, TypeError):
+                    continue
+        self.changed.set()
+
+    def lookup(self, parent: str, child: str) -> tuple[np.ndarray, np.ndarray] | None:
+        """Pose of ``child`` in ``parent`` (rotation, translation); None while not connected."""
+        with self._lock:
+            try:
+                return self.tree.lookup(parent, child)
+            except (InputError, KeyError):
+                return None
+
+
+@dataclass(frozen=True)
+class LaserMount:
+    """The laser's mount on the base (x, y, yaw; ``flipped``: upside down) and where it came from."""
+
+    frame: str
+    pose: Pose2D
+    flipped: bool
+    source: str  # "/tf_static <base> -> <frame>", "the base frame" or "none: ..."
+
+
+@dataclass(frozen=True)
+class _RawScan:
+    """A LaserScan as it came, in its own frame (no-returns NaN)."""
+
+    frame: str
+    angle_min: float
+    angle_increment: float
+    range_max: float
+    ranges: np.ndarray
+
+
 class RosbridgeDriver:
     """Commands out, sensors in, over one :class:`RosbridgeLink` (see the module docstring)."""
 
@@ -86,7 +179,12 @@ class RosbridgeDriver:
         max_angular: float = 1.0,
         odom_timeout: float = ODOM_TIMEOUT_S,
         period: float | None = None,
+        camera_topics: bool = True,
+        warn: Callable[[str], None] = lambda line: None,
     ) -> None:
+        """``camera_topics``: subscribe the detections and depth at once (False: only when
+        :meth:`listen_camera` is called, never on a robot without a camera); ``warn`` gets one line
+        for the first broken scan and for a laser frame with no /tf_static chain to the base."""
         self.link = link
         self.camera, self.mount = camera, mount
         self.topics = topics
@@ -104,7 +202,17 @@ class RosbridgeDriver:
         self.clock_origin: float | None = None  # robot-clock stamp of session time 0
         self.frame_stamp = 0.0  # robot-clock stamp of the last frame
         self.base_frame = ""  # the odometry's child frame (the robot's base), once it arrived
-        self._scan: LaserScan | None = None
+        self.warn = warn
+        self.camera_absent = False  # set by the session: no camera, the scans alone
+        self.static = StaticTransforms(topics.tf_static_topic)
+        self._raw_scan: _RawScan | None = None
+        self._converted: tuple[_RawScan, LaserScan | None] | None = None  # the last raw scan, carried
+        self._scans_in = 0  # LaserScan messages that arrived
+        self.scans_dropped = 0  # of those, broken ones (dropped)
+        self._mounts: dict[str, LaserMount] = {}  # laser frame -> its mount on the base
+        # /tf_static is waited for this long before a laser frame without a chain to the base is
+        # taken as at the base origin
+        self._mount_deadline = time.monotonic() + float(getattr(topics, "camera_wait", 3.0))
         self._detections: deque[dict[str, Any]] = deque(maxlen=20)
         self._depths: deque[tuple[float, dict[str, Any]]] = deque(maxlen=10)
         self._origin: Pose2D | None = None
@@ -112,10 +220,22 @@ class RosbridgeDriver:
         self._distance = 0.0
         link.subscribe(topics.odom_topic, "nav_msgs/msg/Odometry", self._on_odom)
         link.subscribe(topics.scan_topic, "sensor_msgs/msg/LaserScan", self._on_scan)
-        link.subscribe(topics.detections_topic, "vision_msgs/msg/Detection2DArray", self._on_detections)
-        link.subscribe(topics.depth_topic, "sensor_msgs/msg/Image", self._on_depth)
+        link.subscribe(topics.tf_static_topic, TF_MESSAGE, self.static.on_message)
+        self._camera_listening = False
+        if camera_topics:
+            self.listen_camera()
         if drive:
             link.advertise(topics.cmd_vel_topic, TWIST)
+
+    def listen_camera(self) -> None:
+        """Subscribe the robot's detections and aligned depth image (once)."""
+        if self._camera_listening:
+            return
+        self._camera_listening = True
+        self.link.subscribe(
+            self.topics.detections_topic, "vision_msgs/msg/Detection2DArray", self._on_detections
+        )
+        self.link.subscribe(self.topics.depth_topic, "sensor_msgs/msg/Image", self._on_depth)
 
     # -- subscriptions (roslibpy's thread) ----------------------------------------------------------
 
@@ -136,11 +256,22 @@ class RosbridgeDriver:
             self._history.append((stamp, pose2))
 
     def _on_scan(self, msg: dict[str, Any]) -> None:
-        ranges = np.array([math.inf if r is None else float(r) for r in msg.get("ranges", [])])
         with self._lock:
-            self._scan = LaserScan(
-                float(msg["angle_min"]), float(msg["angle_increment"]), float(msg["range_max"]), ranges
-            )
+            self._scans_in += 1
+            n = self._scans_in
+        where = f"{self.topics.scan_topic} (message {n})"
+        try:
+            raw = _checked_scan(where, msg)
+        except (InputError, KeyError, TypeError, ValueError, AttributeError) as exc:
+            with self._lock:
+                self.scans_dropped += 1
+                first = self.scans_dropped == 1
+            if first:
+                text = str(exc) if isinstance(exc, InputError) else f"{where}: a broken LaserScan ({exc!r})"
+                self.warn(f"{text}; such scans are dropped")
+            return
+        with self._lock:
+            self._raw_scan = raw
 
     def _on_detections(self, msg: dict[str, Any]) -> None:
         with self._lock:
@@ -175,11 +306,101 @@ class RosbridgeDriver:
             out.append(DetectedObject(cls, score, (cu - sx / 2, cv - sy / 2, cu + sx / 2, cv + sy / 2), z))
         return out
 
+    # -- the laser ---------------------------------------------------------------------------------
+
+    @property
+    def laser_base(self) -> str:
+        """The base frame the scans are carried into."""
+        return frame_name(self.topics.base_frame or self.base_frame or "base_link")
+
+    def laser_mount(self, frame: str) -> LaserMount | None:
+        """The mount of the laser frame ``frame`` on the base, from /tf_static; None while waiting
+        for it (until ``camera_wait`` s after the driver started), then the base origin (warned)."""
+        known = self._mounts.get(frame)
+        if known is not None:
+            return known
+        base = self.laser_base
+        if not frame or frame_name(frame) == base:
+            mount = LaserMount(frame, Pose2D(0.0, 0.0, 0.0), False, "the base frame")
+        else:
+            found = self.static.lookup(base, frame)
+            if found is not None:
+                r, tr = found
+                where = f"{self.topics.tf_static_topic} {base} -> {frame_name(frame)}"
+                mount = LaserMount(frame, _planar(r, tr), bool(r[2, 2] < 0), where)
+            elif time.monotonic() < self._mount_deadline:
+                return None
+            else:
+                self.warn(
+                    f"no {self.topics.tf_static_topic} chain {base} -> {frame_name(frame)} (the frame of "
+                    f"{self.topics.scan_topic}): its scans are taken as from the base origin, facing ahead"
+                )
+                mount = LaserMount(frame, Pose2D(0.0, 0.0, 0.0), False, "none: taken as the base origin")
+        self._mounts[frame] = mount
+        return mount
+
+    def wait_laser(self, timeout: float) -> LaserMount | None:
+        """Wait up to ``timeout`` s for a scan and its laser's mount; the mount (None: no scan yet)."""
+        deadline = time.monotonic() + timeout
+        while True:
+            with self._lock:
+                raw = self._raw_scan
+            if raw is not None:
+                mount = self.laser_mount(raw.frame)
+                if mount is not None:
+                    return mount
+            if time.monotonic() >= deadline:
+                return None
+            self.static.changed.wait(0.02)
+            self.static.changed.clear()
+
+    @property
+    def lidar_mount(self) -> Pose2D | None:
+        """The (first) laser's mount on the base, once known."""
+        return next(iter(self._mounts.values())).pose if self._mounts else None
+
+    def lidar_record(self) -> dict[str, Any]:
+        """``summary.json``'s ``lidar``: the laser's frame and mount, where it came from, the scans
+        dropped."""
+        mount = next(iter(self._mounts.values()), None)
+        out: dict[str, Any] = {
+            "topic": self.topics.scan_topic,
+            "base_frame": self.laser_base,
+            "scans": self._scans_in,
+            "scans_dropped": self.scans_dropped,
+        }
+        if mount is not None:
+            p = mount.pose
+            out |= {
+                "frame": frame_name(mount.frame),
+                "mount": {"x": round(p.x, 4), "y": round(p.y, 4), "yaw_deg": round(math.degrees(p.yaw), 3)},
+                "flipped": mount.flipped,
+                "mount_from": mount.source,
+            }
+        return out
+
+    def _scan_in_base(self, raw: _RawScan | None) -> LaserScan | None:
+        if raw is None:
+            return None
+        if self._converted is not None and self._converted[0] is raw:
+            return self._converted[1]
+        mount = self.laser_mount(raw.frame)
+        if mount is None:  # its mount not known yet: no scan this period
+            return None
+        s = scan_in_base(
+            0.0, raw.angle_min, raw.angle_increment, raw.range_max, raw.ranges, mount.pose, mount.flipped
+        )
+        scan = LaserScan(s.angle_min, s.angle_increment, s.range_max, np.asarray(s.ranges, dtype=float))
+        self._converted = (raw, scan)
+        return scan
+
+    # -- frames -------------------------------------------------------------------------------------
+
     def _frame(self) -> SensorFrame:
         with self._lock:
             odom = self._odom
             stamp = self._odom_t
-            scan = self._scan
+            raw = self._raw_scan
             pending = list(self._detections)
             self._detections.clear()
         if odom is None or time.monotonic() - odom[0] > self.odom_timeout:
@@ -190,6 +411,7 @@ class RosbridgeDriver:
         if self._origin is None:
             self._origin = odom[1].inverse()  # the odom frame starts at the current pose (§3.3.1)
             self.clock_origin = stamp
+        scan = self._scan_in_base(raw)
         pose = self._origin * odom[1]
         self.frame_stamp = stamp
         if self._last is not None:

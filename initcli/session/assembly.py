@@ -63,7 +63,15 @@ def assemble(
     """The parts of a session of ``config`` on ``driver`` against ``site`` (``storey`` None: every
     storey), logging to ``log_path`` (None: no log file); ``rng`` for the particle filter."""
     options = match_options(config, storey)
-    meta = Meta(driver.camera, driver.mount, depth_window=driver.depth_window, source=meta_source)
+    absent = bool(getattr(driver, "camera_absent", False))  # a live robot without a camera
+    meta = Meta(
+        driver.camera,
+        driver.mount,
+        depth_window=None if absent else driver.depth_window,
+        source=meta_source,
+        camera_absent=absent,
+        lidar_mount=getattr(driver, "lidar_mount", None),
+    )
     cmap, m, x, checks = (
         ClassMap(config.detector.classes),
         config.matching,

@@ -41,6 +41,7 @@ from initcli.session.result import DecidedBy, SessionResult
 from initcli.session.states import SessionState
 from initcli.verify.evidence import (
     StoreyEvidence,
+    camera_blind,
     claim_params,
     track_transform,
     verify_transform,
@@ -115,7 +116,7 @@ class ClaimChecks:
         checks = self.checks
         if fine:
             checks = dataclasses.replace(checks, min_scan_fit=checks.min_fine_scan_fit)
-        checks = claim_params(checks, self.blind())  # no negative evidence from a camera that saw nothing
+        checks = claim_params(checks, self.blind())  # no negative evidence from a camera that sees nothing
         if rival:
             factor = checks.rivals.search_factor
             checks = dataclasses.replace(checks, scan_search_xy=factor * checks.scan_search_xy)
@@ -132,8 +133,9 @@ class ClaimChecks:
         )
 
     def blind(self) -> bool:
-        """Has the camera seen nothing at all (no sighting in the images so far)?"""
-        return self.perception.frames > 0 and not self.perception.sightings
+        """Does the camera see nothing useful (:func:`camera_blind`: images, yet fewer than
+        ``SEEING_FEATURES`` confirmed features; a false box now and then confirms nothing)?"""
+        return camera_blind(self.perception.frames, len(self.perception.confirmed))
 
     def track(self, frame: SensorFrame, h: Hypothesis, check: Verification, wide: bool = False) -> np.ndarray:
         """The lidar's fit along the path for hypothesis ``h`` (``check`` its verification now),
@@ -353,9 +355,9 @@ class ClaimChecks:
         self, frame: SensorFrame, claim: Candidate, transform: Pose2D, found: Registration
     ) -> tuple[bool, Pose2D | None]:
         """Check the place ``claim`` of a lidar registration ``found`` (``transform``, odom -> BIM)
-        as a claim is checked: the path through free space, the recent scans' fit and, when the
-        camera has seen anything, negative evidence. Whether it passed and the transform moved to
-        where the recent scans fit best."""
+        as a claim is checked: the path through free space, the recent scans' fit and, unless the
+        camera sees nothing useful (:meth:`blind`), negative evidence. Whether it passed and the
+        transform moved to where the recent scans fit best."""
         storey = claim.storey
         check = self.verify(storey, transform)
         extra = registration_record(claim, found, self.blind()).as_dict()

@@ -74,10 +74,12 @@ def run_live(
     warn: Callable[[str], None] = lambda line: None,
 ) -> dict:
     """``robot.driver: rosbridge``: the session on the real robot behind a rosbridge server (see the
-        module docstring); returns ``summary.json``'s document. The camera comes from the robot's
+    module docstring); returns ``summary.json``'s document. The camera comes from the robot's
     CameraInfo and ``/tf_static`` where it sends them (``warn`` gets a line where the site config's
-    values are used instead or disagree). An error once the session runs is
-        raised again after ``--out`` holds its log and summary."""
+    values are used instead or disagree); a robot without one (``robot.rosbridge.camera``) runs on
+    the lidar alone: no detections or depth subscribed, the log's meta and ``summary.json`` say
+    ``camera_absent``. The laser's mount comes from ``/tf_static``. An error once the session runs
+    is raised again after ``--out`` holds its log and summary."""
     r = config.robot
     stopped: BaseException | None = None
     with staged_directory(out, RUN_MARKERS) as stage:
@@ -94,14 +96,18 @@ def run_live(
             depth_window=int(config.camera.depth_window),
             max_linear=r.max_linear,
             max_angular=r.max_angular,
+            camera_topics=False,  # the detections and depth only once the robot is known to have a camera
+            warn=warn,
         )
         driver.wait_odometry(r.rosbridge.camera_wait)
-        seen = live_camera(
-            link, r.rosbridge, camera, mount, r.rosbridge.base_frame or driver.base_frame or "base_link"
-        )
+        seen = live_camera(link, r.rosbridge, camera, mount, driver.laser_base, driver.static)
         driver.camera, driver.mount = seen.camera, seen.mount
+        driver.camera_absent = seen.absent
         for line in seen.warnings:
             warn(line)
+        if not seen.absent:
+            driver.listen_camera()
+        driver.wait_laser(r.rosbridge.camera_wait)  # the laser's mount, for the log's meta
         last_state: list[str] = []
         published = [0]  # match steps whose hypotheses went out
         steps: list[MatchStep] = []  # the session's match steps (bound below)
@@ -148,7 +154,9 @@ def run_live(
             simulated=False,
             extra={
                 "clock": _clock(driver),
+                "camera_absent": seen.absent,
                 "camera": seen.record(),
+                "lidar": driver.lidar_record(),
                 **extra,
                 "config": config_to_dict(config),
             },

@@ -16,10 +16,11 @@ from bimtools.site.load import Site, StoreyModel
 from bimtools.site.records import FREE, OCCUPIED
 from initcli.config import SessionConfig, as_built_params, camera_of, start_pose_degrees
 from initcli.config.building import world_storey
-from initcli.config.checks import detector_profile
+from initcli.config.checks import detector_profile, lidar_profile
 from initcli.core.features.classes import ClassMap
 from initcli.core.geometry.se2 import Pose2D
 from initcli.io.detection_log import DetectedObject
+from initcli.io.lidar_profile import LidarProfile
 from initcli.sim.as_built import HOARDING_CLASS, AsBuiltWorld, derive_as_built, stand_out
 from initcli.sim.camera import CameraNoise, SimulatedDetector
 from initcli.sim.driver import LidarSpec, SimDriver
@@ -65,7 +66,8 @@ def build_sim(
     rng = np.random.default_rng(seed)
     model = world_storey(site, world_site, storey)
     circulation = Circulation.of(model)
-    built, clutter = _as_built(config, model, circulation, seed, rng)
+    measured = lidar_profile(config)  # lidar.profile: noise, dropout and clutter measured on real logs
+    built, clutter = _as_built(config, model, circulation, seed, rng, measured)
     # Where the free space reaches the outside (an open gate, a façade not built), the world ends
     # at the building's footprint (initcli.sim.fence).
     built.obstacles.extend(site_fence(model.grid))
@@ -113,7 +115,8 @@ def build_sim(
             detector_profile(config),
         ).detect
     spec = config.lidar
-    lidar = LidarSpec(int(spec.beams), math.radians(spec.fov), spec.max_range, spec.noise, spec.dropout)
+    noise, dropout = (measured.noise, measured.dropout) if measured else (spec.noise, spec.dropout)
+    lidar = LidarSpec(int(spec.beams), math.radians(spec.fov), spec.max_range, noise, dropout)
     driver = SimDriver(
         world,
         robot,
@@ -132,10 +135,16 @@ def build_sim(
 
 
 def _as_built(
-    config: SessionConfig, model: StoreyModel, circulation: Circulation, seed: int, rng: np.random.Generator
+    config: SessionConfig,
+    model: StoreyModel,
+    circulation: Circulation,
+    seed: int,
+    rng: np.random.Generator,
+    measured: LidarProfile | None = None,
 ) -> tuple[AsBuiltWorld, list[np.ndarray]]:
     """The storey as built (from its own generator, so that the starts are the same at every
-    as-built setting) and the material stacks placed in it (from ``rng``)."""
+    as-built setting) and the material stacks placed in it (from ``rng``; ``sim.clutter`` of them
+    per metre of corridor wall, or the lidar profile's)."""
     cmap = ClassMap(config.detector.classes)
     design = sim_features_from_bim(model.camera_features, cmap)  # the camera's; the lidar sees walls
     doors = door_ids(model.features)
@@ -148,7 +157,8 @@ def _as_built(
         np.random.default_rng([seed, AS_BUILT_SEED]),
         doors,
     )
-    clutter = place_clutter(model, circulation, config.sim.clutter, rng)
+    density = measured.clutter if measured else config.sim.clutter
+    clutter = place_clutter(model, circulation, density, rng)
     clutter = stand_out(
         clutter,
         config.sim.as_built.clutter_in_corridor,

@@ -26,6 +26,7 @@ from bimtools.site.load import Site, load_site
 from bimtools.site.records import Feature
 from initcli.config.building import twin_reason
 from initcli.core.features.classes import ClassMap
+from initcli.core.features.detection_filter import DetectionFilter
 from initcli.core.filters.particle_filter import likelihood_field
 from initcli.core.geometry.se2 import Pose2D
 from initcli.core.hypotheses.ranking import Verdict
@@ -40,13 +41,23 @@ from initcli.core.lidar.registration import (
 )
 from initcli.core.lidar.registration_params import RegistrationParams
 from initcli.core.lidar.scan_fit import BeamEnds, ScanSample
+from initcli.core.lidar.wall_beams import wall_beams
 from initcli.core.verify.checks import CameraView, Verification
 from initcli.core.verify.params import VerificationParams
 from initcli.io.detection_log import DetectionLog, Scan, read_log
 from initcli.match.load import site_class_map
 from initcli.match.report import DECIDED_BY_REGISTRATION, Hypothesis, MatchReport, RegistrationRecord
 from initcli.match.sightings import sightings_from_log
-from initcli.verify.evidence import PathEvidence, StoreyEvidence, check_loaded, claim_params, verify_transform
+from initcli.verify.evidence import (
+    SCAN_BEAM_STEP,
+    TRACK_BEAM_STEP,
+    PathEvidence,
+    StoreyEvidence,
+    camera_blind,
+    check_loaded,
+    claim_params,
+    verify_transform,
+)
 
 __all__ = [
     "DECIDED_BY_REGISTRATION",
@@ -98,21 +109,44 @@ class SubmapRegistration:
                 self._maps.append(RegistrationMap(name, storey.grid, field_, through=through, fit=fit))
         return self._maps
 
+    def _submap_scans(self, path: PathEvidence, lines: float) -> list[ScanSample]:
+        """The scans of the last ``window`` m and the newest one, every sixth beam; with ``lines``
+        m, only the beams on straight lines that long (found on every beam) of each."""
+        scans, _ = path.along(self.params.window, raw=lines > 0)
+        newest = path.latest_raw if lines > 0 else (path.scans[-1] if path.scans else None)
+        if newest is not None and (not scans or newest.odom != scans[-1].odom):
+            # the newest scan too (a turn on the spot adds no travel, so no scan along the path)
+            scans = [*scans, newest if lines > 0 else _thinned(newest, TRACK_BEAM_STEP)]
+        if lines <= 0:
+            return scans
+        return [_thinned(wall_beams(s, lines), SCAN_BEAM_STEP * TRACK_BEAM_STEP) for s in scans]
+
     def attempt(self, path: PathEvidence, travel: float) -> tuple[Registration, Pose2D | None]:
         """Register the submap of the recent path: the outcome, and the odom pose of the submap's last
         scan (a candidate's transform, odom -> BIM, is its pose times that pose's inverse; None
-        without scans)."""
+        without scans). Where every beam fits the map too poorly for a claim (below ``min_fit``:
+        the scans see what the map lacks, furniture, people, stacks), the submap is registered again
+        on its wall beams alone (``wall_lines``), as a building model draws walls."""
         self.next_at = travel + self.params.every
         self.attempts += 1
-        scans, _ = path.along(self.params.window)
-        if path.scans and (not scans or path.scans[-1].odom != scans[-1].odom):
-            # the newest scan too (a turn on the spot adds no travel, so no scan along the path)
-            s = path.scans[-1]
-            scans = [*scans, ScanSample(s.odom, s.angles[::2], s.ranges[::2], s.range_max)]
+        found, last = self._register(path, 0.0)
+        best = found.best
+        if self.params.wall_lines > 0 and best is not None and best.fit < self.params.min_fit:
+            walls, at = self._register(path, self.params.wall_lines)
+            if walls.best is not None:
+                return replace(walls, why=f"on its wall beams: {walls.why}"), at
+        return found, last
+
+    def _register(self, path: PathEvidence, lines: float) -> tuple[Registration, Pose2D | None]:
+        scans = self._submap_scans(path, lines)
         if not scans or not self.maps():
             return Registration((), False, "no scans" if not scans else "no map", 0), None
         ends = BeamEnds.of(scans)
         return register(ends, self.maps(), self.params, self.tolerance), ends.last
+
+
+def _thinned(scan: ScanSample, step: int) -> ScanSample:
+    return ScanSample(scan.odom, scan.angles[::step], scan.ranges[::step], scan.range_max)
 
 
 def door_openings(features: Iterable[Feature], cmap: ClassMap) -> np.ndarray:
@@ -212,6 +246,9 @@ def replay_registration(
     cmap = site_class_map(site)
     seen = sightings_from_log(log, cmap, report.options.edge_margin)
     view = CameraView(log.meta.camera, log.meta.camera_pose, report.options.min_depth)
+    # the camera's features confirmed so far (Eq. 3), fed the sightings in log order as a session's
+    confirming = DetectionFilter(report.options.filter_params())
+    fed = 0
     why = f"{params.min_travel:g} m of travel (registration.min_travel) not reached"
     for path, travel, t in PathEvidence.growing(log):
         if not registration.due(travel):
@@ -221,7 +258,11 @@ def replay_registration(
         if not found.unique or best is None or last is None:
             continue
         sightings = [s for s in seen if s.t <= t]
-        blind = bool(path.image_poses) and not sightings  # as the session's ClaimChecks.blind
+        for s in seen[fed : len(sightings)]:
+            confirming.add(s)
+        fed = len(sightings)
+        # as the session's ClaimChecks.blind: a false box now and then confirms nothing
+        blind = camera_blind(len(path.image_poses), len(confirming.result().features))
         transform = best.pose * last.inverse()
         evidence = StoreyEvidence.of(site.storeys[best.storey], cmap)
         confirmed = None if report.landmarks is None else [f for f in report.landmarks if f.t <= t]

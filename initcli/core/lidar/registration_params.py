@@ -47,3 +47,11 @@ class RegistrationParams:
         minimum=0,
         maximum=1,
     )
+    wall_lines: float = setting(
+        1.0,
+        "m: where every beam fits the map below min_fit, the submap is registered again on the beams on a"
+        " straight line at least this long in their own scan (walls, as a building model draws them;"
+        " furniture, people and material the map lacks are not); 0: never",
+        minimum=0,
+        maximum=20,
+    )

@@ -12,6 +12,7 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 from typer.testing import CliRunner
@@ -31,8 +32,9 @@ pytest.importorskip("roslibpy")
 START = Pose2D(10.0, 11.0, 0.0)  # block_a: initialises in ~45 s of robot time (seed 3)
 
 
-def _config(tmp_path: Path, port: int, camera: dict | None = None) -> Path:
-    """block_a's config for a live robot on ``port``; ``camera``: changes to its camera: section."""
+def _config(tmp_path: Path, port: int, camera: dict | None = None, changes: dict | None = None) -> Path:
+    """block_a's config for a live robot on ``port``; ``camera``: changes to its camera: section;
+    ``changes``: to other sections (section -> its keys)."""
     doc = yaml.safe_load((SAMPLES / "block_a.site.yaml").read_text())
     doc["camera"].update(camera or {})
     doc["site"]["path"] = str(SAMPLES / "block_a.ifc")
@@ -44,6 +46,8 @@ def _config(tmp_path: Path, port: int, camera: dict | None = None) -> Path:
         "depth_topic": "/camera/depth/image",
     }
     doc["nav2"] = {"advertise_delay": 0.1, "confirm": {"timeout": 5.0, "republish_period": 0.5}}
+    for key, values in (changes or {}).items():
+        doc.setdefault(key, {}).update(values)
     path = tmp_path / "live.yaml"
     path.write_text(yaml.safe_dump(doc))
     return path
@@ -82,20 +86,23 @@ def live_run(
     camera: dict | None = None,
     seed: int = 3,
     start: Pose2D = START,
+    changes: dict | None = None,
     **robot,
 ) -> dict:
     """One live run (the AMCL stand-in ignores the first ``amcl_ignores`` poses: re-sent, carried
     further); what was measured, for the last pose sent."""
     config, loaded = site
     with RosbridgeServer(rosapi=True, amcl=True, amcl_ignores=amcl_ignores, set_initial_pose=True) as server:
-        path = _config(tmp_path, server.port, camera)
-        with SimRobot(server, config, loaded, seed, start, ros1=ros1, **robot) as bot:
+        path = _config(tmp_path, server.port, camera, changes)
+        bot_config = load_config(path) if changes else config
+        with SimRobot(server, bot_config, loaded, seed, start, ros1=ros1, **robot) as bot:
             out = tmp_path / "out"
             result = CliRunner().invoke(app, ["run", "--config", str(path), "--out", str(out), "--quiet"])
             received = list(bot.received)
             truths = list(bot.truths)
             server.wait_for(lambda: _last_twist(server) == (0.0, 0.0), 2)
             last_twist = _last_twist(server)
+            subscribed = {o["topic"] for o in server.of("subscribe")}
     summary = json.loads((out / "summary.json").read_text()) if (out / "summary.json").exists() else None
     measured: dict = {
         "exit_code": result.exit_code,
@@ -104,6 +111,8 @@ def live_run(
         "sent": received,
     }
     measured["last_twist"] = last_twist
+    measured["subscribed"] = subscribed
+    measured["bot"] = bot
     measured["stderr"] = result.stderr
     if received:
         robot_clock, msg = received[-1]
@@ -184,3 +193,39 @@ def test_an_interrupted_live_run_keeps_its_log_and_stops_the_robot(tmp_path, sit
     log = [json.loads(line) for line in (tmp_path / "out" / "session.jsonl").read_text().splitlines()]
     assert sum(r.get("type") == "odom" for r in log) >= 39
     assert m["last_twist"] == (0.0, 0.0)
+
+
+LASER = Pose2D(0.15, -0.05, math.pi / 2)  # the laser turned 90 degrees, off the base's centre
+
+
+def test_a_live_robot_without_a_camera_runs_on_its_lidar_from_its_mount(tmp_path, site, fast_driver) -> None:
+    """No detections topic (rosapi lists none), 720 beams from a laser turned 90 degrees at an offset
+    (/tf_static): the session runs to its end on the lidar, its scans carried into the base frame."""
+    changes = {"lidar": {"beams": 720}, "limits": {"max_time": 12.0}}
+    m = live_run(tmp_path, site, changes=changes, has_camera=False, laser=LASER)
+    assert "Traceback" not in m["output"], m["output"]
+    s = m["summary"]
+    assert s is not None and s["camera_absent"] is True and s["camera"]["absent"] is True
+    warnings = [line for line in m["stderr"].splitlines() if "warning" in line]
+    assert len(warnings) == 1 and "no publisher of /detections" in warnings[0], m["stderr"]
+    assert "/detections" not in m["subscribed"] and "/camera/depth/image" not in m["subscribed"]
+    lidar = s["lidar"]
+    assert lidar["mount_from"] == "/tf_static base_link -> laser" and lidar["frame"] == "laser"
+    assert lidar["mount"] == {"x": 0.15, "y": -0.05, "yaw_deg": 90.0} and lidar["scans_dropped"] == 0
+    log = [json.loads(line) for line in (tmp_path / "out" / "session.jsonl").read_text().splitlines()]
+    meta = log[0]
+    assert meta["camera_absent"] is True and "camera" not in meta
+    assert meta["lidar_mount"]["yaw"] == pytest.approx(math.pi / 2)
+    assert not [r for r in log if r.get("type") == "detections"]
+    scans = [r for r in log if r.get("type") == "scan"]
+    assert len(scans) >= 5 and sum(r.get("type") == "odom" for r in log) >= 50
+    # The logged scans are in the base frame: each agrees with the walls cast from the base's true pose.
+    bot, origin = m["bot"], s["clock"]["origin_stamp"]
+    for scan in scans[1::4]:
+        truth = bot.truth(origin + scan["t"])
+        ranges = np.array([math.nan if r is None else r for r in scan["ranges"]])
+        angles = scan["angle_min"] + scan["angle_increment"] * np.arange(len(ranges))
+        cast = bot.sim.world.raycast(np.array([truth.x, truth.y]), angles + truth.yaw, 20.0, 0.0)
+        ok = np.isfinite(ranges) & (cast < 19.0)
+        assert ok.sum() > 300
+        assert float(np.median(np.abs(ranges[ok] - cast[ok]))) < 0.05

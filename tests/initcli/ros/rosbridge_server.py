@@ -24,10 +24,10 @@ _GUID = "258EAFA5-E914-47DA-95CA-C5AB0DC85B11"
 
 class RosbridgeServer:
     """``rosapi``: answers ``/rosapi/publishers`` (a topic advertised by a client has rosbridge's
-    node as publisher); ``amcl``: an AMCL stand-in that answers each ``/initialpose`` after
-    ``amcl_delay`` s with the same pose on ``/amcl_pose`` (the first ``amcl_ignores`` are ignored);
-    ``set_initial_pose``: offers AMCL's ``/set_initial_pose`` service; ``hooks``: the test's
-    callbacks for a client's operations (``("publish", "/cmd_vel")``)."""
+    node as publisher, one in :attr:`robot_topics` the robot's); ``amcl``: an AMCL stand-in that
+    answers each ``/initialpose`` after ``amcl_delay`` s with the same pose on ``/amcl_pose`` (the
+    first ``amcl_ignores`` are ignored); ``set_initial_pose``: offers AMCL's ``/set_initial_pose``
+    service; ``hooks``: the test's callbacks for a client's operations (``("publish", "/cmd_vel")``)."""
 
     def __init__(
         self,
@@ -47,6 +47,7 @@ class RosbridgeServer:
         self.sock.settimeout(0.2)
         self.port = self.sock.getsockname()[1]
         self.ops: list[dict[str, Any]] = []
+        self.robot_topics: set[str] = set()  # topics the robot publishes (rosapi lists them)
         self.subscriptions: dict[str, list[socket.socket]] = {}
         self.clients: list[socket.socket] = []
         self._lock = threading.Lock()
@@ -150,7 +151,9 @@ class RosbridgeServer:
         if service == "/rosapi/publishers" and self.rosapi:
             topic = (op.get("args") or {}).get("topic")
             up = any(o.get("op") == "advertise" and o.get("topic") == topic for o in self.ops)
-            return answer | {"values": {"publishers": ["/rosbridge_websocket"] if up else []}, "result": True}
+            publishers = ["/rosbridge_websocket"] if up else []
+            publishers += ["/robot"] if topic in self.robot_topics else []
+            return answer | {"values": {"publishers": publishers}, "result": True}
         if service == "/set_initial_pose" and self.set_initial_pose:
             return answer | {"values": {}, "result": True}
         return answer | {"values": f"Service {service} does not exist", "result": False}

@@ -10,6 +10,11 @@ running on). Once the session advertises ``/initialpose`` the robot drives on
 by itself (``creep``, as a person or Nav2 would), in real time times ``speed``, so the pose sent
 must be carried forward. :meth:`truth` is its true pose at a stamp; ``stop_after`` steps: the
 odometry stops (the robot's driver died).
+
+``has_camera=False``: a robot without a camera (no CameraInfo, detections or depth, and rosapi lists
+none of them). ``laser``: the laser's mount on the base (x, y, yaw): its scans are cast from there,
+in its own frame ``laser`` (sent on ``/tf_static`` as base_link -> laser), misses as ``null`` (as
+rosbridge sends inf) and every 50th beam 0 (no return either).
 """
 
 from __future__ import annotations
@@ -28,8 +33,9 @@ from initcli.config import SessionConfig
 from initcli.config.building import choose_storey
 from initcli.core.geometry.se2 import Pose2D
 from initcli.drivers.base import SensorFrame
-from initcli.ros.bag_writer import OPTICAL_FRAME, camera_info, camera_tf
+from initcli.ros.bag_writer import OPTICAL_FRAME, camera_info, camera_tf, transform_stamped
 from initcli.ros.nav2 import pose_dict, stamp_dict
+from initcli.ros.tf import yaw_quaternion
 from initcli.sim.build import build_sim
 from tests.initcli.ros.rosbridge_server import RosbridgeServer
 
@@ -50,11 +56,17 @@ class SimRobot:
         creep: tuple[float, float] = (0.3, 0.15),
         speed: float = 1.0,
         stop_after: int | None = None,
+        has_camera: bool = True,
+        laser: Pose2D | None = None,
     ) -> None:
         simulated, _ = choose_storey(config, site)
         self.sim = build_sim(config, site, simulated, seed, start).driver
         self.server, self.ros1, self.creep, self.speed = server, ros1, creep, speed
         self.stop_after = stop_after
+        self.has_camera, self.laser = has_camera, laser
+        server.robot_topics |= {"/odom", "/scan", "/tf_static"}
+        if has_camera:
+            server.robot_topics |= {"/detections", "/camera/depth/image", "/camera/color/camera_info"}
         self.window = int(config.camera.depth_window)
         self.truths: list[tuple[float, Pose2D]] = []  # (stamp, true pose in the BIM/map frame)
         self.received: list[tuple[float, dict]] = []  # each /initialpose: (the robot's clock then, message)
@@ -127,7 +139,9 @@ class SimRobot:
             "/odom",
             {"header": head, "child_frame_id": "base_link", "pose": {"pose": pose_dict(o.x, o.y, o.yaw)}},
         )
-        if frame.scan is not None:
+        if frame.scan is not None and self.laser is not None:
+            self.server.send("/scan", self._laser_scan(frame, head))
+        elif frame.scan is not None:
             s = frame.scan
             self.server.send(
                 "/scan",
@@ -140,6 +154,8 @@ class SimRobot:
                     "ranges": [float(r) for r in s.ranges],
                 },
             )
+        if not self.has_camera:
+            return
         camera_head = {"stamp": stamp_dict(stamp, self.ros1), "frame_id": OPTICAL_FRAME}
         self.server.send(
             "/camera/color/camera_info", {**camera_info(stamp, self.sim.camera), "header": camera_head}
@@ -147,8 +163,32 @@ class SimRobot:
         if image and frame.detections is not None:
             self._image(stamp, frame)
 
+    def _laser_scan(self, frame: SensorFrame, head: dict[str, Any]) -> dict[str, Any]:
+        """The scan the laser at ``self.laser`` reads from the true pose, in its own frame."""
+        assert frame.truth is not None and frame.scan is not None and self.laser is not None
+        s = frame.scan
+        at = frame.truth * self.laser
+        angles = s.angle_min + s.angle_increment * np.arange(len(s.ranges))
+        ranges = self.sim.world.raycast(np.array([at.x, at.y]), angles + at.yaw, s.range_max, frame.t)
+        out: list[float | None] = [None if r >= s.range_max else float(r) for r in ranges]
+        out[::50] = [0.0] * len(out[::50])
+        return {
+            "header": {**head, "frame_id": "laser"},
+            "angle_min": s.angle_min,
+            "angle_max": s.angle_min + s.angle_increment * (len(out) - 1),
+            "angle_increment": s.angle_increment,
+            "range_min": 0.05,
+            "range_max": s.range_max,
+            "ranges": out,
+        }
+
     def _tf_static(self) -> None:
-        transforms = camera_tf(T0, self.sim.mount, base="base_link")
+        transforms = camera_tf(T0, self.sim.mount, base="base_link") if self.has_camera else []
+        if self.laser is not None:
+            m = self.laser
+            transforms.append(
+                transform_stamped(T0, "base_link", "laser", (m.x, m.y, 0.3), yaw_quaternion(m.yaw))
+            )
         for tr in transforms:
             tr["header"]["stamp"] = stamp_dict(T0, self.ros1)
         self.server.send("/tf_static", {"transforms": transforms})

@@ -3,20 +3,25 @@ and the robot stopped on error and Ctrl-C."""
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 
+import numpy as np
 import pytest
 
 from benchmarks._recordings import CAMERA, MOUNT, POINTS, make_recording, write
 from bimkit.errors import InputError
 from initcli.config import RosbridgeSection
 from initcli.ros.bag_source import BagSource
+from initcli.ros.bag_writer import transform_stamped
 from initcli.ros.msgdefs import to_dict
+from initcli.ros.tf import yaw_quaternion
 from tests.initcli.ros.rosbridge_server import RosbridgeServer
 
 pytest.importorskip("roslibpy")
 
+from initcli.ros.live_camera import live_camera  # noqa: E402
 from initcli.ros.rosbridge import RosbridgeLink  # noqa: E402
 from initcli.ros.rosbridge_driver import RosbridgeDriver  # noqa: E402
 
@@ -48,7 +53,7 @@ def test_drives_listens_and_stops_when_odometry_ends(tmp_path):
     stop = threading.Event()
     with RosbridgeServer() as server, RosbridgeLink("127.0.0.1", server.port) as link:
         driver = RosbridgeDriver(link, CAMERA, MOUNT, TOPICS, odom_timeout=0.3, period=0.02)
-        assert server.wait_for(lambda: len(server.of("subscribe")) == 4)
+        assert server.wait_for(lambda: len(server.of("subscribe")) == 5)
         feeder = threading.Thread(target=_replay, args=(server, bag, stop, 3.0), daemon=True)
         feeder.start()
         frame = driver.start()
@@ -73,7 +78,7 @@ def test_drives_listens_and_stops_when_odometry_ends(tmp_path):
 def test_ctrl_c_stops_the_robot(tmp_path):
     with RosbridgeServer() as server, RosbridgeLink("127.0.0.1", server.port) as link:
         driver = RosbridgeDriver(link, CAMERA, MOUNT, TOPICS, period=0.01)
-        server.wait_for(lambda: len(server.of("subscribe")) == 4)
+        server.wait_for(lambda: len(server.of("subscribe")) == 5)
         server.send("/odom", {"pose": {"pose": {"position": {"x": 1.0}, "orientation": {"w": 1.0}}}})
         with pytest.raises(KeyboardInterrupt), driver:
             driver.start()
@@ -86,7 +91,7 @@ def test_ctrl_c_stops_the_robot(tmp_path):
 def test_listen_only_sends_no_twist(tmp_path):
     with RosbridgeServer() as server, RosbridgeLink("127.0.0.1", server.port) as link:
         driver = RosbridgeDriver(link, CAMERA, MOUNT, TOPICS, drive=False, period=0.01)
-        server.wait_for(lambda: len(server.of("subscribe")) == 4)
+        server.wait_for(lambda: len(server.of("subscribe")) == 5)
         server.send("/odom", {"pose": {"pose": {"position": {"x": 1.0}, "orientation": {"w": 1.0}}}})
         driver.start()
         driver.step(0.4, 0.0)
@@ -95,3 +100,67 @@ def test_listen_only_sends_no_twist(tmp_path):
         assert server.published("/cmd_vel") == [] and not any(
             o["topic"] == "/cmd_vel" for o in server.of("advertise")
         )
+
+
+def _odom() -> dict:
+    return {
+        "child_frame_id": "base_link",
+        "pose": {"pose": {"position": {"x": 1.0}, "orientation": {"w": 1.0}}},
+    }
+
+
+def _scan(n: int, angle_max: float, ranges: list) -> dict:
+    inc = 2 * math.pi / n
+    return {
+        "header": {"frame_id": "/laser"},
+        "angle_min": -math.pi,
+        "angle_max": angle_max,
+        "angle_increment": inc,
+        "range_min": 0.1,
+        "range_max": 10.0,
+        "ranges": ranges,
+    }
+
+
+def test_scans_come_into_the_base_frame_from_the_lasers_mount_and_broken_ones_are_dropped():
+    """A laser turned 90 degrees (/tf_static base_link -> laser): its scans turned into the base
+    frame, null, 0, below range_min and at range_max no returns; two broken scans dropped, one warning;
+    a robot without a camera: no detections or depth subscribed."""
+    warnings: list[str] = []
+    topics = RosbridgeSection(camera_wait=2.0)
+    with RosbridgeServer() as server, RosbridgeLink("127.0.0.1", server.port) as link:
+        driver = RosbridgeDriver(
+            link, CAMERA, MOUNT, topics, period=0.01, camera_topics=False, warn=warnings.append
+        )
+        assert server.wait_for(lambda: len(server.of("subscribe")) == 3)
+        assert {o["topic"] for o in server.of("subscribe")} == {"/odom", "/scan", "/tf_static"}
+        laser = transform_stamped(0.0, "base_link", "laser", (0.0, 0.0, 0.2), yaw_quaternion(math.pi / 2))
+        server.send("/tf_static", {"transforms": [laser]})
+        server.send("/odom", _odom())
+        n = 720
+        server.send("/scan", _scan(n, math.pi, [2.0] * (n + 5)))  # more ranges than its angles hold
+        server.send("/scan", {**_scan(n, math.pi, [2.0] * n), "angle_increment": None})  # NaN
+        good = [2.0] * n
+        good[:4] = [None, 0.0, 0.05, 10.0]
+        server.send("/scan", _scan(n, math.pi - 2 * math.pi / n, good))
+        assert server.wait_for(lambda: driver._scans_in == 3)
+        frame = driver.start()
+        assert driver.scans_dropped == 2 and len(warnings) == 1, warnings
+        assert "/scan (message 1)" in warnings[0] and "such scans are dropped" in warnings[0]
+        assert frame.scan is not None and len(frame.scan.ranges) == n
+        assert frame.scan.angle_min == pytest.approx(-math.pi / 2)  # turned by the mount's 90 degrees
+        assert np.isnan(frame.scan.ranges[:4]).all() and (frame.scan.ranges[4:] == 2.0).all()
+        assert driver.lidar_record()["mount_from"] == "/tf_static base_link -> laser"
+        assert driver.lidar_mount is not None and driver.lidar_mount.yaw == pytest.approx(math.pi / 2)
+        driver.close()
+
+
+def test_without_rosapi_auto_keeps_the_camera_and_absent_asks_nothing():
+    """auto without rosapi cannot tell, so the camera stays: after camera_wait s without CameraInfo
+    the site config's camera (one warning); camera: absent asks nothing and warns nothing."""
+    with RosbridgeServer() as server, RosbridgeLink("127.0.0.1", server.port) as link:
+        seen = live_camera(link, RosbridgeSection(camera_wait=1.0), CAMERA, MOUNT, "base_link")
+        assert not seen.absent and seen.camera == CAMERA
+        assert "no CameraInfo on /camera/color/camera_info in 1 s" in seen.warnings[0]
+        told = live_camera(link, RosbridgeSection(camera="absent"), CAMERA, MOUNT, "base_link")
+        assert told.absent and not told.warnings and told.record()["absent_because"].endswith("absent")

@@ -58,6 +58,50 @@ def test_with_the_camera_off_the_lidar_registration_initialises(camera_off_run) 
     assert coarse["negative_evidence"] is False and coarse["missed_predictions"] > 0
 
 
+@pytest.fixture(scope="module")
+def phantom_run(camera_off, tmp_path_factory: pytest.TempPathFactory):
+    """The camera-off session, but for a false box a minute (sim.false_positives_per_minute 1): the
+    result and the log's path."""
+    config, site = camera_off
+    config = dataclasses.replace(config, sim=dataclasses.replace(config.sim, false_positives_per_minute=1.0))
+    log = tmp_path_factory.mktemp("phantom_log") / "session.jsonl"
+    return _run(config, site, True, log), log
+
+
+def _boxes_before_claim(log: Path) -> int:
+    """How many boxes the camera fired in the images before the session's coarse claim."""
+    docs = [json.loads(line) for line in log.read_text().splitlines()]
+    claim_t = next(d["t"] for d in docs if d.get("state") == "coarse")
+    return sum(len(d["objects"]) for d in docs if d.get("type") == "detections" and d["t"] <= claim_t)
+
+
+def test_a_false_box_now_and_then_does_not_hold_back_the_lidar_registration(phantom_run) -> None:
+    """A camera that sees nothing but fires a false box now and then is blind all the same: the
+    box confirms no feature, so the doors the place predicts in view and the camera missed are no
+    evidence against the lidar's place (a phantom stairs 5 s before the first unique registration
+    used to refuse the true place: 5 of 5 doors in view never detected)."""
+    result, log = phantom_run
+    assert result.success, result.reason
+    assert result.decided_by == DECIDED_BY_REGISTRATION and result.features_detected == 0
+    assert _boxes_before_claim(log) >= 1  # the false box came before the claim
+    coarse = result.verifications[0]
+    assert coarse["decided_by"] == DECIDED_BY_REGISTRATION and coarse["passed"]
+    assert coarse["negative_evidence"] is False and coarse["missed_predictions"] > 0
+    assert result.pose is not None and result.truth_pose is not None
+    assert result.pose.distance_to(result.truth_pose) < 0.3
+
+
+def test_the_log_with_a_false_box_replays_to_the_registration_claim(camera_off, phantom_run) -> None:
+    """``bim-init match`` judges the camera of the log as the session did: blind, its false box
+    notwithstanding, so the same registration is claimed offline."""
+    _, site = camera_off
+    result, log = phantom_run
+    code, doc = _match(log, site)
+    assert code == 0 and doc["decided_by"] == DECIDED_BY_REGISTRATION
+    assert doc["registration"]["negative_evidence"] is False
+    assert doc["registration"]["registration_fit"] == result.verifications[0]["registration_fit"]
+
+
 def test_with_the_camera_off_and_no_registration_nothing_is_claimed(camera_off) -> None:
     config, site = camera_off
     result = _run(config, site, False)

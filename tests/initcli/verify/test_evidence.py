@@ -3,11 +3,13 @@ corridors that are alike but for one door, and neither is claimed while both fit
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
 
 from bimtools.site.load import load_site
+from initcli.core.features.detection_filter import DetectionFilter, Sighting
 from initcli.core.geometry.projection import CameraIntrinsics
 from initcli.core.hypotheses.ranking import Verdict
 from initcli.core.verify.checks import VerificationParams
@@ -15,7 +17,14 @@ from initcli.io.detection_log import read_log, write_log
 from initcli.match.pipeline import MatchOptions, run_match, site_class_map
 from initcli.sim.synthetic_floor import write_site_folder
 from initcli.sim.synthetic_log import SimFeature, SyntheticParams, make_log, path_from_waypoints
-from initcli.verify.evidence import PathEvidence, StoreyEvidence, verify_report
+from initcli.verify.evidence import (
+    SEEING_FEATURES,
+    PathEvidence,
+    StoreyEvidence,
+    camera_blind,
+    claim_params,
+    verify_report,
+)
 
 DOORS_X = (3.0, 8.5, 13.0, 19.0)
 CAMERA = CameraIntrinsics(320.0, 320.0, 320.0, 240.0, 640, 480)  # the session default: ~90 degrees
@@ -136,3 +145,23 @@ def test_a_long_wall_drive_with_odometry_drift_stays_in_free_space_placed_window
     assert not single.passed and single.path_free is not None and single.path_free < params.min_path_free
     across = Pose2D(0.0, 1.7, 0.0) * right  # the same drive placed beside the corridor
     assert not verify_transform(across, storey, evidence, [], view, params).passed
+
+
+def test_a_camera_that_fires_a_false_box_now_and_then_is_still_blind() -> None:
+    """Negative evidence counts once the camera has confirmed features (Eq. 3), not once it fired a
+    box: a false box, one sighting in one image, confirms nothing; a working camera confirms the
+    doors it passes, and then the doors it missed count against a place."""
+    params = VerificationParams()
+    confirming = DetectionFilter(MatchOptions().filter_params())
+    confirming.add(Sighting(t=21.6, cls="stairs", x=3.0, y=1.0, depth=4.8, frame=108))  # a phantom
+    phantom = len(confirming.result().features)
+    assert phantom == 0 and camera_blind(300, phantom)
+    assert claim_params(params, camera_blind(300, phantom)).log_odds == math.inf
+    for frame in range(3):  # two doors seen in three images
+        confirming.add(Sighting(t=30.0 + frame, cls="door", x=8.0, y=0.0, depth=3.0, frame=150 + frame))
+        confirming.add(Sighting(t=30.0 + frame, cls="door", x=8.0, y=4.0, depth=3.0, frame=150 + frame))
+    seen = len(confirming.result().features)
+    assert seen == SEEING_FEATURES and not camera_blind(300, seen)
+    assert claim_params(params, camera_blind(300, seen)) == params
+    assert camera_blind(300, SEEING_FEATURES - 1)  # one feature may be a poster seen as a door
+    assert not camera_blind(0, 0)  # no images: nothing to judge the camera by
