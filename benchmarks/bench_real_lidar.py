@@ -369,7 +369,13 @@ def main() -> int:
     print(f"confident-wrong claims: {wrong}")
     if args.out is not None:
         args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text(json.dumps({"provenance": provenance(args), "rows": rows}, indent=1) + "\n")
+        doc: dict[str, Any] = {"provenance": provenance(args), "rows": rows}
+        if args.attempts:
+            doc["thresholds"] = {
+                kind: threshold_table([a for a in ATTEMPTS if a["map"] == kind])
+                for kind in ("whole-log", "walls-only")
+            }
+        args.out.write_text(json.dumps(doc, indent=1) + "\n")
     return 0
 
 

@@ -723,6 +723,19 @@ def real_lidar_page(root: Path = ROOT) -> list[Page]:
         real_lidar_table(rows, amcl),
         "",
     ]
+    for kind, table in doc.get("thresholds", {}).items():
+        body += [
+            f"## The thresholds on {kind} maps",
+            "",
+            "Every registration a session would make along the windows (every `registration.every` m),"
+            " before the checks that a claim passes (beams through walls, the path in free space, the"
+            " scan fit): the best places a pair of `registration.min_fit` (rows) and `registration.margin`"
+            " (columns) would let through, right (within the bounds above) / not right (off by more,"
+            " imprecise or wrong). A window stops at its first claim; these go on to its end.",
+            "",
+            *table,
+            "",
+        ]
     return [Page(f"{RESULTS_PAGES}/real-lidar.md", "\n".join(body), REAL_LIDAR.as_posix())]
 
 
