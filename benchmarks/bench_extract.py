@@ -30,8 +30,9 @@ def _child(mode: str, path: str) -> None:
     import ifcopenshell
     import ifcopenshell.geom
 
+    from bimtools.extract.candidates import collect_candidates
     from bimtools.extract.output import write_site
-    from bimtools.extract.pipeline import collect_candidates, extract_site
+    from bimtools.extract.pipeline import extract_site
     from bimtools.ifc.categories import load_categories
 
     # Imports are paid once per process by both modes and are not what is compared.

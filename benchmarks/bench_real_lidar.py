@@ -59,7 +59,7 @@ def write_site(grid: Any, name: str, workdir: Path) -> Path:
 def match_window(records: list[Any], site: Path, workdir: Path) -> tuple[Any, float]:
     """``bim-init match`` on the window: the report (the claim first) and its seconds."""
     from initcli.core.lidar.registration_params import RegistrationParams
-    from initcli.io.detection_log import write_log
+    from initcli.io.log_writer import write_log
     from initcli.match.pipeline import run_match
     from initcli.verify.registration import check_and_register
 
@@ -134,7 +134,8 @@ def attempts(
     from initcli.core.geometry.se2 import Pose2D
     from initcli.core.lidar.registration_params import RegistrationParams
     from initcli.core.verify.params import VerificationParams
-    from initcli.io.detection_log import read_log, write_log
+    from initcli.io.detection_log import read_log
+    from initcli.io.log_writer import write_log
     from initcli.verify.evidence import PathEvidence
     from initcli.verify.registration import SubmapRegistration
 

@@ -3,7 +3,9 @@ error line, and the console-script runner that turns usage errors into that line
 
 from __future__ import annotations
 
+import inspect
 import os
+import re
 import signal
 import sys
 import threading
@@ -14,6 +16,7 @@ from types import FrameType
 from typing import Any, NoReturn
 
 import typer
+from typer.core import TyperGroup
 
 from bimkit.checks import range_problem
 from bimkit.errors import EXIT_BAD_INPUT
@@ -21,12 +24,15 @@ from bimkit.errors import EXIT_BAD_INPUT
 __all__ = [
     "EXIT_INTERRUPTED",
     "EXIT_TERMINATED",
+    "HELP",
+    "HelpGroup",
     "Terminated",
     "error_line",
     "fail",
     "native_stderr_silenced",
     "number_option",
     "run_cli",
+    "summary",
 ]
 
 EXIT_INTERRUPTED = 130  # Ctrl-C (128 + SIGINT)
@@ -87,6 +93,37 @@ def _on_signal(signum: int, frame: FrameType | None) -> None:
     signal.signal(signal.SIGTERM, signal.SIG_DFL)  # a second SIGTERM ends the process at once
     _terminated.append(signum)
     raise Terminated()
+
+
+def summary(command: Any) -> str:
+    """A command's line in its group's help: its ``short_help``, or the first sentence of its help,
+    whole (click cuts it at the column's width with "...")."""
+    if getattr(command, "short_help", None):
+        return " ".join(str(command.short_help).split())
+    paragraph = inspect.cleandoc(getattr(command, "help", None) or "").split("\n\n")[0]
+    text = " ".join(paragraph.replace("\b", " ").split())
+    return re.split(r"(?<=[.!?])\s+(?=[A-Z`])", text, maxsplit=1)[0]
+
+
+class HelpGroup(TyperGroup):
+    """A command group whose help lists each command with its whole first sentence, wrapped."""
+
+    def format_commands(self, ctx: Any, formatter: Any) -> None:
+        rows = []
+        for name in self.list_commands(ctx):
+            command = self.get_command(ctx, name)
+            if command is not None and not command.hidden:
+                rows.append((name, summary(command)))
+        if rows:
+            with formatter.section("Commands"):
+                formatter.write_dl(rows)
+
+
+# The help of every command: click's plain layout, wrapped to the terminal (at most 80 columns).
+# Rich's help panels squeeze the option column of a wide table until long names and metavars are
+# cut with "…" (``--detections-to…``), and read "[default: ...]" in a help text as a markup tag
+# and drop it ("Output folder ."); bim-extract and bim-init share this layout.
+HELP: dict[str, Any] = {"rich_markup_mode": None, "cls": HelpGroup}
 
 
 def error_line(prog: str, message: object) -> str:

@@ -177,11 +177,15 @@ def extract(
     if as_json:
         for note in site.notes:
             print(f"bim-extract: note: {note}", file=sys.stderr)
+        if site.skipped:
+            print(f"bim-extract: skipped: {site.skipped_summary()}", file=sys.stderr)
         print(json.dumps(manifest.to_dict(), indent=2))
     else:
         out.print(summary_table(manifest))
         for note in site.notes:
             out.print(f"note: {note}", highlight=False)
+        if site.skipped:
+            out.print(f"skipped: {site.skipped_summary()} (the warnings say which)", highlight=False)
         out.print(f"wrote {len(manifest.files)} files to {target}")
 
 

@@ -94,6 +94,7 @@ class StoreyContext:
     spaces: SpaceIndex
     categories: CategorySet
     warnings: list[str] = field(default_factory=list)  # what a user should hear (bim-extract prints them)
+    skipped: list[tuple[str, str]] = field(default_factory=list)  # (IFC class, why): the summary counts them
 
 
 def _enclosure_space(categories: CategorySet, name: str) -> bool:
@@ -277,6 +278,10 @@ def _body_front(ctx: StoreyContext, body: BodyCandidate, category: Category) -> 
             return None
         foot = stair_foot(body.parts)
         if foot is None:
+            ctx.warnings.append(
+                f"storey {ctx.name!r}: stair {body.name!r} ({body.guid}): no foot found, skipped"
+            )
+            ctx.skipped.append((body.ifc_class, "no foot found"))
             return None
         # A stair whose foot is seen only from outside the building (an exterior stair) is not a
         # feature a robot inside can reach; nor one whose foot faces a wall (the floor right in
@@ -288,6 +293,7 @@ def _body_front(ctx: StoreyContext, body: BodyCandidate, category: Category) -> 
             return foot
         why = "its foot faces a wall" if ahead.reachable else "its foot is outside the building"
         ctx.warnings.append(f"storey {ctx.name!r}: stair {body.name!r} ({body.guid}): {why}, skipped")
+        ctx.skipped.append((body.ifc_class, why))
         return None
     front = _best_front(ctx, body.footprint, set())
     if front is None:

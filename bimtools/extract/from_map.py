@@ -71,6 +71,8 @@ def is_map_file(path: Path) -> bool:
     path = Path(path)
     if path.suffix.lower() in MAP_SUFFIXES:
         return True
+    if not path.is_file():
+        return False  # a pipe or a device is never opened to sniff (it could block for ever)
     try:
         with path.open("rb") as handle:
             head = handle.read(4096)

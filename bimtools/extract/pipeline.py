@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -15,6 +16,13 @@ from shapely.geometry.base import BaseGeometry
 
 from bimkit.checks import check_number
 from bimkit.errors import InputError
+from bimtools.extract.candidates import (
+    Candidates,
+    ElementStoreys,
+    collect_candidates,
+    door_without_body,
+    placement_axes,
+)
 from bimtools.extract.circulation import FreeRegions, SpaceIndex
 from bimtools.extract.features import (
     BodyCandidate,
@@ -31,7 +39,7 @@ from bimtools.extract.section import polygons_of, projected_footprint, section_p
 from bimtools.ifc.categories import CategorySet, load_categories
 from bimtools.ifc.geometry import Mesh, ProgressCallback, iterate_meshes
 from bimtools.ifc.model import ModelInfo, describe_model, open_model
-from bimtools.ifc.storeys import Storey, container_storey, list_storeys, storey_at_elevation
+from bimtools.ifc.storeys import Storey, list_storeys, storey_at_elevation
 from bimtools.ifc.text import element_name
 from bimtools.settings import (
     DEFAULT_RESOLUTION,
@@ -45,25 +53,19 @@ from bimtools.site.records import Feature, OccupancyGrid, camera_features
 
 __all__ = [
     "BODY_BAND",
-    "CURTAIN_PART_CLASSES",
     "Candidates",
     "FLOOR_BAND",
     "FLOOR_CUT",
-    "ElementStoreys",
     "ExtractedSite",
     "GLASS_BAND",
     "GLASS_CLASSES",
     "LIFT_MIN_SPAN",
     "MERGE_DISTANCE",
-    "OBSTACLE_CLASSES",
     "StoreyResult",
-    "collect_candidates",
     "extract_site",
     "merge_duplicates",
 ]
 
-OBSTACLE_CLASSES = ("IfcWall", "IfcColumn", "IfcCurtainWall", "IfcDoor", "IfcWindow")
-CURTAIN_PART_CLASSES = ("IfcPlate", "IfcMember")
 # Glazing: an obstacle over its whole plan footprint (a section at the cut meets only frame pieces).
 GLASS_CLASSES = ("IfcWindow", "IfcCurtainWall", "IfcPlate")
 GLASS_BAND = (-0.1, 2.5)  # metres around a storey's elevation whose vertices give a glass footprint
@@ -84,6 +86,7 @@ class StoreyResult:
     grid: OccupancyGrid
     warnings: list[str] = field(default_factory=list)  # what the user should know (stderr)
     notes: list[str] = field(default_factory=list)  # what the extraction changed (summary)
+    skipped: list[tuple[str, str]] = field(default_factory=list)  # (IFC class, why) of what was dropped
 
 
 @dataclass
@@ -96,6 +99,13 @@ class ExtractedSite:
     landmarks: LandmarkSettings | None = None  # the rules of the landmark rows (None: none extracted)
 
     warnings: list[str] = field(default_factory=list)
+    skipped: list[tuple[str, str]] = field(default_factory=list)  # (IFC class, why), all storeys
+
+    def skipped_summary(self) -> str:
+        """``5 IfcStair (its foot faces a wall), 2 IfcDoor (no geometry)``: each class and reason counted."""
+        counts = Counter(self.skipped)
+        ranked = sorted(counts.items(), key=lambda kv: -kv[1])
+        return ", ".join(f"{n} {cls} ({why})" for (cls, why), n in ranked)
 
     @property
     def features(self) -> list[Feature]:
@@ -104,140 +114,6 @@ class ExtractedSite:
     @property
     def notes(self) -> list[str]:
         return [n for s in self.storeys for n in s.notes]
-
-
-def _is_curtain_part(element: ifcopenshell.entity_instance) -> bool:
-    parent = ifcopenshell.util.element.get_aggregate(element)
-    return parent is not None and parent.is_a("IfcCurtainWall")
-
-
-def _placement_axes(element: ifcopenshell.entity_instance) -> tuple[np.ndarray, np.ndarray]:
-    matrix = ifcopenshell.util.placement.get_local_placement(element.ObjectPlacement)
-    return np.asarray(matrix[:3, 0]), np.asarray(matrix[:3, 1])
-
-
-@dataclass
-class Candidates:
-    """The elements whose geometry the extraction needs, by role."""
-
-    obstacles: list[ifcopenshell.entity_instance]
-    doors: list[ifcopenshell.entity_instance]
-    bodies: list[ifcopenshell.entity_instance]
-    body_category: dict[int, str]  # entity id -> category name
-    spaces: list[ifcopenshell.entity_instance]
-    # door GlobalId -> the opening it fills, for doors without a body (placed from the opening)
-    openings: dict[str, ifcopenshell.entity_instance] = field(default_factory=dict)
-    slabs: list[ifcopenshell.entity_instance] = field(default_factory=list)  # floors: the footprint
-
-    def all(self) -> list[ifcopenshell.entity_instance]:
-        unique: dict[int, ifcopenshell.entity_instance] = {}
-        parts = [
-            *self.obstacles,
-            *self.doors,
-            *self.spaces,
-            *self.bodies,
-            *self.openings.values(),
-            *self.slabs,
-        ]
-        for element in parts:
-            unique.setdefault(element.id(), element)
-        return list(unique.values())
-
-
-def collect_candidates(model: ifcopenshell.file, categories: CategorySet) -> Candidates:
-    obstacles = [e for cls in OBSTACLE_CLASSES for e in model.by_type(cls)]
-    obstacles += [e for cls in CURTAIN_PART_CLASSES for e in model.by_type(cls) if _is_curtain_part(e)]
-    door_classes = {c for cat in categories.categories for rule in cat.doors for c in rule.classes}
-    doors: list[ifcopenshell.entity_instance] = []
-    for cls in sorted(door_classes):
-        for element in model.by_type(cls):
-            if any(cat.is_door(element) for cat in categories.categories):
-                doors.append(element)
-    body_classes = {c for cat in categories.categories for rule in cat.bodies for c in rule.classes}
-    body_category: dict[int, str] = {}
-    bodies: list[ifcopenshell.entity_instance] = []
-    for cls in sorted(body_classes):
-        for element in model.by_type(cls):
-            for cat in categories.categories:
-                if (
-                    cat.kind in ("lift", "stairs")
-                    and cat.is_body(element)
-                    and element.id() not in body_category
-                ):
-                    body_category[element.id()] = cat.name
-                    bodies.append(element)
-    unique_doors = list({d.id(): d for d in doors}.values())
-    openings: dict[str, ifcopenshell.entity_instance] = {}
-    for door in unique_doors:
-        if getattr(door, "Representation", None) is None:
-            for rel in getattr(door, "FillsVoids", None) or ():
-                openings[door.GlobalId] = rel.RelatingOpeningElement
-    return Candidates(
-        obstacles,
-        unique_doors,
-        bodies,
-        body_category,
-        list(model.by_type("IfcSpace")),
-        openings,
-        list(model.by_type("IfcSlab")),
-    )
-
-
-def _placement_box(element: ifcopenshell.entity_instance, width: float, height: float) -> np.ndarray:
-    """Corner points of a door's opening from its placement alone: the IFC convention puts the
-    origin at the lining's corner at floor level, with the door running +X for its width."""
-    matrix = np.asarray(ifcopenshell.util.placement.get_local_placement(element.ObjectPlacement))
-    origin, x_axis, z_axis = matrix[:3, 3], matrix[:3, 0], matrix[:3, 2]
-    return np.array([origin + x_axis * u + z_axis * v for u in (0.0, width) for v in (0.0, height)])
-
-
-def _door_without_body(
-    element: ifcopenshell.entity_instance,
-    candidates: Candidates,
-    meshes: dict[str, Mesh],
-    scale: float,
-) -> np.ndarray | None:
-    """Plan points of a door that has no body: the opening it fills, else its placement and
-    OverallWidth/OverallHeight; None when neither is known."""
-    opening = candidates.openings.get(element.GlobalId)
-    if opening is not None and opening.GlobalId in meshes:
-        return meshes[opening.GlobalId].verts
-    width = getattr(element, "OverallWidth", None)
-    height = getattr(element, "OverallHeight", None)
-    if not width or getattr(element, "ObjectPlacement", None) is None:
-        return None
-    # Placement is in project units; meshes are in metres.
-    box = _placement_box(element, float(width), float(height or 2.1 / scale))
-    return box * scale
-
-
-class ElementStoreys:
-    """Which storey each element stands on: its spatial container, else its lowest point."""
-
-    def __init__(self, storeys: list[Storey], meshes: dict[str, Mesh]):
-        self.storeys = storeys
-        self.by_entity = {s.entity.id(): s for s in storeys}
-        self.meshes = meshes
-        self._cache: dict[int, Storey | None] = {}
-
-    def of(self, element: ifcopenshell.entity_instance) -> Storey | None:
-        """The container storey; but geometry standing on a higher storey's floor wins (exports put
-        e.g. upper landing doors in the lowest level), and uncontained elements go by elevation."""
-        cached = self._cache.get(element.id())
-        if cached is not None or element.id() in self._cache:
-            return cached
-        container = container_storey(element)
-        mesh = self.meshes.get(element.GlobalId)
-        by_height = storey_at_elevation(self.storeys, mesh.zmin) if mesh is not None else None
-        storey: Storey | None
-        if container is not None and container.id() in self.by_entity:
-            storey = self.by_entity[container.id()]
-            if by_height is not None and by_height.elevation > storey.elevation + 0.5:
-                storey = by_height
-        else:
-            storey = by_height
-        self._cache[element.id()] = storey
-        return storey
 
 
 def _clamped_section(mesh: Mesh, z: float) -> BaseGeometry | None:
@@ -318,8 +194,19 @@ def extract_site(
                 f"({heights[s.name]:.2f} m); its plan has {len(storey_result.plan.walls)} walls"
             )
         result.warnings += storey_result.warnings
+        result.skipped += storey_result.skipped
         if camera_features(storey_result.features) or storey is not None:
             result.storeys.append(storey_result)
+    kinds = {c.name: c.kind for c in categories.categories}
+    for element in candidates.bodies:  # a lift or stair with no geometry at all: no storey saw it
+        parent = ifcopenshell.util.element.get_aggregate(element)
+        if (parent is not None and parent.id() in candidates.body_category) or _stair_parts(element, meshes):
+            continue
+        kind = kinds[candidates.body_category[element.id()]]
+        result.warnings.append(
+            f"{kind} {element_name(element)!r} ({element.GlobalId}): no body, nor parts with one; skipped"
+        )
+        result.skipped.append((element.is_a(), "no geometry"))
     if walls == 0 and candidates.obstacles:
         raise InputError(
             f"{path}: --section-height {section_height:g} m cuts no wall on any storey "
@@ -375,18 +262,20 @@ def _extract_storey(
     ctx = StoreyContext(
         s.name, s.elevation, FreeRegions(grid), SpaceIndex(space_names, space_areas), categories
     )
-    doors = _doors_on(s, candidates, meshes, where, scale, warnings)
+    skipped: list[tuple[str, str]] = []
+    doors = _doors_on(s, candidates, meshes, where, scale, warnings, skipped)
     bodies = _bodies_on_storey(s, storeys, candidates, meshes, where, categories)
     bodies += _shaft_spaces(space_entities, space_names, space_areas, categories)
     features = storey_features(ctx, doors, bodies)
     warnings += ctx.warnings
+    skipped += ctx.skipped
     order = {c.name: i for i, c in enumerate(categories.categories)}
     features.sort(key=lambda f: (order.get(f.category, 99), round(f.x, 3), round(f.y, 3), f.id))
     features, notes = merge_duplicates(features)
     if categories.landmarks.enabled:
         free = region_probe(ctx.regions.label_at, ctx.regions.areas)
         features += storey_landmarks(plan.walls, categories.landmarks, s.name, s.elevation, free)
-    return StoreyResult(s, features, plan, grid, warnings, notes)
+    return StoreyResult(s, features, plan, grid, warnings, notes, skipped)
 
 
 def _spaces_at(
@@ -433,6 +322,7 @@ def _doors_on(
     where: ElementStoreys,
     scale: float,
     warnings: list[str],
+    skipped: list[tuple[str, str]],
 ) -> list[DoorCandidate]:
     """The storey's doors with their openings in plan; a door without a body is placed from the
     opening it fills or its placement (a warning says which), one without any geometry skipped."""
@@ -441,9 +331,10 @@ def _doors_on(
         if where.of(element) is not s:
             continue
         mesh = meshes.get(element.GlobalId)
-        verts = mesh.verts if mesh is not None else _door_without_body(element, candidates, meshes, scale)
+        verts = mesh.verts if mesh is not None else door_without_body(element, candidates, meshes, scale)
         if verts is None:
             warnings.append(f"storey {s.name!r}: door {element_name(element)!r} has no geometry, skipped")
+            skipped.append((element.is_a(), "no geometry"))
             continue
         if mesh is None:
             warnings.append(
@@ -455,7 +346,7 @@ def _doors_on(
                     else "placed from its placement and OverallWidth"
                 )
             )
-        x_axis, y_axis = _placement_axes(element)
+        x_axis, y_axis = placement_axes(element)
         width = getattr(element, "OverallWidth", None)
         height = getattr(element, "OverallHeight", None)
         opening = opening_in_plan(

@@ -14,6 +14,7 @@ import numpy as np
 from shapely.geometry.base import BaseGeometry
 
 from bimtools.extract.section import polygons_of
+from bimtools.fonts import put_text
 from bimtools.site.records import LIDAR, Feature, WallSegment
 
 # BGR colours
@@ -198,9 +199,9 @@ def render_preview(
         counts[f.category] = counts.get(f.category, 0) + 1
     draw_legend(canvas, categories, counts)
     draw_scale_bar(canvas, max(bounds[2] - bounds[0], bounds[3] - bounds[1]))
-    # OpenCV's fonts are ASCII only, and a file name that is not UTF-8 (a lone surrogate) crashes it
-    shown = title.encode("ascii", "replace").decode("ascii")
-    cv2.putText(canvas.image, shown, (20, 30), _FONT, 0.6, (0, 0, 0), 1, cv2.LINE_AA)
+    # OpenCV's fonts are ASCII only ("Уровень 1" came out "??????? 1"): the title, a storey name in
+    # any script, is drawn with DejaVu Sans and any CJK font installed (bimtools.fonts)
+    put_text(canvas.image, title, (20, 30), 18, (0, 0, 0))
     north = (30, canvas.image.shape[0] - 30)
     cv2.arrowedLine(canvas.image, north, (north[0], north[1] - 30), (0, 0, 0), 1, cv2.LINE_AA, tipLength=0.3)
     cv2.putText(canvas.image, "+y", (north[0] + 6, north[1] - 20), _FONT, 0.45, (0, 0, 0), 1, cv2.LINE_AA)

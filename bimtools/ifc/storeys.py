@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 
 import ifcopenshell
 import ifcopenshell.util.element
 import ifcopenshell.util.placement
+
+from bimtools.site.names import storey_slug, storey_slugs
 
 __all__ = ["Storey", "container_storey", "list_storeys", "storey_at_elevation", "storey_slug"]
 
@@ -18,12 +19,6 @@ class Storey:
     elevation: float  # metres, world z of the storey's floor level
     entity: ifcopenshell.entity_instance
     slug: str = ""
-
-
-def storey_slug(name: str) -> str:
-    """A file-name-safe form of a storey name (``map_<slug>.pgm``)."""
-    slug = re.sub(r"[^A-Za-z0-9._-]+", "_", name.strip()).strip("_")
-    return slug or "storey"
 
 
 def _placement_z(entity: ifcopenshell.entity_instance, scale: float) -> float | None:
@@ -77,15 +72,8 @@ def list_storeys(model: ifcopenshell.file, scale: float) -> list[Storey]:
             storey.name = f"{base} ({seen[base]})"
         else:
             seen[base] = 1
-        storey.slug = storey_slug(storey.name)
-    used: set[str] = set()
-    for storey in storeys:
-        slug, k = storey.slug, 1
-        while slug in used:  # a renamed slug may itself be taken: count on until it is free
-            k += 1
-            slug = f"{storey.slug}_{k}"
-        storey.slug = slug
-        used.add(slug)
+    for storey, slug in zip(storeys, storey_slugs(s.name for s in storeys), strict=True):
+        storey.slug = slug  # bimtools.site.names: the one rule for storey names in file names
     return storeys
 
 

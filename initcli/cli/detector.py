@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 from rich.console import Console
 
-from bimkit.cli import error_line, number_option
+from bimkit.cli import HELP, error_line, number_option
 from bimkit.errors import EXIT_BAD_INPUT, InputError
 from bimkit.outputs import OutputFile, OutputFolder, check_outputs
 from initcli.cli import PROG
@@ -44,6 +44,7 @@ detector_app = typer.Typer(
     add_completion=False,
     no_args_is_help=True,
     pretty_exceptions_enable=False,
+    **HELP,
 )
 
 MODEL_HELP = "An .onnx model; 'default' is the model shipped in the package."

@@ -115,7 +115,7 @@ _Sweep = Annotated[
     typer.Option(
         "--sweep",
         metavar="KEY=V1,V2,...",
-        help="Vary one parameter (miss_rate, false_positives, depth_noise, odometry_drift, clutter, "
+        help="Vary one parameter (miss_rate, false_positives, depth_noise, odometry_drift, clutter, people, "
         "alpha, beta, or a dotted site-config path), the rest fixed.",
     ),
 ]

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import typer
 
-from bimkit.cli import run_cli
+from bimkit.cli import HELP, run_cli
 from initcli.cli import PROG
 from initcli.cli.bag2log import bag2log
 from initcli.cli.detector import detector_app
@@ -28,6 +28,7 @@ app = typer.Typer(
     add_completion=False,
     no_args_is_help=True,
     pretty_exceptions_enable=False,
+    **HELP,
 )
 
 

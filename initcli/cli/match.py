@@ -41,10 +41,10 @@ from initcli.cli.exit_codes import match_exit_code
 from initcli.cli.progress import message_progress
 from initcli.config.matching import MatchOptions
 from initcli.core.geometry.se2 import Pose2D
-from initcli.core.lidar.registration_params import RegistrationParams
 from initcli.core.verify.checks import TRACK_HYPOTHESES, Verification
-from initcli.io.detection_log import log_camera_absent
+from initcli.io.detection_log import log_camera_absent, read_meta
 from initcli.match.pipeline import run_match
+from initcli.match.recorded import recorded_settings
 from initcli.match.report import MatchReport
 from initcli.match.report_file import report_to_dict
 from initcli.ros.convert import log_or_bag
@@ -162,7 +162,19 @@ def _record_options(record: type) -> list[inspect.Parameter]:
     return params
 
 
+def _given_options(ctx: typer.Context) -> set[str]:
+    """The names of the options the user gave on the command line (the others are defaults, which
+    a session's log may replace with what the session ran with)."""
+    given = set()
+    for name in ctx.params:
+        source = ctx.get_parameter_source(name)
+        if source is not None and source.name not in ("DEFAULT", "DEFAULT_MAP"):
+            given.add(name)
+    return given
+
+
 def match(
+    ctx: typer.Context,
     log: Annotated[Path, typer.Argument(metavar="LOG.jsonl", help="Detection log (JSON Lines, version 1).")],
     site: Annotated[
         Path, typer.Option("--site", metavar="SITE", help="bim-extract OUTDIR, or a features.csv (Table 1).")
@@ -195,6 +207,7 @@ def match(
     Exit codes: 0 unique match, 3 several hypotheses, 4 no consistent match, 2 bad input.
     """
     options = MatchOptions(storey=None if storey.strip().lower() == "auto" else storey, **settings)
+    given = _given_options(ctx)
     top = options.top
     checks = None
     verify = site.is_dir()  # the checks need the site's maps; a bare features.csv has none
@@ -218,12 +231,18 @@ def match(
             check_outputs(inputs, [OutputFile(plot, "--plot", PLOT_SUFFIXES)])
         with message_progress() as progress, log_or_bag(log, bag, progress) as log_path:
             options.validate()
+            # a session's log: the storey and settings it recorded for the options not given
+            recorded = recorded_settings(read_meta(log_path), options, given, str(log))
+            options = recorded.options
             listed = replace(options, top=max(top, TRACK_HYPOTHESES)) if verify else options
             report = run_match(log_path, site, listed, source=log)
+            if recorded.note is not None:
+                report.notes.insert(0, recorded.note)
             camera_absent = log_camera_absent(log_path)
             if verify:
-                registration = RegistrationParams(enabled=options.registration)
-                checks = check_and_register(log_path, site, report, options.skip_bad, top, registration)
+                checks = check_and_register(
+                    log_path, site, report, options.skip_bad, top, recorded.registration
+                )
     except InputError as exc:
         fail(PROG, exc)
 

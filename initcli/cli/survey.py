@@ -11,12 +11,14 @@ import typer
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
+from rich.text import Text
 
 from bimkit.atomic import claim, write_text_atomic
 from bimkit.cli import EXIT_INTERRUPTED, fail, number_option
 from bimkit.errors import InputError
 from bimkit.outputs import OutputFolder, check_outputs
-from bimtools.site.load import load_site
+from bimtools.site.load import Site, load_site
+from bimtools.site.names import storey_slugs
 from initcli.cli import PROG
 from initcli.config import SessionConfig, camera_of, followed_side, load_config
 from initcli.core.features.visibility import CameraModel
@@ -160,12 +162,14 @@ def survey(
     except InputError as exc:
         fail(PROG, exc)
     storeys: list[dict[str, object]] = []
+    suggested: list[str] = []
     report: dict[str, object] = {
         "version": SURVEY_VERSION,
         "site": str(site),
         "limit_m": params.limit_m,
         "storeys": storeys,
     }
+    stems = _stems(model)
     table = _survey_table()
     try:
         with Progress(
@@ -176,9 +180,13 @@ def survey(
             console=err,
         ) as progress:
             for name, plan in plans.items():
-                entry, chosen = _survey_one(name, plan, params, runner, landmarks, progress, out)
+                stem = stems[name]
+                entry, chosen = _survey_one(name, plan, params, runner, landmarks, progress, out, stem)
                 storeys.append(entry)
-                table.add_row(*_table_row(name, entry, chosen))
+                table.add_row(*_table_row(name, entry))
+                line = _landmarks_line(name, chosen)
+                if line:
+                    suggested.append(line)
     except KeyboardInterrupt:
         runner.close(cancel=True)
         if out.is_dir():
@@ -191,6 +199,8 @@ def survey(
     write_text_atomic(out / "survey.json", json.dumps(report, indent=2) + "\n")
     claim(out, SURVEY_WRITES)
     console.print(table)
+    for line in suggested:
+        console.print(line, markup=False, highlight=False)
     for entry in storeys:
         line = _lidar_twin_line(entry)
         if line:
@@ -199,20 +209,20 @@ def survey(
 
 
 def _survey_table() -> Table:
-    """The terminal table, one row per storey."""
-    table = Table(title="Survey: distance to a unique match", title_justify="left")
+    """The terminal table, one row per storey; it fits 80 columns: the headers are stacked short
+    words and every cell wraps (a long storey name over lines), none is cut with an ellipsis."""
+    table = Table(title="Survey: starts unique within 5, 10, 20 m", title_justify="left")
     for column in (
         "storey",
         "starts",
-        "area m2",
+        "area\nm2",
         "<=5 m",
         "<=10 m",
         "<=20 m",
-        "median m",
-        "never-unique m2",
-        "landmarks",
+        "median\nm",
+        "never\nunique\nm2",
     ):
-        table.add_column(column, justify="left" if column == "storey" else "right")
+        table.add_column(column, justify="left" if column == "storey" else "right", overflow="fold")
     return table
 
 
@@ -224,6 +234,7 @@ def _survey_one(
     landmarks: int,
     progress: Progress,
     out: Path,
+    stem: str,
 ) -> tuple[dict[str, object], list[Landmark]]:
     """Survey one storey (and suggest ``landmarks`` extra landmarks), draw its map into ``out``; its
     entry of survey.json and the landmarks chosen."""
@@ -252,11 +263,29 @@ def _survey_one(
             for lm in chosen
         ]
         entry["with_landmarks"] = summarise(improved)
-    stem = "".join(c if c.isalnum() or c in "-_" else "_" for c in name)
     out.mkdir(parents=True, exist_ok=True)
     survey_png(out / f"survey_{stem}.png", result, improved, chosen)
     entry["map"] = f"survey_{stem}.png"
     return entry, chosen
+
+
+def _stems(model: Site) -> dict[str, str]:
+    """Each storey's ``<slug>`` of ``survey_<slug>.png``: the one of its ``map_<slug>.yaml`` where
+    site.json records that (so a site written by an older rule keeps its names), else the site's
+    storeys slugged together by the one rule (:mod:`bimtools.site.names`), as bim-extract does."""
+    slugs = dict(zip(model.storeys, storey_slugs(model.storeys), strict=True))
+    recorded = {
+        info.name: info.map_yaml[4:-5]
+        for info in (model.manifest.storeys if model.manifest is not None else [])
+        if info.map_yaml and info.map_yaml.startswith("map_") and info.map_yaml.endswith(".yaml")
+    }
+    stems: dict[str, str] = {}
+    for name, slug in slugs.items():
+        stem = recorded.get(name) or slug
+        if stem in stems.values():  # a hand-edited site.json naming one map twice
+            stem = slug
+        stems[name] = stem
+    return stems
 
 
 def _lidar_twin_line(entry: dict[str, object]) -> str | None:
@@ -277,16 +306,24 @@ def _lidar_twin_line(entry: dict[str, object]) -> str | None:
     )
 
 
-def _table_row(name: str, entry: dict[str, object], chosen: list[Landmark]) -> list[str]:
-    """A storey's row of the terminal table."""
+def _table_row(name: str, entry: dict[str, object]) -> list[str | Text]:
+    """A storey's row of the terminal table (its name as plain text: no markup read in it)."""
     shares = entry["unique_within"]
     median = entry["median_distance_m"]
     return [
-        name,
+        Text(name),
         str(entry["samples"]),
         f"{entry['area_m2']:.0f}",
         *(f"{100 * shares[k]:.0f} %" for k in ("5m", "10m", "20m")),  # type: ignore[index]
         "never" if median is None else f"{median:.1f}",
         f"{entry['never_unique_area_m2']:.0f}",
-        ", ".join(f"({lm.x:.1f}, {lm.y:.1f})" for lm in chosen) or "-",
     ]
+
+
+def _landmarks_line(name: str, chosen: list[Landmark]) -> str | None:
+    """Where the suggested landmarks of a storey go (below the table: coordinates would not fit
+    a column at 80 characters), or None without them."""
+    if not chosen:
+        return None
+    places = ", ".join(f"({lm.x:.1f}, {lm.y:.1f})" for lm in chosen)
+    return f"{name}: landmarks suggested at {places} (m, BIM frame)"

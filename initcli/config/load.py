@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import os
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -21,13 +23,23 @@ from initcli.config.sim import REALITY_PROFILES
 from initcli.core.filters.particle_filter import LaserModel
 
 __all__ = [
+    "RENAMED_KEYS",
     "check_resources",
     "config_to_dict",
     "load_config",
     "parse_config",
     "read_yaml",
+    "renamed_keys",
     "with_reality",
 ]
+
+# Keys renamed since: the old one is still read, as the new one, with one warning line.
+RENAMED_KEYS: dict[str, str] = {
+    "sim.workers": "sim.people",  # people walking about, not CPU workers (--workers of eval, survey)
+}
+# The files warned about, kept in the environment so that the worker processes a command starts
+# afterwards (eval's trials load the site configs again) do not repeat the warning.
+WARNED_ENV = "BIM_INIT_RENAMED_KEYS_WARNED"
 
 
 def _merge(instance: Any, doc: dict) -> Any:
@@ -51,10 +63,48 @@ def read_yaml(path: Path, what: str) -> Any:
     return checks.read_yaml(path, what)
 
 
+def renamed_keys(doc: dict, where: str) -> dict:
+    """``doc`` with each old key of :data:`RENAMED_KEYS` moved to its new name, and one warning line
+    on stderr (once per file) naming the file and the new key; both given is an :class:`InputError`."""
+    renamed: list[str] = []
+    for old, new in RENAMED_KEYS.items():
+        *parents, old_leaf = old.split(".")
+        new_parents, new_leaf = new.rsplit(".", 1)
+        if new_parents.split(".") != parents:  # pragma: no cover - every rename so far stays in its section
+            raise NotImplementedError(new)
+        node: Any = doc
+        for part in parents:
+            node = node.get(part) if isinstance(node, dict) else None
+        if not isinstance(node, dict) or old_leaf not in node:
+            continue
+        if new_leaf in node:
+            raise InputError(f"{where}: {old}: renamed {new}, which this file also sets; keep {new} only")
+        if not renamed:
+            doc = copy.deepcopy(doc)
+            node = doc
+            for part in parents:
+                node = node[part]
+        node[new_leaf] = node.pop(old_leaf)
+        renamed.append(f"{old} is now {new}")
+    if renamed:
+        _warn_once(where, f"{where}: {'; '.join(renamed)} (read as such; rename it in the file)")
+    return doc
+
+
+def _warn_once(where: str, message: str) -> None:
+    warned = os.environ.get(WARNED_ENV, "")
+    if where in warned.split(os.pathsep):
+        return
+    os.environ[WARNED_ENV] = os.pathsep.join(filter(None, (warned, where)))
+    print(f"bim-init: warning: {message}", file=sys.stderr)
+
+
 def parse_config(doc: Any, source: Path | None = None) -> SessionConfig:
     where = str(source) if source else "config"
     if doc is None:
         doc = {}
+    if isinstance(doc, dict):
+        doc = renamed_keys(doc, where)
     validate_document(doc, SCHEMA_PATH, where)
     given = given_paths(doc)
     doc = with_reality(doc, (doc.get("sim") or {}).get("reality", "ideal"))

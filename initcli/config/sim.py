@@ -207,7 +207,13 @@ class SimSection:
         OdometryNoiseSection, "the odometry's random walk: variances that grow with each step's motion"
     )
     clutter: float = setting(0.05, "material stacks per metre of corridor wall", minimum=0, maximum=10)
-    workers: int = setting(2, "people walking about", minimum=0, maximum=1000)
+    people: int = setting(
+        2,
+        "people walking about the corridors, moving obstacles the lidar and the camera see (named"
+        " sim.workers before; that name is still read, with a warning)",
+        minimum=0,
+        maximum=1000,
+    )
     miss_rate: float = setting(
         0.1, "chance a visible feature is not detected in an image", minimum=0, maximum=1
     )

@@ -24,11 +24,14 @@ SWEEP_KEYS: dict[str, str] = {
     "depth_noise": "camera.depth_noise",  # sigma = depth_noise * d^2
     "odometry_drift": "sim.odometry_noise",  # a factor on all four odometry alphas (1 = as configured)
     "clutter": "sim.clutter",  # material stacks per metre of corridor wall
-    "workers": "sim.workers",
+    "people": "sim.people",  # people walking about (not the --workers processes)
     "phantoms": "sim.phantoms",
     "alpha": "matching.alpha",  # m, Eq. 7
     "beta": "matching.beta",  # degrees, Eq. 9
 }
+
+# Earlier names still read: sim.workers became sim.people (it never meant CPU workers).
+OLD_SWEEP_KEYS: dict[str, str] = {"workers": "sim.people", "sim.workers": "sim.people"}
 
 
 @dataclass(frozen=True)
@@ -71,7 +74,7 @@ def parse_sweep(text: str, config: SessionConfig | None = None) -> Sweep:
     key = key.strip()
     if not sep or not key:
         raise InputError(f"--sweep: expected KEY=V1,V2,... (e.g. miss_rate=0,0.25,0.5), got {text!r}")
-    path = SWEEP_KEYS.get(key, key)
+    path = SWEEP_KEYS.get(key) or OLD_SWEEP_KEYS.get(key, key)
     try:
         numbers = tuple(float(v) for v in values.split(",") if v.strip())
     except ValueError:

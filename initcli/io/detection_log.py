@@ -6,7 +6,9 @@ Schema: ``schemas/detection_log.schema.json`` (one line = one instance). Records
 - ``meta`` (first line): version 1, frame ``odom``, camera intrinsics, camera pose on the robot,
   optional ``depth_window`` n and ``source``; ``camera_absent: true`` instead of the camera fields
   when the robot had no camera (a lidar-only bag or laser log: no ``detections`` then), and
-  optionally ``lidar_mount`` (x, y, yaw), the laser's mount the scans were carried from.
+  optionally ``lidar_mount`` (x, y, yaw), the laser's mount the scans were carried from; a
+  session's log (``bim-init run``) adds ``storey`` (the storey it matched; absent: every storey)
+  and ``settings`` (``matching`` and ``registration``: what it matched and registered with).
 - ``scan``: a planar scan in the robot's base frame (beams from the base origin, angle 0 along the
   base's x axis; null: no return), see :mod:`initcli.io.laser`.
 - ``odom``: robot pose (x, y, yaw) in the odometry frame (origin: start pose, x: initial heading).
@@ -29,18 +31,16 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
 from bimkit.documents import check_finite_tree, parse_json, read_bytes
 from bimkit.errors import InputError
 from bimkit.limits import MAX_LOG_BYTES, MAX_LOG_LINE_BYTES, show_bytes
-from bimtools.site.records import CAMERA, LIDAR, SENSORS
+from bimtools.site.records import CAMERA, SENSORS
 from initcli.core.geometry.projection import CameraIntrinsics, CameraMount
 from initcli.core.geometry.se2 import Pose2D
-from initcli.core.lidar.landmark_tracks import LidarLandmark
 from initcli.io.log_records import (
     LOG_VERSION,
     NO_CAMERA,
@@ -61,17 +61,13 @@ from initcli.io.log_records import (
 
 __all__ = [
     "is_detection_log",
-    "LogWriter",
     "log_camera_absent",
+    "read_meta",
     "MAX_ANGLE",
     "MAX_COORDINATE",
     "MAX_TIME",
-    "format_record",
-    "iter_lines",
     "parse_record",
     "read_log",
-    "record_to_dict",
-    "write_log",
 ]
 
 
@@ -171,6 +167,14 @@ def _parse_meta(o: dict[str, Any]) -> Meta:
             _coord(lm, "y", "lidar_mount.", bound=10.0),
             _coord(lm, "yaw", "lidar_mount.", bound=MAX_ANGLE, unit="rad"),
         )
+    storey = o.get("storey")
+    if storey is not None and (not isinstance(storey, str) or not storey):
+        raise _Bad(f"'storey' must be a storey's name, got {json.dumps(storey)[:40]}")
+    settings = o.get("settings")
+    if settings is not None and (
+        not isinstance(settings, dict) or not all(isinstance(v, dict) for v in settings.values())
+    ):
+        raise _Bad("'settings' must be an object of objects ('matching', 'registration')")
     return Meta(
         camera=intr,
         camera_pose=mount,
@@ -180,6 +184,8 @@ def _parse_meta(o: dict[str, Any]) -> Meta:
         source=source,
         camera_absent=absent,
         lidar_mount=lidar,
+        storey=storey,
+        settings=settings,
     )
 
 
@@ -288,6 +294,8 @@ def parse_record(o: Any) -> Record | None:
 def is_detection_log(path: Path | str) -> bool:
     """Does the file start as a detection log does (its first line a meta record)? What ``-o``
     may write over: a log an earlier run wrote, never another file."""
+    if not Path(path).is_file():
+        return False
     try:
         with open(path, "rb") as f:
             first = f.readline(MAX_META_LINE)
@@ -299,6 +307,8 @@ def is_detection_log(path: Path | str) -> bool:
 
 def log_camera_absent(path: Path | str) -> bool:
     """Whether the log's meta record says the camera was absent (False when it cannot be read)."""
+    if not Path(path).is_file():
+        return False
     try:
         with open(path, encoding="utf-8-sig") as handle:
             for raw in handle:
@@ -308,6 +318,24 @@ def log_camera_absent(path: Path | str) -> bool:
     except (OSError, ValueError):
         return False
     return False
+
+
+def read_meta(path: Path | str) -> Meta | None:
+    """The log's meta record alone (its first line), or None when it cannot be read or is not one
+    (:func:`read_log` then says what is wrong)."""
+    if not Path(path).is_file():
+        return None  # a pipe or a device is never opened here (it could block for ever)
+    try:
+        with open(path, encoding="utf-8-sig") as handle:
+            for raw in handle:
+                if raw.strip():
+                    value = json.loads(raw) if len(raw) <= MAX_LOG_LINE_BYTES else None
+                    if not isinstance(value, dict) or value.get("type") != "meta":
+                        return None
+                    return _parse_meta(value)
+    except (OSError, ValueError, RecursionError, _Bad):
+        return None
+    return None
 
 
 def _record_time(rec: Record) -> float | None:
@@ -450,124 +478,3 @@ def _safe_type(raw: str) -> str | None:
 
 
 # --- writer ----------------------------------------------------------------------------------------
-
-
-def record_to_dict(rec: Record) -> dict[str, Any]:
-    """A record as the JSON object of its line."""
-    if isinstance(rec, Meta):
-        c, m = rec.camera, rec.camera_pose
-        out: dict[str, Any] = {"type": "meta", "version": rec.version, "frame": rec.frame}
-        if rec.camera_absent:
-            out["camera_absent"] = True
-        else:
-            out["camera"] = {
-                "fx": c.fx,
-                "fy": c.fy,
-                "cx": c.cx,
-                "cy": c.cy,
-                "width": int(c.width),
-                "height": int(c.height),
-            }
-            out["camera_pose"] = {
-                "x": m.x,
-                "y": m.y,
-                "z": m.z,
-                "roll": m.roll,
-                "pitch": m.pitch,
-                "yaw": m.yaw,
-            }
-        if rec.lidar_mount is not None:
-            lm = rec.lidar_mount
-            out["lidar_mount"] = {"x": lm.x, "y": lm.y, "yaw": lm.yaw}
-        if rec.depth_window is not None:
-            out["depth_window"] = int(rec.depth_window)
-        if rec.source is not None:
-            out["source"] = rec.source
-        return out
-    if isinstance(rec, Odom):
-        return {"type": "odom", "t": rec.t, "x": rec.x, "y": rec.y, "yaw": rec.yaw}
-    if isinstance(rec, Detections):
-        return {
-            "type": "detections",
-            "t": rec.t,
-            "pose": {"x": rec.pose.x, "y": rec.pose.y, "yaw": rec.pose.yaw},
-            "objects": [
-                {"class": o.cls, "score": o.score, "bbox": list(o.bbox), "depth": o.depth}
-                for o in rec.objects
-            ],
-        }
-    if isinstance(rec, FeatureRecord):
-        out = {"type": "feature", "t": rec.t, "class": rec.cls, "x": rec.x, "y": rec.y}
-        if rec.source != CAMERA:  # camera logs stay as they were
-            out["source"] = rec.source
-        return out
-    if isinstance(rec, Scan):
-        return {
-            "type": "scan",
-            "t": rec.t,
-            "angle_min": rec.angle_min,
-            "angle_increment": rec.angle_increment,
-            "range_max": rec.range_max,
-            "ranges": [None if not math.isfinite(r) else r for r in rec.ranges],
-        }
-    if isinstance(rec, Truth):
-        return {"type": "truth", "t": rec.t, "x": rec.x, "y": rec.y, "yaw": rec.yaw}
-    if isinstance(rec, State | HypothesesRecord):
-        kind = "state" if isinstance(rec, State) else "hypotheses"
-        out = {"type": kind, **{k: v for k, v in rec.data.items() if k != "type"}}
-        if rec.t is not None:
-            out["t"] = rec.t
-        return out
-    raise TypeError(f"not a detection log record: {rec!r}")
-
-
-def format_record(rec: Record) -> str:
-    """One line of the log (no newline)."""
-    return json.dumps(record_to_dict(rec), separators=(",", ":"), allow_nan=False)
-
-
-class LogWriter:
-    """Append records to a log, one line each, flushing after every record (for ``bim-init run``)."""
-
-    def __init__(self, target: Path | str | IO[str]) -> None:
-        if isinstance(target, str | Path):
-            self._handle: IO[str] = open(target, "w", encoding="utf-8")  # noqa: SIM115
-            self._owned = True
-        else:
-            self._handle = target
-            self._owned = False
-
-    def write(self, rec: Record) -> None:
-        self._handle.write(format_record(rec) + "\n")
-        self._handle.flush()
-
-    def write_all(self, records: Iterable[Record]) -> None:
-        for rec in records:
-            self.write(rec)
-
-    def close(self) -> None:
-        if self._owned:
-            self._handle.close()
-
-    def __enter__(self) -> LogWriter:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-
-def landmark_records(landmarks: Iterable[LidarLandmark]) -> list[FeatureRecord]:
-    """Confirmed lidar landmarks as ``feature`` records with ``source: lidar``, at the time each was
-    confirmed (their covariance and normal stay with the landmarks: the record has no field for them)."""
-    return [FeatureRecord(float(m.t_confirmed), m.category, float(m.x), float(m.y), LIDAR) for m in landmarks]
-
-
-def write_log(path: Path | str, records: Iterable[Record]) -> None:
-    """Write a whole log (the first record must be the :class:`Meta`)."""
-    with LogWriter(path) as writer:
-        writer.write_all(records)
-
-
-def iter_lines(records: Iterable[Record]) -> Iterator[str]:
-    for rec in records:
-        yield format_record(rec)

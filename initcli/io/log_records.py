@@ -50,6 +50,12 @@ class Meta:
     # the laser's mount on the base (x, y, yaw) the scans were carried from; informational: the
     # scan records are already in the base frame (initcli.io.laser)
     lidar_mount: Pose2D | None = None
+    # written by ``bim-init run``: the storey the session matched against (None: every storey, or
+    # not recorded) and the settings it matched and registered with, {"matching": {...},
+    # "registration": {...}} (the fields of MatchOptions and RegistrationParams), which
+    # ``bim-init match`` takes for the options its user did not give (initcli.match.recorded)
+    storey: str | None = None
+    settings: dict[str, Any] | None = field(default=None, compare=False, hash=False)
 
 
 @dataclass(frozen=True)

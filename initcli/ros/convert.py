@@ -12,7 +12,8 @@ from typing import TYPE_CHECKING
 
 from bimkit.errors import InputError
 from initcli.io.carmen import CarmenStats, carmen_to_records, is_carmen
-from initcli.io.detection_log import Record, write_log
+from initcli.io.detection_log import Record
+from initcli.io.log_writer import write_log
 from initcli.ros.records import Bag2LogOptions, Bag2LogStats
 
 if TYPE_CHECKING:

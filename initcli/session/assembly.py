@@ -18,6 +18,7 @@ from initcli.core.verify.checks import CameraView
 from initcli.drivers.base import RobotDriver
 from initcli.io.detection_log import Meta
 from initcli.match.landmarks import site_tracker
+from initcli.match.recorded import session_meta_settings
 from initcli.session.claims import ClaimChecks
 from initcli.session.escapes import Escapes
 from initcli.session.exploration import ActiveExploration
@@ -71,6 +72,8 @@ def assemble(
         source=meta_source,
         camera_absent=absent,
         lidar_mount=getattr(driver, "lidar_mount", None),
+        storey=storey,
+        settings=session_meta_settings(options, config.registration),
     )
     cmap, m, x, checks = (
         ClassMap(config.detector.classes),

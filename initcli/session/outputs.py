@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bimtools.fonts import unicode_fonts
 from bimtools.site.load import StoreyModel
 from initcli.core.geometry.se2 import SESSION_DIGITS, Pose2D, pose_json
 from initcli.session.result import SessionResult
@@ -78,6 +79,7 @@ def _ellipse(cov: np.ndarray, scale: float = 2.0) -> np.ndarray:
     return (vectors @ np.vstack([values[0] * np.cos(t), values[1] * np.sin(t)])).T
 
 
+@unicode_fonts  # storey names in any script: DejaVu Sans, then any CJK font installed
 def render_report(
     path: Path,
     result: SessionResult,

@@ -2,7 +2,7 @@
 (Eq. 1-2), the confirmed features (Eq. 3), and the match step (Algorithm 1) on the log so far.
 
 Every record the session acts on goes to its detection log as it happens (through
-:class:`initcli.io.detection_log.LogWriter`), and the match step runs the same pipeline as
+:class:`initcli.io.log_writer.LogWriter`), and the match step runs the same pipeline as
 ``bim-init match`` on that log, so the log replays to the same verdict and pose.
 """
 
@@ -24,13 +24,13 @@ from initcli.io.detection_log import (
     Detections,
     FeatureRecord,
     HypothesesRecord,
-    LogWriter,
     Meta,
     Odom,
     Record,
     Scan,
     Truth,
 )
+from initcli.io.log_writer import LogWriter
 from initcli.match.landmarks import feature_records
 from initcli.match.pipeline import Hypothesis, MatchOptions, MatchReport, match_log
 from initcli.match.sightings import image_sightings

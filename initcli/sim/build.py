@@ -72,7 +72,7 @@ def build_sim(
     # at the building's footprint (initcli.sim.fence).
     built.obstacles.extend(site_fence(model.grid))
     static = SimWorld.from_obstacles(built.obstacles, clutter)
-    workers = place_workers(model, circulation, static.static, int(config.sim.workers), rng)
+    workers = place_workers(model, circulation, static.static, int(config.sim.people), rng)
     world = SimWorld.from_obstacles(built.obstacles, clutter, workers)
     # Starts lie where a robot can be: the free space connected to the corridors with the doors as
     # the simulated world has them (closed leaves, hoardings), material stacks, and the robot's size.

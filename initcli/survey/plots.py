@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from bimkit.atomic import write_bytes_atomic
+from bimtools.fonts import unicode_fonts
 from initcli.survey.landmarks import Landmark
 from initcli.survey.run import StoreySurvey
 from initcli.survey.spaces import SHUT_IN_LABEL
@@ -124,6 +125,7 @@ def _lidar_twins(ax: Axes, result: StoreySurvey) -> None:
     ax.fill([], [], facecolor="none", edgecolor="0.2", hatch="///", label=LIDAR_TWIN_LABEL)  # the legend's
 
 
+@unicode_fonts  # storey names in any script: DejaVu Sans, then any CJK font installed
 def survey_png(
     path: Path,
     result: StoreySurvey,

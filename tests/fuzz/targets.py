@@ -123,7 +123,7 @@ def _map_beside() -> dict[str, bytes]:
 
 @cache
 def _log() -> bytes:
-    from initcli.io.detection_log import format_record
+    from initcli.io.log_writer import format_record
     from initcli.sim.synthetic_log import SimFeature, make_log, path_from_waypoints
 
     features = [SimFeature(f"D{i}", "door", 2.0 + 4 * i, 0.0, 0.0, 1.0) for i in range(3)]

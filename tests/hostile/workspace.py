@@ -17,7 +17,7 @@ from benchmarks._recordings import make_recording
 from bimtools.extract.output import write_site
 from bimtools.extract.pipeline import extract_site
 from bimtools.ifc.categories import DEFAULT_CATEGORIES
-from initcli.io.detection_log import write_log
+from initcli.io.log_writer import write_log
 from initcli.ros.bag_writer import BagMessage, write_bag
 from initcli.sim.synthetic_log import SimFeature, make_log, path_from_waypoints
 from tests.helpers import SAMPLES

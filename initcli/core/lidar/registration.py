@@ -32,6 +32,7 @@ Pure numpy (and OpenCV's correlation); the session decides what to do with the r
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import cv2
@@ -421,9 +422,27 @@ def register(
         far = best.pose.distance_to(rival.pose)
         crossed = f"; beams through walls {', '.join(f'{c:.3f}' for c in through)}" if through else ""
         why = (
-            f"{len(close)} place(s) fit within {params.margin:g}, one {far:.1f} m away"
-            f" {rival.fit:.2f} against {best.fit:.2f}{crossed}"
+            f"{len(close)} place(s) fit within {params.margin:g}{_elsewhere(best, close)}, one {far:.1f} m"
+            f" away{_on(best, rival)} {rival.fit:.2f} against {best.fit:.2f}{crossed}"
         )
         return Registration(ordered, False, why, len(points), close, through, doors_open)
     next_fit = distinct[0].fit if distinct else 0.0
     return Registration(ordered, True, f"fit {best.fit:.2f}, the next place {next_fit:.2f}", len(points))
+
+
+def _elsewhere(best: Candidate, places: Sequence[Candidate]) -> str:
+    """How many of ``places`` lie on each storey other than ``best``'s: " (2 on storey Level 2)",
+    or nothing when they all lie on its storey."""
+    counts: dict[str, int] = {}
+    for c in places:
+        if c.storey != best.storey:
+            counts[c.storey] = counts.get(c.storey, 0) + 1
+    if not counts:
+        return ""
+    return " (" + ", ".join(f"{n} on storey {name}" for name, n in counts.items()) + ")"
+
+
+def _on(best: Candidate, place: Candidate) -> str:
+    """``" on storey X:"`` when ``place`` lies on another storey than ``best`` (its distance is
+    then between the two storeys' plans), else nothing."""
+    return f" on storey {place.storey}:" if place.storey != best.storey else ""

@@ -7,7 +7,8 @@ import ifcopenshell.guid
 import numpy as np
 import pytest
 
-from bimtools.extract.pipeline import MERGE_DISTANCE, _placement_box, merge_duplicates
+from bimtools.extract.candidates import _placement_box
+from bimtools.extract.pipeline import MERGE_DISTANCE, merge_duplicates
 from bimtools.site.records import Feature
 
 

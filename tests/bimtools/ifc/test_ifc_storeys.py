@@ -23,7 +23,12 @@ def _storey(model: ifcopenshell.file, name: str | None, elevation: float | None,
 
 @pytest.mark.parametrize(
     ("name", "slug"),
-    [("Level 1", "Level_1"), ("  B1 / Car park ", "B1_Car_park"), ("L-2.5", "L-2.5"), ("///", "storey")],
+    [
+        ("Level 1", "Level_1"),
+        ("  B1 / Car park ", "B1_Car_park"),
+        ("L-2.5", "L-2_5"),
+        ("Уровень 1", "Уровень_1"),
+    ],
 )
 def test_storey_slug(name: str, slug: str) -> None:
     assert storey_slug(name) == slug

@@ -18,7 +18,7 @@ from typer.testing import CliRunner
 
 from bimtools.site.load import load_site
 from initcli.cli.main import app
-from initcli.io.detection_log import write_log
+from initcli.io.log_writer import write_log
 from initcli.sim.synthetic_log import SimFeature, make_log, path_from_waypoints
 
 runner = CliRunner()
@@ -289,7 +289,7 @@ EVAL = [
         "--sweep miss_rate: nan",
     ),
     ("--sweep alpha=-1", lambda w: ["--config", "eval.yaml", "--sweep", "alpha=-1"], "--sweep alpha"),
-    ("--sweep workers=1.5", lambda w: ["--config", "eval.yaml", "--sweep", "workers=1.5"], "whole numbers"),
+    ("--sweep people=1.5", lambda w: ["--config", "eval.yaml", "--sweep", "people=1.5"], "whole numbers"),
     (
         "--sweep odometry_drift=inf",
         lambda w: ["--config", "eval.yaml", "--sweep", "odometry_drift=inf"],

@@ -17,8 +17,8 @@ def test_help_lists_only_registered_commands() -> None:
     result = invoke("--help")
     assert result.exit_code == 0
     assert "match" in result.stdout
-    commands = result.stdout.split("Commands")[1]
-    names = [line.split()[1] for line in commands.splitlines() if line.startswith("│ ") and line[2:3].strip()]
+    commands = result.stdout.split("Commands:")[1]
+    names = [line.split()[0] for line in commands.splitlines() if line.startswith("  ") and line[2:3].strip()]
     registered = [c.name or c.callback.__name__ for c in app.registered_commands]
     registered += [g.name for g in app.registered_groups]
     assert "match" in names and sorted(names) == sorted(registered)  # only what exists

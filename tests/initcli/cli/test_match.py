@@ -15,7 +15,7 @@ import yaml
 from typer.testing import CliRunner
 
 from initcli.cli.main import app
-from initcli.io.detection_log import write_log
+from initcli.io.log_writer import write_log
 from initcli.sim.synthetic_floor import write_site_folder
 from initcli.sim.synthetic_log import SimFeature, make_log, path_from_waypoints
 from tests.helpers import SAMPLES, SCHEMAS

@@ -136,7 +136,7 @@ def test_ambiguous_start_triggers_active_exploration_when_it_is_on(tmp_path, act
         ("block_a", "0.8,11.0,180", {}, {}),  # at the dead end of the corridor, facing it
         # Heavy clutter, the paper's alpha: at 0.8 this start stays ambiguous for 150 m (its one
         # unique match, turned half round, is rejected by the scan fit); the explorer is the subject.
-        ("block_b", "20.0,11.0,0", {"clutter": 0.4, "workers": 6}, {"alpha": 0.5}),
+        ("block_b", "20.0,11.0,0", {"clutter": 0.4, "people": 6}, {"alpha": 0.5}),
     ],
 )
 def test_hard_starts_initialise(tmp_path, name, start, sim, matching):

@@ -47,7 +47,7 @@ SITE_KEYS = {
 # Options of ``bim-init match`` that are about input/output, not matching.
 # How a BAG is read (bag2log's options, initcli/cli/bag_options.py): not match settings.
 BAG_READING = set(inspect.signature(bag_options).parameters)
-NOT_SETTINGS = {"log", "site", "top", "json_out", "plot", "skip_bad"} | BAG_READING
+NOT_SETTINGS = {"ctx", "log", "site", "top", "json_out", "plot", "skip_bad"} | BAG_READING
 SESSION_OWN = {"storey", "drift_window"}  # same name and unit, a session-specific default
 
 

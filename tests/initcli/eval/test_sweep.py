@@ -21,8 +21,10 @@ def test_apply_sets_one_value_and_leaves_the_original_alone():
     swept = apply_sweep(config, parse_sweep("alpha=1.1"), 1.1)
     assert swept.matching.alpha == 1.1 and config.matching.alpha == MatchOptions().alpha
     assert swept.matching.beta == config.matching.beta
-    workers = apply_sweep(config, parse_sweep("workers=0,4"), 4.0)
-    assert workers.sim.workers == 4 and isinstance(workers.sim.workers, int)
+    people = apply_sweep(config, parse_sweep("people=0,4"), 4.0)
+    assert people.sim.people == 4 and isinstance(people.sim.people, int)
+    old = apply_sweep(config, parse_sweep("workers=0,3"), 3.0)  # the former name of the key
+    assert old.sim.people == 3
 
 
 def test_odometry_drift_scales_every_alpha():

@@ -14,7 +14,8 @@ import pytest
 
 from bimkit.errors import InputError
 from initcli.io.carmen import carmen_to_records, is_carmen
-from initcli.io.detection_log import Meta, Odom, Scan, read_log, write_log
+from initcli.io.detection_log import Meta, Odom, Scan, read_log
+from initcli.io.log_writer import write_log
 
 REAL_LIDAR = Path(__file__).resolve().parents[3].parent / "shared" / "real_lidar"
 ROOM = (-3.0, -2.0, 6.0, 4.0)

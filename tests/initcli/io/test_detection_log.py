@@ -23,8 +23,8 @@ from initcli.io.detection_log import (
     State,
     Truth,
     read_log,
-    write_log,
 )
+from initcli.io.log_writer import write_log
 from tests.helpers import SCHEMAS
 
 SCHEMA = json.loads((SCHEMAS / "detection_log.schema.json").read_text())

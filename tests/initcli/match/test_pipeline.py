@@ -12,7 +12,8 @@ from bimtools.site.load import load_site
 from initcli.core.features.classes import ClassMap
 from initcli.core.geometry.se2 import Pose2D
 from initcli.core.hypotheses.ranking import Verdict
-from initcli.io.detection_log import read_log, write_log
+from initcli.io.detection_log import read_log
+from initcli.io.log_writer import write_log
 from initcli.match.pipeline import MatchOptions, MatchReport, match_log, site_class_map
 from initcli.sim.synthetic_floor import write_site_folder
 from initcli.sim.synthetic_log import SimFeature, SyntheticParams, make_log, path_from_waypoints

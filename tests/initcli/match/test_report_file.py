@@ -10,7 +10,7 @@ import numpy as np
 
 from initcli.cli.exit_codes import match_exit_code
 from initcli.core.geometry.se2 import MATCH_DIGITS, SESSION_DIGITS, Pose2D, pose_json
-from initcli.io.detection_log import write_log
+from initcli.io.log_writer import write_log
 from initcli.match.pipeline import MatchOptions, run_match
 from initcli.match.report_file import RESULT_FORMAT, report_to_dict
 from initcli.sim.synthetic_floor import write_site_folder

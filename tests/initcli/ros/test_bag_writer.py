@@ -11,7 +11,8 @@ import yaml
 from typer.testing import CliRunner
 
 from initcli.cli.main import app
-from initcli.io.detection_log import read_log, write_log
+from initcli.io.detection_log import read_log
+from initcli.io.log_writer import write_log
 from initcli.match.pipeline import MatchOptions, run_match
 from initcli.ros.bag_reader import bag_to_records
 from initcli.ros.bag_source import BagSource

@@ -12,7 +12,8 @@ import pytest
 
 from bimkit.errors import InputError
 from initcli.core.geometry.se2 import Pose2D
-from initcli.io.detection_log import Meta, Odom, Scan, read_log, write_log
+from initcli.io.detection_log import Meta, Odom, Scan, read_log
+from initcli.io.log_writer import write_log
 from initcli.ros.bag_reader import bag_to_records
 from initcli.ros.bag_writer import BagMessage, odometry, transform_stamped, write_bag
 from initcli.ros.records import LASER_SCAN, ODOMETRY, TF_MESSAGE

@@ -12,7 +12,8 @@ import pytest
 from bimkit.errors import InputError
 from initcli.core.geometry.projection import CameraIntrinsics, CameraMount
 from initcli.core.geometry.se2 import Pose2D
-from initcli.io.detection_log import Detections, HypothesesRecord, Meta, Odom, write_log
+from initcli.io.detection_log import Detections, HypothesesRecord, Meta, Odom
+from initcli.io.log_writer import write_log
 from initcli.ros.nav2 import (
     covariance_6x6,
     hypothesis_poses,

@@ -18,7 +18,8 @@ from initcli.core.geometry.projection import CameraIntrinsics
 from initcli.core.geometry.se2 import Pose2D
 from initcli.core.verify.checks import CameraView
 from initcli.drivers.base import SensorFrame
-from initcli.io.detection_log import read_log, write_log
+from initcli.io.detection_log import read_log
+from initcli.io.log_writer import write_log
 from initcli.match.pipeline import Hypothesis, MatchOptions, MatchReport, match_log
 from initcli.match.sightings import sightings_from_log
 from initcli.session.claims import ClaimChecks

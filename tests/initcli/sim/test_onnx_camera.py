@@ -23,7 +23,7 @@ def test_onnx_session_completes(tmp_path):
     doc["detector"].update({"kind": "onnx", "model": "default"})
     doc["limits"]["max_distance"] = 60
     doc["camera"].update({"width": 320, "height": 240, "fx": 160, "fy": 160, "cx": 160, "cy": 120})
-    doc["sim"].update({"clutter": 0.0, "workers": 0})
+    doc["sim"].update({"clutter": 0.0, "people": 0})
     config = tmp_path / "onnx.yaml"
     config.write_text(yaml.safe_dump(doc))
     result = CliRunner().invoke(

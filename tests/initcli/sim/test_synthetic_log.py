@@ -8,10 +8,7 @@ from pathlib import Path
 
 import jsonschema
 
-from initcli.io.detection_log import (
-    LogWriter,
-    format_record,
-)
+from initcli.io.log_writer import LogWriter, format_record
 from initcli.sim.synthetic_log import SimFeature, make_log, path_from_waypoints
 from tests.helpers import SCHEMAS
 

@@ -13,7 +13,8 @@ from initcli.core.features.detection_filter import DetectionFilter, Sighting
 from initcli.core.geometry.projection import CameraIntrinsics
 from initcli.core.hypotheses.ranking import Verdict
 from initcli.core.verify.checks import VerificationParams
-from initcli.io.detection_log import read_log, write_log
+from initcli.io.detection_log import read_log
+from initcli.io.log_writer import write_log
 from initcli.match.pipeline import MatchOptions, run_match, site_class_map
 from initcli.sim.synthetic_floor import write_site_folder
 from initcli.sim.synthetic_log import SimFeature, SyntheticParams, make_log, path_from_waypoints

@@ -99,7 +99,8 @@ def test_a_landmark_seen_fewer_than_k_times_is_not_confirmed_and_far_ones_are_dr
 
 def test_confirmed_landmarks_go_into_the_detection_log_as_lidar_features(tmp_path) -> None:
     from initcli.core.geometry.projection import DEFAULT_CAMERA, DEFAULT_MOUNT
-    from initcli.io.detection_log import Meta, landmark_records, read_log, write_log
+    from initcli.io.detection_log import Meta, read_log
+    from initcli.io.log_writer import landmark_records, write_log
 
     found = accumulate_landmarks(_drive(l_room(), [(1.0, 1.0), (7.0, 1.0)]), PARAMS)
     assert found
