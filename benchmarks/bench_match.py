@@ -41,7 +41,8 @@ from bimtools.site.load import Site, load_site  # noqa: E402
 from initcli.core.geometry.se2 import Pose2D  # noqa: E402
 from initcli.core.hypotheses.matching import BimIndex, Matcher  # noqa: E402
 from initcli.core.hypotheses.ranking import Verdict  # noqa: E402
-from initcli.io.detection_log import read_log, write_log  # noqa: E402
+from initcli.io.detection_log import read_log  # noqa: E402
+from initcli.io.log_writer import write_log  # noqa: E402
 from initcli.match.pipeline import MatchOptions, match_log, site_class_map  # noqa: E402
 from initcli.sim.synthetic_floor import SyntheticFloor, doors_along, make_floor, write_site_folder  # noqa: E402
 from initcli.sim.synthetic_log import (  # noqa: E402
