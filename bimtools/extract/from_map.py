@@ -214,7 +214,6 @@ def read_map_features(
     rows, cols = grid.shape
     x0, y0 = grid.origin[0], grid.origin[1]
     x1, y1 = x0 + cols * grid.resolution, y0 + rows * grid.resolution
-    seen: dict[str, int] = {}
     features: list[Feature] = []
     for line, f in read_feature_rows(path):
         category = known.get(f.category.lower())
@@ -224,9 +223,6 @@ def read_map_features(
                 f"{path}:{line}: column Category: unknown category {shown!r}; known: "
                 f"{', '.join(known.values())}"
             )
-        if f.id in seen:
-            raise InputError(f"{path}:{line}: duplicate ID {f.id!r} (first on line {seen[f.id]})")
-        seen[f.id] = line
         if f.storey and f.storey != storey:
             raise InputError(
                 f"{path}:{line}: column Storey: {f.storey!r} is not the map's storey {storey!r} "

@@ -15,6 +15,8 @@ from bimkit.checks import read_text
 from bimkit.errors import InputError
 from bimtools.site.records import EXTRA_COLUMNS, FEATURE_COLUMNS, TABLE1_COLUMNS, Feature
 
+MAX_FEATURE_SIZE = 50.0  # m: the widest or tallest door, lift or stairs a building has, and more
+
 
 def format_features(features: Iterable[Feature]) -> str:
     """Render features as CSV text (metres, 4 decimals; normals 6 decimals)."""
@@ -85,6 +87,7 @@ def _rows(path: Path, reader: csv.DictReader[str]) -> list[tuple[int, Feature]]:
         )
     reader.fieldnames = header
     features: list[tuple[int, Feature]] = []
+    first_line: dict[tuple[str, str], int] = {}  # (ID, Storey) -> the line it was first on
     for row in reader:
         line = reader.line_num
         if not any((v or "").strip() for v in row.values() if isinstance(v, str)):
@@ -113,8 +116,27 @@ def _rows(path: Path, reader: csv.DictReader[str]) -> list[tuple[int, Feature]]:
             ifc_class=values["IfcClass"],
             name=values["Name"],
         )
+        for key, size in (("Width", feature.width), ("Height", feature.height)):
+            if not 0.0 <= size <= MAX_FEATURE_SIZE:
+                raise InputError(
+                    f"{path}:{line}: column {key} is {size:g} m; no door, lift or stairs is outside"
+                    f" 0 to {MAX_FEATURE_SIZE:g} m"
+                )
+        seen = first_line.setdefault((feature.id, feature.storey), line)
+        if seen != line:
+            raise InputError(
+                f"{path}:{line}: ID {feature.id} on storey {feature.storey!r} is on line {seen} already"
+                " (one row per element and storey)"
+            )
         features.append((line, feature))
     return features
 
 
-__all__ = ["EXTRA_COLUMNS", "format_features", "read_feature_rows", "read_features", "write_features"]
+__all__ = [
+    "EXTRA_COLUMNS",
+    "MAX_FEATURE_SIZE",
+    "format_features",
+    "read_feature_rows",
+    "read_features",
+    "write_features",
+]

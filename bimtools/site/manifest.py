@@ -53,6 +53,12 @@ class SiteManifest:
 
     @classmethod
     def from_dict(cls, doc: dict[str, Any], where: str = "site.json") -> SiteManifest:
+        fmt = doc.get("format", SITE_FORMAT) if isinstance(doc, dict) else SITE_FORMAT
+        if fmt != SITE_FORMAT:
+            raise InputError(
+                f"{where}: format {fmt!r} is not one this bim-init reads ({SITE_FORMAT}); extract the site"
+                " again with this version, or update bim-init"
+            )
         try:
             return cls(
                 source_file=doc["source"]["file"],

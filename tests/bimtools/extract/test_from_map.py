@@ -191,7 +191,7 @@ def test_features_are_copied_in(tmp_path):
         ("D1,Window,1,4,0,1,0.9,2.1\n", "doors.csv:2: column Category: unknown category 'Window'"),
         (
             "D1,Door,1,4,0,1,0.9,2.1\nD1,Door,2,4,0,1,0.9,2.1\n",
-            "doors.csv:3: duplicate ID 'D1' (first on line 2)",
+            "doors.csv:3: ID D1 on storey '' is on line 2 already",
         ),
         ("D1,Door,one,4,0,1,0.9,2.1\n", "doors.csv:2: column X: expected a number, got 'one'"),
         ("D1,Door,100,4,0,1,0.9,2.1\n", "doors.csv:2: (100, 4) lies outside the map"),
@@ -220,7 +220,9 @@ def test_cli_refusals_are_one_line_before_any_output(tmp_path):
     assert_bad_input(run_extract(str(good), "-o", out, cwd=tmp_path), "corridor.pgm", "header disagrees")
     sheared.write_bytes(data)
     assert_bad_input(
-        run_extract(str(good), "-o", out, "--features", str(csv), cwd=tmp_path), "doors.csv:3", "duplicate ID"
+        run_extract(str(good), "-o", out, "--features", str(csv), cwd=tmp_path),
+        "doors.csv:3",
+        "is on line 2 already",
     )
     # the output folder may not hold the map it reads
     assert_bad_input(run_extract(str(good), "-o", str(tmp_path), cwd=tmp_path), "holds the input")

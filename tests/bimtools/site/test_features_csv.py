@@ -44,6 +44,15 @@ def test_hand_written_table1_is_enough(tmp_path):
             ":3: Norm_X, Norm_Y is the zero",
         ),
         ("ID,Category,X,Y,Norm_X,Norm_Y,Width,Height\n,Door,0,0,1,0,1,2\n", ":2: column ID is empty"),
+        (
+            "ID,Category,X,Y,Norm_X,Norm_Y,Width,Height\n1,Door,0,0,1,0,1000000,2\n",
+            ":2: column Width is 1e.06 m; no door",
+        ),
+        ("ID,Category,X,Y,Norm_X,Norm_Y,Width,Height\n1,Door,0,0,1,0,1,-2\n", ":2: column Height is -2 m"),
+        (
+            "ID,Category,X,Y,Norm_X,Norm_Y,Width,Height\n7,Door,0,0,1,0,1,2\n8,Lift,5,0,1,0,1,2\n7,Door,9,0,1,0,1,2\n",
+            ":4: ID 7 on storey '' is on line 2 already",
+        ),
     ],
 )
 def test_features_csv_errors_name_the_line(tmp_path, text, message):
@@ -64,3 +73,14 @@ def test_a_stray_carriage_return_is_one_line_of_error(tmp_path: Path) -> None:
     path.write_bytes(b"ID,Category,X,Y,Norm_X,Norm_Y,Width,Height\n1,Door,0,0,1,0\r\x01,1,2\n")
     with pytest.raises(InputError, match=r"features\.csv:\d+: "):
         read_features(path)
+
+
+def test_one_element_on_two_storeys_is_two_rows(tmp_path: Path) -> None:
+    """A lift has a feature per storey it serves, all with its GlobalId: not a duplicate."""
+    path = tmp_path / "features.csv"
+    head = "ID,Category,X,Y,Norm_X,Norm_Y,Width,Height,Storey,Elevation,IfcClass,Name\n"
+    path.write_text(
+        head + "L1,Lift,0,0,1,0,1,2,Level 1,0,IfcTransportElement,lift\n"
+        "L1,Lift,0,0,1,0,1,2,Level 2,3,IfcTransportElement,lift\n"
+    )
+    assert [f.storey for f in read_features(path)] == ["Level 1", "Level 2"]
