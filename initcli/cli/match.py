@@ -42,7 +42,7 @@ from initcli.cli.progress import message_progress
 from initcli.config.matching import MatchOptions
 from initcli.core.geometry.se2 import Pose2D
 from initcli.core.verify.checks import TRACK_HYPOTHESES, Verification
-from initcli.io.detection_log import log_camera_absent, read_meta
+from initcli.io.detection_log import read_meta
 from initcli.match.pipeline import run_match
 from initcli.match.recorded import recorded_settings
 from initcli.match.report import MatchReport
@@ -232,13 +232,14 @@ def match(
         with message_progress() as progress, log_or_bag(log, bag, progress) as log_path:
             options.validate()
             # a session's log: the storey and settings it recorded for the options not given
-            recorded = recorded_settings(read_meta(log_path), options, given, str(log))
+            meta = read_meta(log_path)
+            recorded = recorded_settings(meta, options, given, str(log))
             options = recorded.options
             listed = replace(options, top=max(top, TRACK_HYPOTHESES)) if verify else options
             report = run_match(log_path, site, listed, source=log)
             if recorded.note is not None:
                 report.notes.insert(0, recorded.note)
-            camera_absent = log_camera_absent(log_path)
+            camera_absent = meta is not None and meta.camera_absent
             if verify:
                 checks = check_and_register(
                     log_path, site, report, options.skip_bad, top, recorded.registration

@@ -61,7 +61,6 @@ from initcli.io.log_records import (
 
 __all__ = [
     "is_detection_log",
-    "log_camera_absent",
     "read_meta",
     "MAX_ANGLE",
     "MAX_COORDINATE",
@@ -303,21 +302,6 @@ def is_detection_log(path: Path | str) -> bool:
     except (OSError, ValueError):
         return False
     return isinstance(doc, dict) and doc.get("type") == "meta" and "version" in doc
-
-
-def log_camera_absent(path: Path | str) -> bool:
-    """Whether the log's meta record says the camera was absent (False when it cannot be read)."""
-    if not Path(path).is_file():
-        return False
-    try:
-        with open(path, encoding="utf-8-sig") as handle:
-            for raw in handle:
-                if raw.strip():
-                    value = json.loads(raw) if len(raw) <= MAX_LOG_LINE_BYTES else None
-                    return isinstance(value, dict) and value.get("camera_absent") is True
-    except (OSError, ValueError):
-        return False
-    return False
 
 
 def read_meta(path: Path | str) -> Meta | None:

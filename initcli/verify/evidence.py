@@ -207,9 +207,7 @@ class PathEvidence:
     ) -> None:
         raw = ScanSample(odom, np.asarray(angles), np.asarray(ranges), range_max)
         self.latest_raw = raw
-        self.scans.append(
-            ScanSample(odom, raw.angles[::SCAN_BEAM_STEP], raw.ranges[::SCAN_BEAM_STEP], range_max)
-        )
+        self.scans.append(raw.thinned(SCAN_BEAM_STEP))
         self.scan_travel.append(travel)
         if len(self.scans) > 4 * MAX_SCANS:
             del self.scans[: -2 * MAX_SCANS]
@@ -217,7 +215,7 @@ class PathEvidence:
         if not self.track_travel or travel - self.track_travel[-1] >= TRACK_STEP_M:
             s = self.scans[-1]
             k = TRACK_BEAM_STEP
-            self.track.append(ScanSample(s.odom, s.angles[::k], s.ranges[::k], s.range_max))
+            self.track.append(s.thinned(k))
             self.track_raw.append(raw)
             self.track_travel.append(travel)
             old = next((i for i, d in enumerate(self.track_travel) if travel - d <= TRACK_KEPT_M), 0)

@@ -116,10 +116,10 @@ class SubmapRegistration:
         newest = path.latest_raw if lines > 0 else (path.scans[-1] if path.scans else None)
         if newest is not None and (not scans or newest.odom != scans[-1].odom):
             # the newest scan too (a turn on the spot adds no travel, so no scan along the path)
-            scans = [*scans, newest if lines > 0 else _thinned(newest, TRACK_BEAM_STEP)]
+            scans = [*scans, newest if lines > 0 else newest.thinned(TRACK_BEAM_STEP)]
         if lines <= 0:
             return scans
-        return [_thinned(wall_beams(s, lines), SCAN_BEAM_STEP * TRACK_BEAM_STEP) for s in scans]
+        return [wall_beams(s, lines).thinned(SCAN_BEAM_STEP * TRACK_BEAM_STEP) for s in scans]
 
     def attempt(self, path: PathEvidence, travel: float) -> tuple[Registration, Pose2D | None]:
         """Register the submap of the recent path: the outcome, and the odom pose of the submap's last
@@ -143,10 +143,6 @@ class SubmapRegistration:
             return Registration((), False, "no scans" if not scans else "no map", 0), None
         ends = BeamEnds.of(scans)
         return register(ends, self.maps(), self.params, self.tolerance), ends.last
-
-
-def _thinned(scan: ScanSample, step: int) -> ScanSample:
-    return ScanSample(scan.odom, scan.angles[::step], scan.ranges[::step], scan.range_max)
 
 
 def door_openings(features: Iterable[Feature], cmap: ClassMap) -> np.ndarray:

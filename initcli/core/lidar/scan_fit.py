@@ -29,6 +29,10 @@ class ScanSample:
     ranges: np.ndarray
     range_max: float
 
+    def thinned(self, step: int) -> ScanSample:
+        """The scan with every ``step`` th beam."""
+        return ScanSample(self.odom, self.angles[::step], self.ranges[::step], self.range_max)
+
 
 @dataclass(frozen=True)
 class BeamEnds:
