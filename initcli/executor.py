@@ -39,6 +39,7 @@ __all__ = [
 EXECUTORS = ("local", "ray")
 PROBE_TIMEOUT_S = 5.0  # s: a TCP connection to the Ray address
 CONNECT_TIMEOUT_S = 20.0  # s: ray.init on an address that accepts connections (both within 30 s)
+MANAGER_JOIN_S = 10.0  # s: the pool's manager thread, once its workers are gone
 
 
 def default_workers() -> int:
@@ -113,18 +114,23 @@ class LocalExecutor:
         if not cancel:
             pool.shutdown(wait=True)
             return
-        processes = list(getattr(pool, "_processes", {}).values())  # no public way to stop them
+        # No public way to stop them: take the workers and the pool's manager thread before
+        # shutdown(), which drops its references to both.
+        processes = list(getattr(pool, "_processes", {}).values())
+        manager = getattr(pool, "_executor_manager_thread", None)
         pool.shutdown(wait=False, cancel_futures=True)
         for process in processes:
             process.terminate()
         for process in processes:
             process.join(timeout=5)
-        # Let the pool's manager thread see its workers gone and close its wake-up pipe now: left to
-        # the interpreter's exit, the exit hook may write to that pipe as the thread closes it
-        # (Python 3.11: "Exception ignored ... Bad file descriptor" after an interrupt).
-        manager = getattr(pool, "_executor_manager_thread", None)
+            if process.is_alive():
+                process.kill()
+                process.join(timeout=5)
+        # Let the manager thread see its workers gone (it fails their futures) and close its
+        # wake-up pipe now: left to the interpreter's exit, the exit hook may write to that pipe as
+        # the thread closes it (Python 3.11: "Exception ignored ... Bad file descriptor").
         if manager is not None:
-            manager.join(timeout=5)
+            manager.join(timeout=MANAGER_JOIN_S)
 
 
 class RayExecutor:
