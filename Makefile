@@ -88,7 +88,7 @@ samples: install
 	$(BIN)/python -m bimtools.samples --out sample_models
 
 # Every benchmark, benchmarks/bench_NAME.py (tests/benchmarks checks that this names them all).
-BENCHMARKS := bag2log claims detector eval extract lidar_twins match matcher_scale offline_match raycast real_lidar registration_scale session survey
+BENCHMARKS := bag2log claims detector eval extract lidar_twins match matcher_scale offline_match raycast real_lidar registration_scale session survey watch
 
 # Each benchmark whole (bench_claims alone takes about 40 min on 2 cores; bench_extract also
 # measures the real models in ../shared/ifc where that folder is).

@@ -3,7 +3,8 @@
 Commands: ``match`` (:mod:`initcli.cli.match`), ``run`` (:mod:`initcli.cli.run`), ``eval``
 (:mod:`initcli.cli.eval`), ``detector`` (:mod:`initcli.cli.detector`), ``bag2log``
 (:mod:`initcli.cli.bag2log`), ``publish-pose`` (:mod:`initcli.cli.publish_pose`), ``survey``
-(:mod:`initcli.cli.survey`). Bad input exits with 2 and one line on stderr, never a traceback.
+(:mod:`initcli.cli.survey`), ``watch`` (:mod:`initcli.cli.watch`). Bad input exits with 2 and one
+line on stderr, never a traceback.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from initcli.cli.match import match
 from initcli.cli.publish_pose import publish_pose
 from initcli.cli.run import run as run_session_command
 from initcli.cli.survey import survey
+from initcli.cli.watch import watch
 
 __all__ = ["app", "main"]
 
@@ -44,6 +46,7 @@ app.command("eval")(evaluate)
 app.command("bag2log")(bag2log)
 app.command("publish-pose")(publish_pose)
 app.command("survey")(survey)
+app.command("watch")(watch)
 app.add_typer(detector_app, name="detector")
 
 

@@ -17,6 +17,7 @@ from bimkit.settings import section, setting
 from initcli.config.exploration import ExplorationSection
 from initcli.config.matching import SCORE_THRESHOLD, MatchingSettings
 from initcli.config.sim import SimSection
+from initcli.config.watch import AMCL_POSE_TOPIC, WatchSection
 from initcli.core.lidar.registration_params import RegistrationParams
 from initcli.core.verify.params import VerificationParams
 
@@ -287,7 +288,7 @@ class ConfirmSection:  # nav2.confirm (initcli/ros/delivery.py)
         0.3, "m: AMCL's pose within this of ours counts as taken", above=0, maximum=10
     )
     tolerance_deg: float = setting(5.0, "degrees: AMCL's heading within this of ours", above=0, maximum=180)
-    amcl_topic: str = setting("/amcl_pose", "geometry_msgs/PoseWithCovarianceStamped: AMCL's estimate")
+    amcl_topic: str = setting(AMCL_POSE_TOPIC, "geometry_msgs/PoseWithCovarianceStamped: AMCL's estimate")
     republish_period: float = setting(
         2.0, "s: /initialpose is sent again this often until confirmed", above=0, maximum=600
     )
@@ -401,6 +402,9 @@ class SessionConfig:
     registration: RegistrationParams = section(
         RegistrationParams,
         "the lidar submap registered over the BIM map when no camera claim exists (beyond the paper)",
+    )
+    watch: WatchSection = section(
+        WatchSection, "bim-init watch: the localiser's pose checked against the model, and re-initialised"
     )
     source: Path | None = None  # the YAML file (not a setting)
 

@@ -19,6 +19,8 @@ Schema: ``schemas/detection_log.schema.json`` (one line = one instance). Records
   sensor found it: ``camera`` (the default: a log without the field is a camera log) or ``lidar``
   (a wall corner, column corner or opening, see :mod:`initcli.core.lidar.landmark_tracks`).
 - ``truth`` (optional, simulation only: true pose in the BIM frame).
+- ``localiser`` (optional): the pose a tracking localiser (AMCL) published, in the map (site)
+  frame: what ``bim-init watch`` checks (``bag2log --pose-topic``).
 - ``state``, ``hypotheses`` (optional, written by ``bim-init run``): kept as plain data.
 
 Unknown record types are skipped with one warning (forward compatibility); unknown keys in a
@@ -51,6 +53,7 @@ from initcli.io.log_records import (
     Detections,
     FeatureRecord,
     HypothesesRecord,
+    Localiser,
     Meta,
     Odom,
     Record,
@@ -262,6 +265,8 @@ def _parse_body(kind: str, o: dict[str, Any]) -> Record:
         )
     if kind == "truth":
         return Truth(_t(o), _coord(o, "x"), _coord(o, "y"), _yaw(o))
+    if kind == "localiser":
+        return Localiser(_t(o), _coord(o, "x"), _coord(o, "y"), _yaw(o))
     if kind in ("state", "hypotheses"):
         t = _num(o, "t") if "t" in o else None
         data = {k: v for k, v in o.items() if k != "type"}

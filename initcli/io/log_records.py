@@ -18,6 +18,7 @@ __all__ = [
     "FeatureRecord",
     "HypothesesRecord",
     "LOG_VERSION",
+    "Localiser",
     "Meta",
     "NO_CAMERA",
     "NO_MOUNT",
@@ -33,7 +34,7 @@ LOG_VERSION = 1
 # the camera of a log without one (Meta.camera_absent): a placeholder that sees nothing
 NO_CAMERA = CameraIntrinsics(fx=1.0, fy=1.0, cx=0.5, cy=0.5, width=1, height=1)
 NO_MOUNT = CameraMount(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-RECORD_TYPES = ("meta", "odom", "detections", "feature", "scan", "truth", "state", "hypotheses")
+RECORD_TYPES = ("meta", "odom", "detections", "feature", "scan", "truth", "localiser", "state", "hypotheses")
 
 
 @dataclass(frozen=True)
@@ -116,6 +117,21 @@ class Truth:
 
 
 @dataclass(frozen=True)
+class Localiser:
+    """The pose a tracking localiser (Nav2's AMCL) held, in the map (site) frame, as it published
+    it: what ``bim-init watch`` checks."""
+
+    t: float
+    x: float
+    y: float
+    yaw: float
+
+    @property
+    def pose(self) -> Pose2D:
+        return Pose2D(self.x, self.y, self.yaw)
+
+
+@dataclass(frozen=True)
 class State:
     """Whatever ``bim-init run`` decided; ``data`` is the record without ``type``."""
 
@@ -129,7 +145,7 @@ class HypothesesRecord:
     data: dict[str, Any] = field(default_factory=dict, compare=False)
 
 
-Record = Union[Meta, Odom, Detections, FeatureRecord, Scan, Truth, State, HypothesesRecord]  # noqa: UP007
+Record = Union[Meta, Odom, Detections, FeatureRecord, Scan, Truth, Localiser, State, HypothesesRecord]  # noqa: UP007
 
 
 @dataclass
@@ -171,3 +187,7 @@ class DetectionLog:
     @property
     def truth(self) -> list[Truth]:
         return self.of_type(Truth)
+
+    @property
+    def localiser(self) -> list[Localiser]:
+        return self.of_type(Localiser)

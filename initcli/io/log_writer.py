@@ -15,6 +15,7 @@ from initcli.io.log_records import (
     Detections,
     FeatureRecord,
     HypothesesRecord,
+    Localiser,
     Meta,
     Odom,
     Record,
@@ -94,6 +95,8 @@ def record_to_dict(rec: Record) -> dict[str, Any]:
         }
     if isinstance(rec, Truth):
         return {"type": "truth", "t": rec.t, "x": rec.x, "y": rec.y, "yaw": rec.yaw}
+    if isinstance(rec, Localiser):
+        return {"type": "localiser", "t": rec.t, "x": rec.x, "y": rec.y, "yaw": rec.yaw}
     if isinstance(rec, State | HypothesesRecord):
         kind = "state" if isinstance(rec, State) else "hypotheses"
         out = {"type": kind, **{k: v for k, v in rec.data.items() if k != "type"}}

@@ -30,9 +30,10 @@ from bimkit.errors import InputError
 from initcli.core.geometry.depth import window_depth
 from initcli.core.geometry.projection import CameraIntrinsics, CameraMount, mount_from_optical
 from initcli.core.geometry.se2 import Pose2D, wrap_angle
-from initcli.io.detection_log import DetectedObject, Detections, Meta, Odom, Record, Scan
+from initcli.io.detection_log import DetectedObject, Detections, Localiser, Meta, Odom, Record, Scan
 from initcli.io.laser import check_odometry, check_scan_geometry, no_returns, scan_in_base
 from initcli.io.log_records import NO_CAMERA, NO_MOUNT
+from initcli.ros.bag_localiser import localiser_records
 from initcli.ros.bag_source import BagSource
 from initcli.ros.bag_topics import choose_topics
 from initcli.ros.messages import (
@@ -227,7 +228,7 @@ def bag_to_records(
         )
         origin = Pose2D(float(trajectory.x[0]), float(trajectory.y[0]), float(trajectory.yaw[0])).inverse()
 
-        records: list[Odom | Scan | Detections] = []  # each with a time stamp t
+        records: list[Odom | Scan | Detections | Localiser] = []  # each with a time stamp t
         for i in range(len(trajectory.t)):
             p = origin * Pose2D(float(trajectory.x[i]), float(trajectory.y[i]), float(trajectory.yaw[i]))
             records.append(Odom(float(trajectory.t[i]), p.x, p.y, float(wrap_angle(p.yaw))))
@@ -235,6 +236,9 @@ def bag_to_records(
         scans, lidar_mount = first.scans_in_base(base)
         records.extend(scans)
         stats.scans = len(scans)
+        localiser = localiser_records(first.localiser, first.tf_edges, trajectory.at, topics, options)
+        records.extend(localiser)
+        stats.localiser = len(localiser)
         if topics.perception is not None:
             # Pass 2: perception, each with the depth image nearest in time.
             _PerceptionPass(topics, options, stats, camera, trajectory, origin, records).read(source, tick)
@@ -308,12 +312,13 @@ class _FirstPass:
     scans: list[_RawScan] = field(default_factory=list)
     clock: dict[str, list[float]] = field(default_factory=dict)  # stamps per topic
     odom_children: set[str] = field(default_factory=set)  # every child frame the odometry named
+    localiser: list[tuple[float, str, Pose2D]] = field(default_factory=list)  # t, frame, pose
 
     @staticmethod
     def read(source: BagSource, topics: BagTopics, tick: Callable[[], None]) -> _FirstPass:
         """Read pass 1; InputError when a topic's clock jumps back."""
         first = _FirstPass(topics)
-        wanted = (topics.camera_info, topics.odom, topics.tf, topics.tf_static, topics.scan)
+        wanted = (topics.camera_info, topics.odom, topics.tf, topics.tf_static, topics.scan, topics.localiser)
         for name, bag_ns, msg in source.messages([t.name for t in wanted if t]):
             tick()
             first.add(name, bag_ns, msg)
@@ -348,6 +353,11 @@ class _FirstPass:
             self.odom_child = child or self.odom_child
             if child:
                 self.odom_children.add(child)
+        elif topics.localiser is not None and name == topics.localiser.name:
+            p, q = msg.pose.pose.position, msg.pose.pose.orientation
+            finite(name, "a localiser pose", p.x, p.y, q.x, q.y, q.z, q.w)
+            pose = Pose2D(float(p.x), float(p.y), quaternion_yaw(q.x, q.y, q.z, q.w))
+            self.localiser.append((t, frame_name(msg.header.frame_id), pose))
         elif topics.scan is not None and name == topics.scan.name:
             where = f"{name} (message {len(self.scans) + 1}, t={t:.3f} s)"
             finite(
@@ -462,7 +472,7 @@ class _PerceptionPass:
         camera: CameraIntrinsics,
         trajectory: _Trajectory,
         origin: Pose2D,
-        records: list[Odom | Scan | Detections],
+        records: list[Odom | Scan | Detections | Localiser],
     ) -> None:
         self.topics = topics
         self.options = options

@@ -6,10 +6,12 @@ colour image, compressed image or Detection2DArray) is read for its laser scan a
 from __future__ import annotations
 
 from collections.abc import Iterable
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from bimkit.errors import InputError
 from initcli.ros.records import (
+    AMCL_POSE_TOPIC,
     CAMERA_INFO,
     COMPRESSED_IMAGE,
     DEPTH_ENCODINGS,
@@ -17,6 +19,8 @@ from initcli.ros.records import (
     IMAGE,
     LASER_SCAN,
     ODOMETRY,
+    POSE_FROM_TF,
+    POSE_WITH_COVARIANCE_STAMPED,
     TF_MESSAGE,
     Bag2LogOptions,
     BagTopics,
@@ -65,8 +69,29 @@ def _encoding(source: BagSource, topic: Topic) -> str:
 
 def choose_topics(source: BagSource, options: Bag2LogOptions) -> BagTopics:
     """The topics to read; InputError naming the candidates when the choice is not clear."""
+    topics = _sensor_topics(source, options)
+    return replace(topics, localiser=_localiser_topic(source, options))
+
+
+def _localiser_topic(source: BagSource, options: Bag2LogOptions) -> Topic | None:
+    """``--pose-topic`` (a PoseWithCovarianceStamped; ``tf``: /tf map -> odom, read with the
+    transforms), else /amcl_pose when the bag has it as one, else None."""
+    if options.pose_topic == POSE_FROM_TF:
+        if source.topics.get("/tf", Topic("", "")).msgtype != TF_MESSAGE:
+            raise InputError(f"{source.path}: --pose-topic tf, but the bag has no /tf")
+        return None
+    if options.pose_topic is not None:
+        kinds = (POSE_WITH_COVARIANCE_STAMPED,)
+        return _pick(source, options.pose_topic, kinds, "localiser pose", "--pose-topic", True)
+    amcl = source.topics.get(AMCL_POSE_TOPIC)
+    return amcl if amcl is not None and amcl.msgtype == POSE_WITH_COVARIANCE_STAMPED else None
+
+
+def _sensor_topics(source: BagSource, options: Bag2LogOptions) -> BagTopics:
     if options.image_topic and options.detections_topic:
         raise InputError("give --image-topic or --detections-topic, not both")
+    if options.lidar_only:
+        return _lidar_topics(source, options)
     images = [t for t in source.topics.values() if t.msgtype == IMAGE]
     encodings = {t.name: _encoding(source, t) for t in images}
     if _camera_absent(source, options, images, encodings):

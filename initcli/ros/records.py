@@ -7,9 +7,14 @@ from pathlib import Path
 
 import numpy as np
 
+from initcli.config.watch import AMCL_POSE_TOPIC, POSE_FROM_TF
 from initcli.detector import DETECTOR_CONFIDENCE
 
 __all__ = [
+    "AMCL_POSE_TOPIC",
+    "DIAGNOSTICS_TOPIC",
+    "DIAGNOSTIC_ARRAY",
+    "POSE_FROM_TF",
     "Bag2LogOptions",
     "Bag2LogStats",
     "BagTopics",
@@ -54,6 +59,9 @@ DEPTH_ENCODINGS = ("16UC1", "32FC1", "mono16")  # 16UC1 / mono16: millimetres; 3
 
 # Topic names bim-init writes and publishes.
 INITIALPOSE_TOPIC = "/initialpose"
+DIAGNOSTICS_TOPIC = "/diagnostics"
+DIAGNOSTIC_ARRAY = "diagnostic_msgs/msg/DiagnosticArray"
+
 HYPOTHESES_TOPIC = "/bim_init/hypotheses"
 STATE_TOPIC = "/bim_init/state"
 MAP_TOPIC = "/map"
@@ -82,6 +90,9 @@ class BagTopics:
     tf: Topic | None
     tf_static: Topic | None
     scan: Topic | None
+    # the localiser's pose (geometry_msgs/PoseWithCovarianceStamped, /amcl_pose by default; None:
+    # not read, or from /tf map -> odom when Bag2LogOptions.pose_topic is "tf")
+    localiser: Topic | None = None
 
     @property
     def camera_absent(self) -> bool:
@@ -113,6 +124,10 @@ class Bag2LogOptions:
     camera_info_topic: str | None = None
     odom_topic: str | None = None
     scan_topic: str | None = None
+    # the localiser's pose: a PoseWithCovarianceStamped topic, or "tf" (map -> odom on /tf); None:
+    # /amcl_pose when the bag has it
+    pose_topic: str | None = None
+    lidar_only: bool = False  # the camera left unread (bim-init watch): scans, odometry, the localiser
     base_frame: str | None = None  # None: the odometry's child frame
     model: str | Path = "default"
     rate: float | None = None  # Hz: images used at most this often; None: every image
@@ -130,6 +145,7 @@ class Bag2LogStats:
     objects_without_depth: int = 0
     odom: int = 0
     scans: int = 0
+    localiser: int = 0  # the localiser's poses (localiser records)
     without_depth: int = 0
     outside_odometry: int = 0
     skipped_rate: int = 0

@@ -1,0 +1,170 @@
+"""``bim-init watch --config site.yaml``: beside Nav2 on a live robot over rosbridge.
+
+The robot's odometry and scans (``robot.rosbridge``, the laser's mount from ``/tf_static``) and the
+localiser's pose (``watch.pose_topic``, ``/amcl_pose`` by default) feed a
+:class:`~initcli.watch.monitor.Watcher`, everything on the robot's clock (the odometry's stamps).
+The watch's state goes to ``/bim_init/state`` (std_msgs/String: ``waiting``, ``tracking``,
+``lost``) when it changes and once a second, with a ``diagnostic_msgs/DiagnosticArray`` on
+``/diagnostics`` (OK tracking, WARN waiting, ERROR lost; the check's numbers as values). A
+recovered pose goes to Nav2 as ``run`` sends one (:func:`initcli.ros.delivery.deliver_initial_pose`:
+``/initialpose`` stamped on the robot's clock, carried forward by odometry, confirmed on AMCL's
+pose topic). The watch runs until ``duration`` s pass (0: until Ctrl-C or SIGTERM)."""
+
+from __future__ import annotations
+
+import math
+import queue
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from bimkit.errors import InputError
+from initcli.config import SessionConfig
+from initcli.config.building import prepare_site
+from initcli.core.filters.particle_filter import FilterNoise
+from initcli.core.geometry.se2 import Pose2D
+from initcli.io.log_records import NO_CAMERA, NO_MOUNT
+from initcli.ros.delivery import CarriedPose, deliver_initial_pose
+from initcli.ros.nav2 import stamp_dict, state_message
+from initcli.ros.records import (
+    DIAGNOSTIC_ARRAY,
+    DIAGNOSTICS_TOPIC,
+    POSE_FROM_TF,
+    POSE_WITH_COVARIANCE_STAMPED,
+    STATE_TOPIC,
+    STRING,
+)
+from initcli.ros.rosbridge import RosbridgeLink
+from initcli.ros.rosbridge_driver import RosbridgeDriver, header_stamp
+from initcli.ros.tf import quaternion_yaw
+from initcli.watch.monitor import Watcher
+from initcli.watch.records import EventKind, WatchEvent, WatchState
+from initcli.watch.replay import WatchResult, watched_storey
+
+__all__ = ["DIAGNOSTIC_NAME", "diagnostic_message", "watch_live"]
+
+DIAGNOSTIC_NAME = "bim_init: watch"
+STATUS_PERIOD_S = 1.0  # s between two state and diagnostics messages when nothing changes
+RECOVERED_SD_M = 0.15  # m: the recovered pose's standard deviation sent to Nav2 (the checks' tolerance)
+RECOVERED_SD_DEG = 3.0  # degrees: ... of its heading
+_LEVELS = {WatchState.TRACKING: 0, WatchState.WAITING: 1, WatchState.LOST: 2}  # OK, WARN, ERROR
+
+
+def diagnostic_message(
+    stamp: float, watcher: Watcher, ros1: bool = False, state: WatchState | None = None
+) -> dict[str, Any]:
+    """The watch's ``diagnostic_msgs/DiagnosticArray``: one status (``state``, default the
+    watcher's), the last check as values."""
+    state = watcher.state if state is None else state
+    last = watcher.checks[-1] if watcher.checks else None
+    values = {"state": str(state), "storey": watcher.storey, "travel_m": f"{watcher.travel:.2f}"}
+    if last is not None:
+        values |= {
+            "fit": f"{last.fit:.3f}",
+            "through": f"{last.through:.3f}",
+            "statistic": f"{last.statistic:.3f}",
+            "threshold": f"{watcher.params.threshold:.3f}",
+        }
+    message = {
+        WatchState.TRACKING: "the localiser's pose agrees with the model",
+        WatchState.WAITING: "waiting for the localiser's pose, odometry and scans",
+        WatchState.LOST: "the localiser's pose is wrong; re-initialising",
+    }[state]
+    status = {
+        "level": _LEVELS[state],
+        "name": DIAGNOSTIC_NAME,
+        "message": message,
+        "hardware_id": "",
+        "values": [{"key": k, "value": v} for k, v in values.items()],
+    }
+    return {"header": {"stamp": stamp_dict(stamp, ros1), "frame_id": ""}, "status": [status]}
+
+
+def _pose_message(msg: dict[str, Any]) -> tuple[float, Pose2D]:
+    pose = msg["pose"]["pose"]
+    p, q = pose["position"], pose["orientation"]
+    yaw = quaternion_yaw(q.get("x", 0.0), q.get("y", 0.0), q.get("z", 0.0), q.get("w", 1.0))
+    return header_stamp(msg), Pose2D(float(p["x"]), float(p["y"]), yaw)
+
+
+def watch_live(
+    cfg: SessionConfig,
+    storey: str | None,
+    pose_topic: str | None,
+    duration: float = 0.0,
+    echo: Callable[[WatchEvent], None] = lambda event: None,
+) -> WatchResult:
+    """Watch the robot of ``cfg`` (module docstring); the result when ``duration`` s passed."""
+    topic = pose_topic or cfg.watch.pose_topic
+    if topic == POSE_FROM_TF:
+        raise InputError(
+            "--pose-topic tf is read from recordings; live, give the localiser's PoseWithCovarianceStamped"
+            " topic (watch.pose_topic)"
+        )
+    if cfg.watch.drive:
+        raise InputError(
+            "watch.drive: true (exploring to re-initialise) is not available yet; the watch re-initialises"
+            " from the robot's own motion (watch.drive: false)"
+        )
+    with tempfile.TemporaryDirectory(prefix="bim-init-watch-") as tmp:
+        site = prepare_site(cfg, Path(tmp))
+    name = watched_storey(site, storey if storey is not None else cfg.site.storey)
+    watcher = Watcher(site, name, cfg.watch, replace(cfg.registration, enabled=True), cfg.verification)
+    r = cfg.robot.rosbridge
+    poses: queue.Queue[tuple[float, Pose2D]] = queue.Queue()
+
+    def on_pose(msg: dict[str, Any]) -> None:
+        try:
+            poses.put(_pose_message(msg))
+        except (KeyError, TypeError, ValueError):
+            return
+
+    with RosbridgeLink(r.host, r.port) as link:
+        driver = RosbridgeDriver(link, NO_CAMERA, NO_MOUNT, r, drive=False, camera_topics=False)
+        link.subscribe(topic, POSE_WITH_COVARIANCE_STAMPED, on_pose)
+        link.advertise(STATE_TOPIC, STRING)
+        link.advertise(DIAGNOSTICS_TOPIC, DIAGNOSTIC_ARRAY)
+        driver.wait_odometry(r.camera_wait)
+        driver.wait_laser(r.camera_wait)
+        frame = driver.start()
+        started, last_status, last_state = time.monotonic(), -math.inf, None
+        while duration <= 0 or time.monotonic() - started < duration:
+            stamp = driver.frame_stamp
+            watcher.odom(stamp, frame.odom)
+            while not poses.empty():
+                t, pose = poses.get()
+                watcher.localiser(t, pose)
+            if frame.scan is not None:
+                scan = frame.scan
+                for event in watcher.scan(stamp, scan.angles, np.asarray(scan.ranges, float), scan.range_max):
+                    echo(event)
+                    if event.kind is EventKind.LOST:  # said at once, though a recovery may follow
+                        link.publish(STATE_TOPIC, STRING, state_message(str(WatchState.LOST)))
+                        lost = diagnostic_message(stamp, watcher, driver.ros1, WatchState.LOST)
+                        link.publish(DIAGNOSTICS_TOPIC, DIAGNOSTIC_ARRAY, lost)
+                    if event.kind is EventKind.RECOVERED and event.pose is not None:
+                        _deliver(cfg, driver, event.pose * frame.odom.inverse(), stamp)
+            if watcher.state != last_state or time.monotonic() - last_status >= STATUS_PERIOD_S:
+                link.publish(STATE_TOPIC, STRING, state_message(str(watcher.state)))
+                link.publish(
+                    DIAGNOSTICS_TOPIC, DIAGNOSTIC_ARRAY, diagnostic_message(stamp, watcher, driver.ros1)
+                )
+                last_state, last_status = watcher.state, time.monotonic()
+            frame = driver.step(0.0, 0.0)
+        link.flush()
+    return WatchResult(
+        name, watcher.events, watcher.checks, [], watcher.state, watcher.travel, watcher.why_not_recovered
+    )
+
+
+def _deliver(cfg: SessionConfig, driver: RosbridgeDriver, transform: Pose2D, stamp: float) -> dict[str, Any]:
+    """Send the recovered pose to Nav2 (``transform``: odom -> map), carried forward by odometry."""
+    sd, yaw_sd = RECOVERED_SD_M, math.radians(RECOVERED_SD_DEG)
+    covariance = np.diag([sd**2, sd**2, yaw_sd**2])
+    carried = CarriedPose(transform, covariance, stamp, driver.odometry, FilterNoise())
+    return deliver_initial_pose(driver.link, carried, cfg.nav2, driver.ros1)
