@@ -78,14 +78,15 @@ def cases(truth: LogTruth, args: argparse.Namespace, rng: np.random.Generator) -
     return found
 
 
-def replay(case: Case, site: Path, workdir: Path) -> tuple[Any, float]:
-    """``bim-init watch LOG --site SITE`` on the case: its result and seconds."""
+def replay(case: Case, site: Path, workdir: Path, name: str = "case") -> tuple[Any, float]:
+    """``bim-init watch LOG --site SITE`` on the case (written to ``workdir/NAME.jsonl``): its result
+    and seconds."""
     from bimtools.site.load import load_site
     from initcli.io.detection_log import read_log
     from initcli.io.log_writer import write_log
     from initcli.watch.replay import watch_log
 
-    path = workdir / "case.jsonl"
+    path = workdir / f"{name}.jsonl"
     write_log(path, case.records)
     started = time.perf_counter()
     result = watch_log(read_log(path), load_site(site))
@@ -183,6 +184,7 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=49)
     parser.add_argument("--limit", type=int, default=0, help="logs read at most (0: all)")
     parser.add_argument("--out", type=Path, default=None)
+    parser.add_argument("--keep", type=Path, default=None, help="keep the sites and cases' logs here")
     args = parse_args(parser, {"kidnaps": 1, "controls": 1, "limit": 1, "maps": "whole", "control_m": 30.0})
     logs = sorted(args.logs.glob("*.log.gz")) + sorted(args.logs.glob("*.log")) if args.logs.is_dir() else []
     if not logs:
@@ -192,15 +194,17 @@ def main() -> int:
     rng = np.random.default_rng(args.seed)
     rows: list[dict[str, Any]] = []
     with tempfile.TemporaryDirectory(prefix="bench-watch-") as tmp:
-        workdir = Path(tmp)
+        workdir = args.keep if args.keep is not None else Path(tmp)
+        workdir.mkdir(parents=True, exist_ok=True)
         for log in logs:
             truth = log_truth(log)
             whole = whole_log_map(truth)
             grids = {"whole": whole, "walls": walls_only(whole) if "walls" in args.maps else None}
             for name in [m.strip() for m in args.maps.split(",")]:
                 site = write_site(grids[name], f"{log.name.split('.')[0]}-{name}", workdir)
-                for case in cases(truth, args, rng):
-                    result, seconds = replay(case, site, workdir)
+                for k, case in enumerate(cases(truth, args, rng)):
+                    stem = f"{log.name.split('.')[0]}-{name}-{case.kind}-{k}"
+                    result, seconds = replay(case, site, workdir, stem if args.keep else "case")
                     row = {
                         "log": log.name,
                         "map": name,

@@ -42,6 +42,7 @@ __all__ = [
     "generated_pages",
     "package_modules",
     "real_lidar_page",
+    "watch_page",
     "real_lidar_table",
     "record_folders",
     "records_table",
@@ -57,6 +58,7 @@ ARCHIVE = "archive"  # benchmarks/results/archive/: superseded records, no page,
 API_DIR = "reference/api"
 RESULTS_PAGES = "results"
 REAL_LIDAR = RESULTS_DIR / "real_lidar" / "real_lidar.json"  # bench_real_lidar.py --out
+WATCH = RESULTS_DIR / "watch" / "watch.json"  # bench_watch.py --out
 
 # A description starting with one of these words (then ":" or ",") names the setting's unit.
 UNITS = (
@@ -739,6 +741,63 @@ def real_lidar_page(root: Path = ROOT) -> list[Page]:
     return [Page(f"{RESULTS_PAGES}/real-lidar.md", "\n".join(body), REAL_LIDAR.as_posix())]
 
 
+def watch_table(cases: list[dict[str, Any]], detect_m: float) -> str:
+    """Per log and map kind, then over every log: kidnaps, detected within ``detect_m`` m (and the
+    median metres), recovered right, wrong; controls, false alarms, a right pose's largest evidence."""
+    head = ["log", "map", "kidnaps", f"lost within {detect_m:g} m", "median m to lost", "recovered right"]
+    head += ["wrong recoveries", "controls", "false alarms", "largest right evidence"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    keys = sorted({(str(r["log"]), str(r["map"])) for r in cases})
+    keys += [("all", kind) for kind in sorted({str(r["map"]) for r in cases}, reverse=True)]
+    for log, kind in keys:
+        mine = [r for r in cases if r["map"] == kind and log in ("all", r["log"])]
+        kidnaps = [r for r in mine if r["kind"] == "kidnap"]
+        n = len(kidnaps)
+        detected = [float(r["detected_m"]) for r in kidnaps if r.get("detected")]
+        cells = [log if log != "all" else "**all**", kind, str(n), _share(len(detected), n)]
+        cells += [_median(detected, 1), _share(sum(r.get("recovery") == "right" for r in kidnaps), n)]
+        cells += [str(sum(r.get("recovery") == "wrong" for r in kidnaps))]
+        cells += [str(sum(r["kind"] == "control" for r in mine)), str(sum(int(r["false_alarms"]) for r in mine))]
+        cells += [f"{max(float(r.get('right_statistic', 0.0)) for r in mine):.2f}"]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def watch_page(root: Path = ROOT) -> list[Page]:
+    """results/watch.md from ``benchmarks/results/watch/watch.json`` (none without it)."""
+    path = root / WATCH
+    if not path.is_file():
+        return []
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    info = doc.get("provenance", {})
+    body = [
+        "# Lost and found on real laser logs",
+        "",
+        f"Generated at build time from `{WATCH.as_posix()}`, written by"
+        f" `{info.get('command', 'python benchmarks/bench_watch.py --out ...')}` at commit"
+        f" `{str(info.get('commit', ''))[:7]}` ({info.get('machine', 'this machine')}).",
+        "",
+        "`bim-init watch` (how it decides: [bim-init watch](../watch.md)) on real robots' CARMEN laser"
+        " logs of real buildings, each against two maps made from the log: the whole log's occupancy"
+        " map (what a localiser such as AMCL tracks on) and a walls-only map (its long straight"
+        " structures, as a building model draws walls). A *kidnap* joins two stretches of one log:"
+        f" {info.get('before', 10)} m driven, then the robot carried elsewhere and driven"
+        f" {info.get('after', 30)} m, its odometry drifting and unaware; the localiser's pose is right"
+        " on the first stretch and carried on by odometry from where it ended, as a tracking localiser"
+        f" that did not notice. A *control* is a stretch of {info.get('control_m', 60)} m whose localiser"
+        " stays right. *Lost within*: a `lost` event within that much travel after the kidnap;"
+        f" *recovered right*: the recovered pose within {info.get('right_m', 0.5)} m and"
+        f" {info.get('right_deg', 5)} degrees of the truth; *wrong*: off by more than"
+        f" {info.get('wrong_m', 1)} m or {info.get('wrong_deg', 10)} degrees; *false alarms*: `lost` on"
+        " a control or before a kidnap. *Largest right evidence*: the largest CUSUM statistic a right"
+        f" pose reached, against the threshold {info.get('threshold', 0.8)}.",
+        "",
+        watch_table(doc["cases"], float(info.get("detect_m", 15))),
+        "",
+    ]
+    return [Page(f"{RESULTS_PAGES}/watch.md", "\n".join(body), WATCH.as_posix())]
+
+
 # --------------------------------------------------------------------------------------------------
 # Record tables inside hand-written pages
 # --------------------------------------------------------------------------------------------------
@@ -849,5 +908,6 @@ def generated_pages(root: Path = ROOT, figures: bool = True) -> list[Page]:
         + copied_pages(root)
         + results_pages(root, figures)
         + real_lidar_page(root)
+        + watch_page(root)
         + expanded_pages(root)
     )

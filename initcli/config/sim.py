@@ -228,3 +228,10 @@ class SimSection:
         0, "persistent door-like things that are not in the BIM (posters, openings)", minimum=0, maximum=1000
     )
     seed: int = setting(1, "random seed", minimum=0, maximum=4294967295)
+    kidnap: float = setting(
+        0.0,
+        "m of travel after which the robot is carried to a random free place, its wheels unaware (the"
+        " watch method of bim-init eval: its localiser stand-in keeps tracking the old place); 0: never",
+        minimum=0,
+        maximum=100000,
+    )

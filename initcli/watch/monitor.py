@@ -50,6 +50,8 @@ STALE_DEG = 10.0  # degrees: ... nor turned this much
 UNCONFIRMED = 3.0  # thresholds of evidence that make a pose lost though no place fits better
 CONFIRM_SEARCH_M = 0.1  # m: the registration's place aligned within this on the scans since the change
 CONFIRM_SEARCH_DEG = 2.0
+USUAL_CHECKS = 8  # checks of a right pose before its usual fit is known ...
+USUAL_SPAN_M = 5.0  # ... over this much travel at least
 
 
 def _far(a: Pose2D, b: Pose2D, metres: float, degrees: float) -> bool:
@@ -96,6 +98,14 @@ class Watcher:
         self._path: PathEvidence | None = None  # the scans since then, while lost
         self._next_attempt = 0.0
         self._why_not = ""
+        self._fits: list[tuple[float, float]] = []  # (travel, fit) of the checks of a right pose
+
+    def usual(self) -> float | None:
+        """The usual fit: the median of the right pose's checks over the last ``usual_m`` m (None
+        before USUAL_CHECKS of them over USUAL_SPAN_M)."""
+        if len(self._fits) < USUAL_CHECKS or self._fits[-1][0] - self._fits[0][0] < USUAL_SPAN_M:
+            return None
+        return float(np.median([f for _, f in self._fits]))
 
     # -- inputs ---------------------------------------------------------------------------------
 
@@ -170,8 +180,14 @@ class Watcher:
             p.search_m,
             p.search_deg,
         )
-        w = wrongness(ev.fit, ev.through, ev.off_free, p)
+        usual = self.usual()
+        w = wrongness(ev.fit, ev.through, ev.off_free, p, usual)
         alarm = self.test.update(self.travel, w)
+        if self.test.statistic == 0.0 and self.state is not WatchState.LOST:
+            if usual is None or ev.fit >= p.usual_share * usual:  # a right pose's fit: learnt
+                self._fits.append((self.travel, ev.fit))
+                old = next((i for i, (d, _) in enumerate(self._fits) if self.travel - d <= p.usual_m), 0)
+                del self._fits[:old]
         if self.state is WatchState.WAITING:
             self.state = WatchState.TRACKING
         if self.state is WatchState.TRACKING and alarm:
@@ -250,6 +266,8 @@ class Watcher:
                 )
             )
             self.test.reset(self.travel)
+            # what a right pose fits here: the checks since the change, the usual fit from now on
+            self._fits = [(c.travel, c.fit) for c in self.checks if c.travel >= since]
         elif statistic > UNCONFIRMED * self.params.threshold:
             self._lose(
                 t,

@@ -4,12 +4,14 @@ Each check of the pose (:mod:`initcli.core.watch.pose_check`) gives a fit ``f`` 
 recent scans' beam ends on mapped walls) and a through-share ``s`` (share of beams that pass
 through a mapped wall into the open). Its evidence of a wrong pose is
 
-    w = s (1 - f) + a max(0, f_0 - f) + b o                (beyond the paper)
+    w = s (1 - f) + a max(0, f_0 - f) + u max(0, k f_u - f) + b o        (beyond the paper)
 
 beams through walls, which no clutter explains, discounted where the walls fit well (glass, an
-open door), plus a little for a fit below ``f_0``, plus the share ``o`` of the robot's recent
-places that the pose puts inside a wall or off the building (where no robot stands). Page's
-CUSUM accumulates it over travel:
+open door), plus a little for a fit below ``f_0``, plus a fall below a share ``k`` of the usual fit
+``f_u`` (what this robot's scans fit this map while the pose was right: a building model that
+draws every wall fits a right pose far better than a wrong one), plus the share ``o`` of the
+robot's recent places that the pose puts inside a wall or off the building (where no robot
+stands). Page's CUSUM accumulates it over travel:
 
     g_k = max(0, g_{k-1} + d_k (w_k - c)),   suspect when g_k > h
 
@@ -28,9 +30,14 @@ from initcli.core.watch.params import WatchParams
 __all__ = ["CusumTest", "wrongness"]
 
 
-def wrongness(fit: float, through: float, off_free: float, params: WatchParams) -> float:
-    """One check's evidence of a wrong pose, ``w`` of the module docstring."""
+def wrongness(
+    fit: float, through: float, off_free: float, params: WatchParams, usual: float | None = None
+) -> float:
+    """One check's evidence of a wrong pose, ``w`` of the module docstring (``usual``: the usual
+    fit ``f_u``; None: not known yet)."""
     shortfall = params.fit_weight * max(0.0, params.fit_floor - fit)
+    if usual is not None:
+        shortfall += params.usual_weight * max(0.0, params.usual_share * usual - fit)
     return through * (1.0 - fit) + shortfall + params.off_free_weight * off_free
 
 
