@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from initcli.core.geometry.se2 import Pose2D
 
 __all__ = ["LocalisationOutcome"]
@@ -30,3 +32,5 @@ class LocalisationOutcome:
     # The simulator refused the start (a space closed off from the corridors, known at 0 m, or a
     # storey with no free space to draw a start from): neither a success nor a failure of the method.
     refused: bool = False
+    # the 3x3 (x, y, yaw) covariance the method claims with its pose (what Nav2 is sent); None: none
+    covariance: np.ndarray | None = None

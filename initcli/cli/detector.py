@@ -19,6 +19,7 @@ from rich.console import Console
 from bimkit.cli import HELP, error_line, number_option
 from bimkit.errors import EXIT_BAD_INPUT, InputError
 from bimkit.outputs import OutputFile, OutputFolder, check_outputs
+from bimkit.ownership import json_of_format, starts_with_marker
 from initcli.cli import PROG
 from initcli.cli.progress import TrainingProgress, metrics_table
 from initcli.detector import DETECTOR_CONFIDENCE
@@ -369,7 +370,8 @@ def export(
     """Export a single-file ONNX model (static 1x3xHxW input, metadata) and verify it against PyTorch."""
     target = out or model.with_suffix(".onnx")
     try:
-        check_outputs([model], [OutputFile(target, "-o/--out", (".onnx",))])
+        owned = starts_with_marker(b"bim-init")  # its producer_name
+        check_outputs([model], [OutputFile(target, "-o/--out", (".onnx",), owned=owned, kind="model")])
         _require_torch("export")
         try:
             import onnx  # noqa: F401
@@ -569,13 +571,18 @@ def calibrate(
     """Measure a model's recall by box height, false boxes per image and class confusion on a
     labelled dataset: a profile for the simulated detector (sim.detector.profile)."""
     from initcli.detector.calibrate import calibrate_model
-    from initcli.detector.profile import write_profile
+    from initcli.detector.profile import PROFILE_FORMAT, write_profile
 
     if split not in ("val", "train"):
         raise _fail(f"--split: expected val or train, got {split!r}")
     try:
         check_outputs(
-            [data, None if model == "default" else Path(model)], [OutputFile(out, "-o/--out", (".json",))]
+            [data, None if model == "default" else Path(model)],
+            [
+                OutputFile(
+                    out, "-o/--out", (".json",), owned=json_of_format(PROFILE_FORMAT), kind="detector profile"
+                )
+            ],
         )
         profile, warnings = calibrate_model(model, data, split, conf, iou, max_images, threads)
         write_profile(profile, out)

@@ -37,12 +37,14 @@ from initcli.eval.campaign import (
     trial_count,
 )
 from initcli.eval.config import EvalConfig, load_eval_config, parse_methods
+from initcli.eval.consistency import consistency_rows
 from initcli.eval.records import TrialRecord
 from initcli.eval.report import RunStats, write_report
 from initcli.eval.results_file import ResultsWriter, read_results
 from initcli.eval.sweep import check_sweep, parse_sweep
 from initcli.eval.tables import NONE, table2, table3
 from initcli.eval.trial import TrialJob
+from initcli.eval.watch_table import watch_rows
 from initcli.executor import Executor, default_workers, make_executor
 
 __all__ = ["EVAL_MARKERS", "EXIT_INTERRUPTED", "evaluate"]
@@ -216,12 +218,19 @@ def evaluate(
     stats = RunStats(ran, time.perf_counter() - started, n_workers)
     summaries = write_report(out, records, environments, eval_config.rule, stats, command)
     claim(out, EVAL_WRITES)
+    summaries = [s for s in summaries if s.method != "watch"]  # its own table
     header, rows = table2(summaries, environments)
     if rows:
         console.print(_rich_table("Table 2: BIM-based initialisation per site, ours (paper)", header, rows))
     header, rows = table3(summaries, environments, long_names=False)
     if rows:
         console.print(_rich_table("Table 3: methods compared, ours (paper)", header, rows))
+    header, rows = consistency_rows(records)
+    if rows:
+        console.print(_rich_table("Pose and covariance (NEES, the 99 % ellipse)", header, rows))
+    header, rows = watch_rows(records)
+    if rows:
+        console.print(_rich_table("Lost and found (bim-init watch, sim.kidnap)", header, rows))
     if ran:
         console.print(
             f"{ran} trials in {stats.seconds:.0f} s on {n_workers} worker(s): "

@@ -22,6 +22,7 @@ from rich.table import Table
 from bimkit.cli import fail
 from bimkit.errors import InputError
 from bimkit.outputs import OutputFile, check_outputs
+from bimkit.ownership import drawn_by_matplotlib
 from bimkit.settings import describe, settings_of
 from initcli.cli import PROG
 from initcli.cli.bag_options import (
@@ -228,7 +229,8 @@ def match(
         if plot is not None:
             from initcli.cli.plot_hypotheses import PLOT_SUFFIXES
 
-            check_outputs(inputs, [OutputFile(plot, "--plot", PLOT_SUFFIXES)])
+            plots = OutputFile(plot, "--plot", PLOT_SUFFIXES, owned=drawn_by_matplotlib, kind="plot")
+            check_outputs(inputs, [plots])
         with message_progress() as progress, log_or_bag(log, bag, progress) as log_path:
             options.validate()
             # a session's log: the storey and settings it recorded for the options not given

@@ -20,6 +20,7 @@ from bimkit.checks import check_number
 from bimkit.cli import fail, number_option
 from bimkit.errors import InputError
 from bimkit.outputs import OutputFile, OutputFolder, check_outputs
+from bimkit.ownership import never_written_over
 from initcli.cli import PROG
 from initcli.config import load_config
 from initcli.config.building import input_paths
@@ -152,7 +153,11 @@ def run(
             input_paths(cfg),
             [
                 OutputFolder(target, "--out", RUN_MARKERS, RUN_WRITES),
-                None if record is None else OutputFile(record, "--record", (".mcap",)),
+                None
+                if record is None
+                else OutputFile(
+                    record, "--record", (".mcap",), owned=never_written_over, kind="new recording"
+                ),
             ],
             force,
         )

@@ -26,6 +26,7 @@ from rich.table import Table
 from bimkit.cli import fail, number_option
 from bimkit.errors import InputError
 from bimkit.outputs import OutputFile, check_outputs
+from bimkit.ownership import drawn_by_matplotlib
 from bimtools.site.load import Site, load_site
 from initcli.cli import PROG
 from initcli.cli.bag_options import BaseFrame, OdomTopic, ScanTopic
@@ -107,7 +108,12 @@ def watch(
         if site is None and cfg is None:
             raise InputError("--site SITE (or --config site.yaml) is needed to replay a recording")
         inputs = [recording, site, config]
-        check_outputs(inputs, [OutputFile(plot, "--plot", PLOT_SUFFIXES) if plot is not None else None])
+        plots = (
+            OutputFile(plot, "--plot", PLOT_SUFFIXES, owned=drawn_by_matplotlib, kind="plot")
+            if plot
+            else None
+        )
+        check_outputs(inputs, [plots])
         topic = pose_topic if pose_topic is not None else (cfg.watch.pose_topic if cfg is not None else None)
         options = Bag2LogOptions(
             odom_topic=odom_topic,

@@ -220,6 +220,16 @@ class FineTuningSection:
     min_travel: float = setting(
         1.0, "m followed before the covariance may count as converged", minimum=0, maximum=1000
     )
+    covariance_floor_m: float = setting(
+        0.05,
+        "m: the least standard deviation of x and y sent with the pose (what a map of such cells can"
+        " place); the disagreement with the carried coarse claim is added too",
+        minimum=0,
+        maximum=10,
+    )
+    covariance_floor_deg: float = setting(
+        0.5, "degrees: the least standard deviation of the yaw sent with the pose", minimum=0, maximum=90
+    )
     seed_sigma_xy: float = setting(0.5, "m: spread of the seeded particles", minimum=0, maximum=100)
     seed_sigma_yaw: float = setting(10.0, "degrees: spread of the seeded particles", minimum=0, maximum=180)
     landmarks: int = setting(

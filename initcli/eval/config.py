@@ -15,7 +15,7 @@ from bimkit.errors import InputError
 from bimkit.schemas import schema_path, validate_document
 from initcli.config import read_yaml
 from initcli.core.filters.global_localisation import GlobalLocalisationParams
-from initcli.eval.records import METHODS, FailureRule
+from initcli.eval.records import DEFAULT_METHODS, METHODS, FailureRule
 from initcli.sim.markers import MarkerParams
 
 __all__ = [
@@ -48,7 +48,7 @@ class EvalSite:
 class EvalConfig:
     sites: list[EvalSite]
     seed: int = 1
-    methods: tuple[str, ...] = METHODS
+    methods: tuple[str, ...] = DEFAULT_METHODS
     rule: FailureRule = field(default_factory=FailureRule)
     amcl: dict[str, Any] = field(default_factory=dict)
     markers: dict[str, Any] = field(default_factory=dict)
@@ -97,7 +97,7 @@ def parse_eval_config(doc: Any, source: Path) -> EvalConfig:
         wrong_error_m=float(failure.get("wrong_error", paper_rule.wrong_error_m)),
         wrong_error_deg=float(failure.get("wrong_error_deg", paper_rule.wrong_error_deg)),
     )
-    methods = tuple(dict.fromkeys(doc.get("methods", METHODS)))
+    methods = tuple(dict.fromkeys(doc.get("methods", DEFAULT_METHODS)))
     for section, params in (("amcl", GlobalLocalisationParams), ("markers", MarkerParams)):
         defaults = params()
         settable = {

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-__all__ = ["FailureRule", "METHODS", "MethodSummary", "TrialKey", "TrialRecord"]
+__all__ = ["DEFAULT_METHODS", "FailureRule", "METHODS", "MethodSummary", "TrialKey", "TrialRecord"]
 
-METHODS = ("bim", "bim+pf", "amcl", "markers")
+DEFAULT_METHODS = ("bim", "bim+pf", "amcl", "markers")  # what an evaluation runs unless told
+# ... and the watch (bim-init watch beside a localiser, kidnapped after sim.kidnap m): asked for by name
+METHODS = (*DEFAULT_METHODS, "watch")
 
 
 @dataclass(frozen=True)
@@ -62,6 +64,19 @@ class TrialRecord:
     # The simulator refused the start (its space closed off from the corridors, known at 0 m; a
     # storey with no free space): counted apart, neither a success nor a failure.
     refused: bool = False
+    # The claimed pose's consistency with its own covariance (what Nav2 is sent): the normalised
+    # estimation error squared over (x, y, yaw), and the covariance's largest position sigma (m)
+    nees: float | None = None
+    sigma_m: float | None = None
+    # The watch method (initcli.watch.sim_trial): the travel at the kidnap (None: none), from it to
+    # the first lost and the first recovery, the m driven with the localiser right and the lost
+    # events there, and whether the recovery was wrong (by the rule's confident-wrong bounds)
+    kidnap_m: float | None = None
+    lost_after_m: float | None = None
+    recovered_after_m: float | None = None
+    control_m: float = 0.0
+    false_alarms: int = 0
+    wrong_recovery: bool = False
 
     @property
     def key(self) -> TrialKey:

@@ -52,6 +52,15 @@ _KINDS = {
     "truth": "numbers?",
     "sweep_key": "str",
     "sweep_value": "str",
+    "refused": "bool",
+    "nees": "number?",
+    "sigma_m": "number?",
+    "kidnap_m": "number?",
+    "lost_after_m": "number?",
+    "recovered_after_m": "number?",
+    "control_m": "number",
+    "false_alarms": "int",
+    "wrong_recovery": "bool",
 }
 
 

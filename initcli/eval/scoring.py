@@ -81,7 +81,25 @@ def score(
         sweep_key=sweep[0],
         sweep_value=sweep[1],
         refused=outcome.refused,
+        **_consistency(outcome),
     )
+
+
+def _consistency(outcome: LocalisationOutcome) -> dict[str, float | None]:
+    """NEES of the claimed pose against the truth under its own covariance (x, y, yaw; 3 degrees of
+    freedom), and the covariance's largest position sigma; None without a covariance."""
+    cov = outcome.covariance
+    if cov is None or outcome.pose is None or outcome.truth is None or not outcome.localised:
+        return {"nees": None, "sigma_m": None}
+    p, t = outcome.pose, outcome.truth
+    error = np.array([p.x - t.x, p.y - t.y, math.remainder(p.yaw - t.yaw, math.tau)])
+    c = np.asarray(cov, dtype=float)
+    try:
+        nees = float(error @ np.linalg.solve(c, error))
+    except np.linalg.LinAlgError:
+        nees = math.inf
+    sigma = float(np.sqrt(max(c[0, 0], c[1, 1], 0.0)))
+    return {"nees": round(nees, 3) if math.isfinite(nees) else 1e9, "sigma_m": round(sigma, 4)}
 
 
 def _pose_list(pose: tuple[float, float, float]) -> list[float]:

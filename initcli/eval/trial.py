@@ -113,6 +113,7 @@ def session_outcomes(result: SessionResult) -> dict[str, LocalisationOutcome]:
         features=result.features_detected,
         wall_seconds=result.wall_seconds,
         refused=bim.refused,
+        covariance=result.covariance if fine else None,
     )
     return {"bim": bim, "bim+pf": bim_pf}
 
@@ -177,6 +178,17 @@ def _run_trial(job: TrialJob) -> list[TrialRecord]:
         result = built.session.run()
         both = session_outcomes(result)
         outcomes.extend(both[m] for m in session_methods)
+    watch: list[TrialRecord] = []
+    if "watch" in job.methods:
+        from initcli.eval.watch_table import watch_record
+        from initcli.watch.sim_trial import watch_trial
+
+        trial = watch_trial(config, site, job.seed, start, _world(job.world_dir))
+        start_pose = start_pose or trial.start.as_tuple()
+        label = sweep_label(job.sweep, job.sweep_value)
+        watch.append(
+            watch_record(trial, job.rule, site=job.site, start=job.start, seed=job.seed, sweep=label)
+        )
     attempts: list[BaselineAttempt] = []
     if any(m in job.methods for m in ("amcl", "markers")):
         # One drive for both: their wall following does not depend on what they sense.
@@ -197,10 +209,11 @@ def _run_trial(job: TrialJob) -> list[TrialRecord]:
     sweep = sweep_label(job.sweep, job.sweep_value)
     order = {m: i for i, m in enumerate(job.methods)}
     outcomes.sort(key=lambda o: order[o.method])
-    return [
+    records = [
         score(o, job.rule, site=job.site, start=job.start, seed=job.seed, start_pose=start_pose, sweep=sweep)
         for o in outcomes
-    ]
+    ] + watch
+    return sorted(records, key=lambda r: order[r.method])
 
 
 def trial_seed(base: int, start: int) -> int:

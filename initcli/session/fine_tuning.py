@@ -19,6 +19,7 @@ from bimtools.site.load import StoreyModel
 from bimtools.site.records import Feature, OccupancyGrid
 from initcli.config.session import FineTuningSection
 from initcli.core.features.detection_filter import ConfirmedFeature
+from initcli.core.filters.covariance import honest_covariance
 from initcli.core.filters.particle_filter import (
     FilterNoise,
     LaserModel,
@@ -204,7 +205,10 @@ class FineTuning:
                 hooks.note(
                     frame.t, f"filter drifted (scan fit {fit:.0%}); rectified pose kept ({carried_fit:.0%})"
                 )
-                return FineTuned(frame, carried, cov, converged=False)
+                sent = honest_covariance(
+                    cov, estimate.pose, carried, cfg.covariance_floor_m, cfg.covariance_floor_deg
+                )
+                return FineTuned(frame, carried, sent, converged=False)
             if verdict is Settlement.LOST:
                 return FineLost(frame, f"lost during fine tuning (only {fit:.0%} of the scan fits the map)")
             if verdict is Settlement.RESEED:
@@ -214,7 +218,10 @@ class FineTuning:
                 pf.seed(estimate.pose, cfg.reseed_sigma_xy, math.radians(cfg.seed_sigma_yaw))
                 start_distance, converged_at = driver.distance, None
                 continue
-            return FineTuned(frame, estimate.pose, cov, converged=converged_at is not None)
+            sent = honest_covariance(
+                cov, estimate.pose, carried, cfg.covariance_floor_m, cfg.covariance_floor_deg
+            )
+            return FineTuned(frame, estimate.pose, sent, converged=converged_at is not None)
 
 
 class FineStage:

@@ -6,7 +6,8 @@ it) and judged (:mod:`initcli.core.watch.pose_check`); Page's CUSUM over travel
 (:mod:`initcli.core.watch.lost_test`) turns the checks into "suspect". A suspect pose is lost only
 when the lidar registration of the scans since the change (the submap registration of ``run`` and
 ``match``, :class:`initcli.verify.registration.SubmapRegistration`) finds a place elsewhere that
-fits those scans clearly better than the localiser's pose does; if its best place is the
+fits those scans clearly better than the localiser's pose does, or when the evidence grows to
+UNCONFIRMED times the threshold though no place does; if its best place is the
 localiser's, the suspicion is dropped. Lost, the watcher registers the scans since the change
 every ``watch.recover_every`` m; the first unique registration that passes a session's claim checks
 (:func:`initcli.verify.evidence.verify_transform`, the camera counted blind) is the recovered
@@ -47,9 +48,10 @@ __all__ = ["Watcher"]
 ODOM_KEPT_S = 60.0  # s of odometry kept to place a localiser pose stamped a little in the past
 STALE_M = 0.5  # m: the localiser's transform this close to where it was when lost has not moved on
 STALE_DEG = 10.0  # degrees: ... nor turned this much
-UNCONFIRMED = 3.0  # thresholds of evidence that make a pose lost though no place fits better
+UNCONFIRMED = 10.0  # thresholds of evidence that make a pose lost though no place could be claimed
 CONFIRM_SEARCH_M = 0.1  # m: the registration's place aligned within this on the scans since the change
 CONFIRM_SEARCH_DEG = 2.0
+USUAL_PERCENTILE = 10.0  # the usual fit: this percentile of a right pose's recent fits (its worst usual)
 USUAL_CHECKS = 8  # checks of a right pose before its usual fit is known ...
 USUAL_SPAN_M = 5.0  # ... over this much travel at least
 
@@ -101,11 +103,11 @@ class Watcher:
         self._fits: list[tuple[float, float]] = []  # (travel, fit) of the checks of a right pose
 
     def usual(self) -> float | None:
-        """The usual fit: the median of the right pose's checks over the last ``usual_m`` m (None
+        """The usual fit: the USUAL_PERCENTILE of the right pose's checks over the last ``usual_m`` m (None
         before USUAL_CHECKS of them over USUAL_SPAN_M)."""
         if len(self._fits) < USUAL_CHECKS or self._fits[-1][0] - self._fits[0][0] < USUAL_SPAN_M:
             return None
-        return float(np.median([f for _, f in self._fits]))
+        return float(np.percentile([f for _, f in self._fits], USUAL_PERCENTILE))
 
     # -- inputs ---------------------------------------------------------------------------------
 
@@ -246,13 +248,15 @@ class Watcher:
         far = _far(transform * ends.last, best.pose * last.inverse() * ends.last, p.confirm_m, p.confirm_deg)
         travelled = self.travel - since
         if far and fit_best >= fit_mine + p.confirm_margin:
+            ours, theirs_pose = transform * ends.last, best.pose * last.inverse() * ends.last
+            turned = abs(math.degrees(math.remainder(theirs_pose.yaw - ours.yaw, math.tau)))
             self._lose(
                 t,
                 since,
                 path,
                 f"over the last {travelled:.1f} m the scans fit the localiser's pose {fit_mine:.2f} (evidence"
-                f" {statistic:.2f}), a place {best.pose.distance_to(transform * ends.last):.1f} m away"
-                f" {fit_best:.2f}",
+                f" {statistic:.2f}), a place {ours.distance_to(theirs_pose):.1f} m and {turned:.0f} degrees"
+                f" away {fit_best:.2f}",
             )
             self._recover(t)
         elif not far:

@@ -83,7 +83,9 @@ def watch_trial(
     setup = build_sim(config, site, storey, seed, start, detect_features=False, world_site=world)
     driver = setup.driver
     explorer = WallFollowingExplorer(config)
-    watcher = Watcher(site, storey, config.watch, replace(config.registration, enabled=True), config.verification)
+    watcher = Watcher(
+        site, storey, config.watch, replace(config.registration, enabled=True), config.verification
+    )
     rng = np.random.default_rng(seed + KIDNAP_RNG_OFFSET)
     kidnap_at = config.sim.kidnap if config.sim.kidnap > 0 else None
     total = (kidnap_at + AFTER_KIDNAP_M) if kidnap_at is not None else CONTROL_M
@@ -110,7 +112,9 @@ def watch_trial(
             trial.control_m += watcher.travel - before
         if frame.scan is None:
             continue
-        for event in watcher.scan(frame.t, frame.scan.angles, np.asarray(frame.scan.ranges), frame.scan.range_max):
+        for event in watcher.scan(
+            frame.t, frame.scan.angles, np.asarray(frame.scan.ranges), frame.scan.range_max
+        ):
             trial.events.append(event)
             stale = _on_event(trial, event, frame.truth, frame.odom, stale)
     trial.travel = watcher.travel
@@ -140,5 +144,7 @@ def _on_event(
         trial.recovered_after_m = event.travel - (trial.kidnap_m or 0.0)
         trial.recovery_error = (event.pose.distance_to(truth), math.degrees(event.pose.yaw_error(truth)))
         trial.truth, trial.recovered = truth, event.pose
-    right = event.pose.distance_to(truth) <= RIGHT_M and math.degrees(event.pose.yaw_error(truth)) <= RIGHT_DEG
+    right = (
+        event.pose.distance_to(truth) <= RIGHT_M and math.degrees(event.pose.yaw_error(truth)) <= RIGHT_DEG
+    )
     return None if right else event.pose * odom.inverse()

@@ -8,8 +8,9 @@ through a mapped wall into the open). Its evidence of a wrong pose is
 
 beams through walls, which no clutter explains, discounted where the walls fit well (glass, an
 open door), plus a little for a fit below ``f_0``, plus a fall below a share ``k`` of the usual fit
-``f_u`` (what this robot's scans fit this map while the pose was right: a building model that
-draws every wall fits a right pose far better than a wrong one), plus the share ``o`` of the
+``f_u`` (what this robot's scans fit this map while the pose was right; only where that is at
+least ``usual_min``: a map that draws what the lidar sees fits a right pose far better than a
+wrong one, a walls-only one does not), plus the share ``o`` of the
 robot's recent places that the pose puts inside a wall or off the building (where no robot
 stands). Page's CUSUM accumulates it over travel:
 
@@ -36,7 +37,7 @@ def wrongness(
     """One check's evidence of a wrong pose, ``w`` of the module docstring (``usual``: the usual
     fit ``f_u``; None: not known yet)."""
     shortfall = params.fit_weight * max(0.0, params.fit_floor - fit)
-    if usual is not None:
+    if usual is not None and usual >= params.usual_min:
         shortfall += params.usual_weight * max(0.0, params.usual_share * usual - fit)
     return through * (1.0 - fit) + shortfall + params.off_free_weight * off_free
 

@@ -44,14 +44,22 @@ class WatchParams:
     fit_weight: float = setting(0.5, "weight of that shortfall", minimum=0, maximum=10)
     usual_share: float = setting(
         0.5,
-        "share of the usual fit (the median of the checks of the last usual_m m the pose was right)"
+        "share of the usual fit (the 10th percentile of the checks of the last usual_m m the pose was"
+        " right)"
         " below which a check counts the shortfall as evidence: a fall from what this robot's scans"
         " fit this map; 0: off",
         minimum=0,
         maximum=1,
     )
     usual_weight: float = setting(1.0, "weight of that shortfall", minimum=0, maximum=10)
-    usual_m: float = setting(30.0, "m of checks the usual fit is the median of", above=0, maximum=1000)
+    usual_min: float = setting(
+        0.8,
+        "the usual fit at which that fall starts to count: a map that draws what the lidar sees (a"
+        " walls-only model, where furniture and clutter hold half the beam ends, does not)",
+        minimum=0,
+        maximum=1,
+    )
+    usual_m: float = setting(30.0, "m of checks the usual fit is taken over", above=0, maximum=1000)
     off_free_weight: float = setting(
         0.5,
         "weight of the share of the robot's recent places that the pose puts off the map's free space"

@@ -27,10 +27,17 @@ def _watch(*args: str | Path) -> tuple[int, str, str]:
     return result.exit_code, result.stdout, result.stderr
 
 
-def test_a_kidnap_is_lost_then_recovered_at_the_truth(corridor):
-    code, out, err = _watch(corridor.kidnap_log, "--site", corridor.site, "--json")
+@pytest.fixture(scope="module")
+def kidnap_run(corridor, tmp_path_factory):
+    """``bim-init watch KIDNAP --site SITE --json --plot FILE``: (exit code, document, stderr, plot)."""
+    plot = tmp_path_factory.mktemp("plot") / "watch.png"
+    code, out, err = _watch(corridor.kidnap_log, "--site", corridor.site, "--json", "--plot", plot)
+    return code, json.loads(out) if code in (0, 1) else None, err, plot
+
+
+def test_a_kidnap_is_lost_then_recovered_at_the_truth(corridor, kidnap_run):
+    code, doc, err, _ = kidnap_run
     assert code == 0, err
-    doc = json.loads(out)
     kinds = [e["kind"] for e in doc["events"]]
     assert kinds[:2] == ["lost", "recovered"], doc["events"]
     lost, found = doc["events"][0], doc["events"][1]
@@ -68,9 +75,8 @@ def test_lost_and_not_recovered_exits_1(corridor, tmp_path):
     assert "lost 1 time(s), recovered 0" in out
 
 
-def test_the_plot_is_written(corridor, tmp_path):
-    plot = tmp_path / "watch.png"
-    code, _, err = _watch(corridor.kidnap_log, "--site", corridor.site, "--plot", plot)
+def test_the_plot_is_written(kidnap_run):
+    code, _, err, plot = kidnap_run
     assert code == 0, err
     assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
@@ -90,14 +96,12 @@ def _bag_messages(records) -> list[BagMessage]:
     return out
 
 
-@pytest.mark.parametrize("layout", ["b.mcap", "b.bag"])
-def test_a_bag_replays_as_its_log(corridor, tmp_path, layout):
-    bag = write_bag(tmp_path / layout, _bag_messages(corridor.kidnap.records))
+def test_a_bag_replays_as_its_log(corridor, kidnap_run, tmp_path):
+    bag = write_bag(tmp_path / "b.mcap", _bag_messages(corridor.kidnap.records))
     code, out, err = _watch(bag, "--site", corridor.site, "--json")
     assert code == 0, err
     from_bag = [(e["kind"], round(e["travel"], 1)) for e in json.loads(out)["events"]]
-    _, out_log, _ = _watch(corridor.kidnap_log, "--site", corridor.site, "--json")
-    assert from_bag == [(e["kind"], round(e["travel"], 1)) for e in json.loads(out_log)["events"]]
+    assert from_bag == [(e["kind"], round(e["travel"], 1)) for e in kidnap_run[1]["events"]]
 
 
 def test_bad_input_is_one_line(corridor, tmp_path):
