@@ -57,6 +57,7 @@ def score(
 ) -> TrialRecord:
     """One ``results.jsonl`` row from what a method reported."""
     trans, rot = pose_errors(outcome)
+    nees, sigma = _consistency(outcome)
     success, verdict, wrong = judge(outcome.localised, outcome.distance_m, trans, rule, rot)
     reason = f"{verdict}: {outcome.reason}" if outcome.localised else f"no result: {outcome.reason}"
     if outcome.refused:
@@ -81,16 +82,17 @@ def score(
         sweep_key=sweep[0],
         sweep_value=sweep[1],
         refused=outcome.refused,
-        **_consistency(outcome),
+        nees=nees,
+        sigma_m=sigma,
     )
 
 
-def _consistency(outcome: LocalisationOutcome) -> dict[str, float | None]:
+def _consistency(outcome: LocalisationOutcome) -> tuple[float | None, float | None]:
     """NEES of the claimed pose against the truth under its own covariance (x, y, yaw; 3 degrees of
     freedom), and the covariance's largest position sigma; None without a covariance."""
     cov = outcome.covariance
     if cov is None or outcome.pose is None or outcome.truth is None or not outcome.localised:
-        return {"nees": None, "sigma_m": None}
+        return None, None
     p, t = outcome.pose, outcome.truth
     error = np.array([p.x - t.x, p.y - t.y, math.remainder(p.yaw - t.yaw, math.tau)])
     c = np.asarray(cov, dtype=float)
@@ -99,7 +101,7 @@ def _consistency(outcome: LocalisationOutcome) -> dict[str, float | None]:
     except np.linalg.LinAlgError:
         nees = math.inf
     sigma = float(np.sqrt(max(c[0, 0], c[1, 1], 0.0)))
-    return {"nees": round(nees, 3) if math.isfinite(nees) else 1e9, "sigma_m": round(sigma, 4)}
+    return (round(nees, 3) if math.isfinite(nees) else 1e9), round(sigma, 4)
 
 
 def _pose_list(pose: tuple[float, float, float]) -> list[float]:
