@@ -6,6 +6,7 @@ Exit codes: 0 written, 2 bad input (one line on stderr).
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated
 
@@ -24,6 +25,7 @@ from initcli.cli.bag_options import (
     ImageTopic,
     Model,
     OdomTopic,
+    PoseTopic,
     Rate,
     ScanTopic,
     bag_options,
@@ -33,6 +35,11 @@ from initcli.io.detection_log import is_detection_log
 from initcli.ros.convert import convert_bag
 
 __all__ = ["bag2log"]
+
+
+def _localiser(stats: object) -> str:
+    n = getattr(stats, "localiser", 0)
+    return f", {n} localiser poses" if n else ""
 
 
 def bag2log(
@@ -51,6 +58,7 @@ def bag2log(
     odom_topic: OdomTopic = None,
     scan_topic: ScanTopic = None,
     base_frame: BaseFrame = None,
+    pose_topic: PoseTopic = None,
     model: Model = "default",
     rate: Rate = None,
     class_names: ClassNames = None,
@@ -75,6 +83,7 @@ def bag2log(
             rate,
             class_names,
         )
+        options = replace(options, pose_topic=pose_topic)
         with message_progress() as progress:
             records, stats = convert_bag(bag, out, options, progress)
     except InputError as exc:
@@ -84,6 +93,6 @@ def bag2log(
     camera = "camera absent (lidar only), " if stats.camera_absent else ""
     typer.echo(
         f"wrote {out}: {camera}{stats.images} images, {stats.objects} detections, {stats.odom} odom, "
-        f"{stats.scans} scans "
+        f"{stats.scans} scans{_localiser(stats)} "
         f"({stats.messages} messages in {stats.seconds:.1f} s)"
     )

@@ -19,6 +19,7 @@ __all__ = [
     "ImageTopic",
     "Model",
     "OdomTopic",
+    "PoseTopic",
     "Rate",
     "ScanTopic",
     "bag_options",
@@ -45,6 +46,15 @@ OdomTopic = Annotated[
 ]
 ScanTopic = Annotated[
     str | None, typer.Option("--scan-topic", metavar="T", help="sensor_msgs/LaserScan topic.")
+]
+PoseTopic = Annotated[
+    str | None,
+    typer.Option(
+        "--pose-topic",
+        metavar="T|tf",
+        help="The localiser's PoseWithCovarianceStamped [default: /amcl_pose where the bag has it];"
+        " tf: map -> odom on /tf.",
+    ),
 ]
 BaseFrame = Annotated[
     str | None,

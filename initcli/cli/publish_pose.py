@@ -73,6 +73,12 @@ def publish_pose(
         report = publish_initial_pose(pose, host, port, settings, old_style)
     except InputError as exc:
         fail(PROG, exc)
+    if not report.get("flushed", False):
+        fail(
+            PROG,
+            f"ws://{host}:{port} did not answer after /initialpose was published: not known to be sent"
+            " (a rosbridge server answers; is it one, and is it up?)",
+        )
     verdict = {None: "", True: ", confirmed by AMCL", False: ", not confirmed by AMCL"}[report["confirmed"]]
     typer.echo(
         f"sent /initialpose to ws://{host}:{port} ({report['sends']}x{verdict}): "

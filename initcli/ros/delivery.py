@@ -255,5 +255,5 @@ def publish_initial_pose(
         link.advertise(STATE_TOPIC, STRING)
         report = deliver_initial_pose(link, FixedPose(pose), settings, ros1)
         link.publish(STATE_TOPIC, STRING, state_message("initialised"))
-        report["flushed"] = link.flush() and report["flushed"]
+        report["flushed"] = report["flushed"] and link.flush()  # a server mute once is not asked again
     return report | {"message": initial_pose_message(pose, ros1)}

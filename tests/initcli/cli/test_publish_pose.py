@@ -90,3 +90,31 @@ def test_publish_pose_unconfirmed_exits_1(tmp_path: Path) -> None:
     with RosbridgeServer(rosapi=True) as server:  # no AMCL
         result = _publish(summary, server.port, "0.5")
     assert result.exit_code == 1 and "not confirmed by AMCL" in result.output
+
+
+def test_publish_pose_to_a_server_that_goes_mute_is_not_sent(tmp_path: Path, monkeypatch) -> None:
+    """A server that answers the handshake, then nothing: no "sent", one line, exit 2."""
+    pytest.importorskip("roslibpy")
+    from initcli.ros import delivery
+    from tests.initcli.ros.rosbridge_server import RosbridgeServer
+
+    monkeypatch.setattr(delivery, "SERVICE_TIMEOUT_S", 0.5)  # its unanswered calls: sooner
+
+    class MuteAfterHandshake(RosbridgeServer):
+        answered = 0
+
+        def _handle(self, conn, op):  # type: ignore[no-untyped-def]
+            if op.get("op") == "call_service":
+                self.answered += 1
+                if self.answered > 1:
+                    with self._lock:
+                        self.ops.append(op)
+                    return  # mute
+            super()._handle(conn, op)
+
+    summary = _live_summary(tmp_path, "ros2 (sec, nanosec)")
+    with MuteAfterHandshake() as server:
+        result = _publish(summary, server.port, "0")
+    assert result.exit_code == 2, result.output
+    assert "sent /initialpose" not in result.output
+    assert "not known to be sent" in result.output and "Traceback" not in result.output
