@@ -474,6 +474,15 @@ class RosbridgeDriver:
         """Session time ``t`` on the robot's clock."""
         return (self.clock_origin or 0.0) + t
 
+    def raw_odometry_at(self, stamp: float) -> Pose2D | None:
+        """The odometry as the robot sent it (its own odom frame) nearest ``stamp``, within 0.2 s."""
+        with self._lock:
+            history = list(self._history)
+        if not history:
+            return None
+        t, pose = min(history, key=lambda h: abs(h[0] - stamp))
+        return pose if abs(t - stamp) <= 0.2 else None
+
     def odometry(self) -> list[tuple[float, Pose2D]]:
         """The odometry that arrived (robot-clock stamp, pose in the session's odom frame), oldest first."""
         with self._lock:

@@ -1,7 +1,8 @@
 """``bim-init watch --config site.yaml``: beside Nav2 on a live robot over rosbridge.
 
 The robot's odometry and scans (``robot.rosbridge``, the laser's mount from ``/tf_static``) and the
-localiser's pose (``watch.pose_topic``, ``/amcl_pose`` by default) feed a
+localiser's pose (``watch.pose_topic``, ``/amcl_pose`` by default; ``tf``: ``map -> odom`` on
+``/tf`` composed with the odometry, Nav2's ``map -> base_link``) feed a
 :class:`~initcli.watch.monitor.Watcher`, everything on the robot's clock (the odometry's stamps).
 The watch's state goes to ``/bim_init/state`` (std_msgs/String: ``waiting``, ``tracking``,
 ``lost``) when it changes and once a second, with a ``diagnostic_msgs/DiagnosticArray`` on
@@ -38,10 +39,11 @@ from initcli.ros.records import (
     POSE_WITH_COVARIANCE_STAMPED,
     STATE_TOPIC,
     STRING,
+    TF_MESSAGE,
 )
 from initcli.ros.rosbridge import RosbridgeLink
 from initcli.ros.rosbridge_driver import RosbridgeDriver, header_stamp
-from initcli.ros.tf import quaternion_yaw
+from initcli.ros.tf import frame_name, quaternion_yaw
 from initcli.watch.monitor import Watcher
 from initcli.watch.records import EventKind, WatchEvent, WatchState
 from initcli.watch.replay import WatchResult, watched_storey
@@ -49,6 +51,8 @@ from initcli.watch.replay import WatchResult, watched_storey
 __all__ = ["DIAGNOSTIC_NAME", "diagnostic_message", "watch_live"]
 
 DIAGNOSTIC_NAME = "bim_init: watch"
+MAP_FRAME = "map"  # REP 105
+TF_TOPIC = "/tf"
 STATUS_PERIOD_S = 1.0  # s between two state and diagnostics messages when nothing changes
 RECOVERED_SD_M = 0.15  # m: the recovered pose's standard deviation sent to Nav2 (the checks' tolerance)
 RECOVERED_SD_DEG = 3.0  # degrees: ... of its heading
@@ -92,6 +96,46 @@ def _pose_message(msg: dict[str, Any]) -> tuple[float, Pose2D]:
     return header_stamp(msg), Pose2D(float(p["x"]), float(p["y"]), yaw)
 
 
+class LocaliserFeed:
+    """The localiser's poses as they arrive (roslibpy's thread), handed to the watcher in the loop:
+    a PoseWithCovarianceStamped topic, or ``map -> odom`` on /tf composed with the robot's odometry."""
+
+    def __init__(self, link: RosbridgeLink, driver: RosbridgeDriver, topic: str) -> None:
+        self.driver = driver
+        self.poses: queue.Queue[tuple[float, Pose2D]] = queue.Queue()  # map poses
+        self.corrections: queue.Queue[tuple[float, Pose2D]] = queue.Queue()  # map -> odom
+        if topic == POSE_FROM_TF:
+            link.subscribe(TF_TOPIC, TF_MESSAGE, self._on_tf)
+        else:
+            link.subscribe(topic, POSE_WITH_COVARIANCE_STAMPED, self._on_pose)
+
+    def _on_pose(self, msg: dict[str, Any]) -> None:
+        try:
+            self.poses.put(_pose_message(msg))
+        except (KeyError, TypeError, ValueError):
+            return
+
+    def _on_tf(self, msg: dict[str, Any]) -> None:
+        for stamped in msg.get("transforms") or []:
+            try:
+                if frame_name(stamped["header"]["frame_id"]) != MAP_FRAME:
+                    continue
+                tr, q = stamped["transform"]["translation"], stamped["transform"]["rotation"]
+                yaw = quaternion_yaw(q.get("x", 0.0), q.get("y", 0.0), q.get("z", 0.0), q.get("w", 1.0))
+                self.corrections.put((header_stamp(stamped), Pose2D(float(tr["x"]), float(tr["y"]), yaw)))
+            except (KeyError, TypeError, ValueError, AttributeError):
+                continue
+
+    def drain(self, watcher: Watcher) -> None:
+        while not self.poses.empty():
+            watcher.localiser(*self.poses.get())
+        while not self.corrections.empty():
+            t, map_odom = self.corrections.get()
+            raw = self.driver.raw_odometry_at(t)
+            if raw is not None:
+                watcher.localiser(t, map_odom * raw)
+
+
 def watch_live(
     cfg: SessionConfig,
     storey: str | None,
@@ -100,12 +144,6 @@ def watch_live(
     echo: Callable[[WatchEvent], None] = lambda event: None,
 ) -> WatchResult:
     """Watch the robot of ``cfg`` (module docstring); the result when ``duration`` s passed."""
-    topic = pose_topic or cfg.watch.pose_topic
-    if topic == POSE_FROM_TF:
-        raise InputError(
-            "--pose-topic tf is read from recordings; live, give the localiser's PoseWithCovarianceStamped"
-            " topic (watch.pose_topic)"
-        )
     if cfg.watch.drive:
         raise InputError(
             "watch.drive: true (exploring to re-initialise) is not available yet; the watch re-initialises"
@@ -116,17 +154,9 @@ def watch_live(
     name = watched_storey(site, storey if storey is not None else cfg.site.storey)
     watcher = Watcher(site, name, cfg.watch, replace(cfg.registration, enabled=True), cfg.verification)
     r = cfg.robot.rosbridge
-    poses: queue.Queue[tuple[float, Pose2D]] = queue.Queue()
-
-    def on_pose(msg: dict[str, Any]) -> None:
-        try:
-            poses.put(_pose_message(msg))
-        except (KeyError, TypeError, ValueError):
-            return
-
     with RosbridgeLink(r.host, r.port) as link:
         driver = RosbridgeDriver(link, NO_CAMERA, NO_MOUNT, r, drive=False, camera_topics=False)
-        link.subscribe(topic, POSE_WITH_COVARIANCE_STAMPED, on_pose)
+        feed = LocaliserFeed(link, driver, pose_topic or cfg.watch.pose_topic)
         link.advertise(STATE_TOPIC, STRING)
         link.advertise(DIAGNOSTICS_TOPIC, DIAGNOSTIC_ARRAY)
         driver.wait_odometry(r.camera_wait)
@@ -136,30 +166,49 @@ def watch_live(
         while duration <= 0 or time.monotonic() - started < duration:
             stamp = driver.frame_stamp
             watcher.odom(stamp, frame.odom)
-            while not poses.empty():
-                t, pose = poses.get()
-                watcher.localiser(t, pose)
+            feed.drain(watcher)
             if frame.scan is not None:
                 scan = frame.scan
                 for event in watcher.scan(stamp, scan.angles, np.asarray(scan.ranges, float), scan.range_max):
                     echo(event)
-                    if event.kind is EventKind.LOST:  # said at once, though a recovery may follow
-                        link.publish(STATE_TOPIC, STRING, state_message(str(WatchState.LOST)))
-                        lost = diagnostic_message(stamp, watcher, driver.ros1, WatchState.LOST)
-                        link.publish(DIAGNOSTICS_TOPIC, DIAGNOSTIC_ARRAY, lost)
-                    if event.kind is EventKind.RECOVERED and event.pose is not None:
-                        _deliver(cfg, driver, event.pose * frame.odom.inverse(), stamp)
+                    _act(cfg, link, driver, watcher, event, frame.odom, stamp)
             if watcher.state != last_state or time.monotonic() - last_status >= STATUS_PERIOD_S:
-                link.publish(STATE_TOPIC, STRING, state_message(str(watcher.state)))
-                link.publish(
-                    DIAGNOSTICS_TOPIC, DIAGNOSTIC_ARRAY, diagnostic_message(stamp, watcher, driver.ros1)
-                )
+                _status(link, driver, watcher, stamp)
                 last_state, last_status = watcher.state, time.monotonic()
             frame = driver.step(0.0, 0.0)
         link.flush()
     return WatchResult(
         name, watcher.events, watcher.checks, [], watcher.state, watcher.travel, watcher.why_not_recovered
     )
+
+
+def _status(
+    link: RosbridgeLink,
+    driver: RosbridgeDriver,
+    watcher: Watcher,
+    stamp: float,
+    state: WatchState | None = None,
+) -> None:
+    """The state on /bim_init/state and the diagnostics on /diagnostics (``state``: the watcher's)."""
+    said = watcher.state if state is None else state
+    link.publish(STATE_TOPIC, STRING, state_message(str(said)))
+    link.publish(DIAGNOSTICS_TOPIC, DIAGNOSTIC_ARRAY, diagnostic_message(stamp, watcher, driver.ros1, said))
+
+
+def _act(
+    cfg: SessionConfig,
+    link: RosbridgeLink,
+    driver: RosbridgeDriver,
+    watcher: Watcher,
+    event: WatchEvent,
+    odom: Pose2D,
+    stamp: float,
+) -> None:
+    """Lost: said at once (a recovery may follow in the same check); recovered: sent to Nav2."""
+    if event.kind is EventKind.LOST:
+        _status(link, driver, watcher, stamp, WatchState.LOST)
+    if event.kind is EventKind.RECOVERED and event.pose is not None:
+        _deliver(cfg, driver, event.pose * odom.inverse(), stamp)
 
 
 def _deliver(cfg: SessionConfig, driver: RosbridgeDriver, transform: Pose2D, stamp: float) -> dict[str, Any]:

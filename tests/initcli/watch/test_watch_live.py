@@ -147,3 +147,50 @@ def test_the_live_watch_finds_the_robot_again_and_tells_nav2(corridor, tmp_path)
     levels = [s["level"] for m in server.published("/diagnostics") for s in m["status"]]
     assert 0 in levels and 2 in levels
     assert all(header_stamp(m) >= T0 for m in server.published("/diagnostics"))
+
+
+def test_the_localiser_from_tf_is_map_to_odom_times_the_robots_odometry():
+    """``--pose-topic tf`` live: each ``map -> odom`` on /tf composed with the odometry the robot sent
+    at its stamp (Nav2's ``map -> base_link``); other parents ignored."""
+    from initcli.watch.live import LocaliserFeed
+
+    class Link:
+        subscribed: list[str] = []
+
+        def subscribe(self, topic, msgtype, callback):  # type: ignore[no-untyped-def]
+            self.subscribed.append(topic)
+
+    class Driver:
+        def raw_odometry_at(self, stamp):  # type: ignore[no-untyped-def]
+            return Pose2D(1.0, 0.0, math.pi / 2) if abs(stamp - T0) < 0.2 else None
+
+    class Watcher:
+        got: list[tuple[float, Pose2D]] = []
+
+        def localiser(self, t, pose):  # type: ignore[no-untyped-def]
+            self.got.append((t, pose))
+
+    link, watcher = Link(), Watcher()
+    feed = LocaliserFeed(link, Driver(), "tf")  # type: ignore[arg-type]
+    assert link.subscribed == ["/tf"]
+    q = {"x": 0.0, "y": 0.0, "z": math.sin(math.pi / 4), "w": math.cos(math.pi / 4)}  # 90 degrees
+    feed._on_tf(
+        {
+            "transforms": [
+                {
+                    "header": {"stamp": stamp_dict(T0), "frame_id": "map"},
+                    "child_frame_id": "odom",
+                    "transform": {"translation": {"x": 5.0, "y": 2.0, "z": 0.0}, "rotation": q},
+                },
+                {
+                    "header": {"stamp": stamp_dict(T0), "frame_id": "odom"},
+                    "child_frame_id": "base_link",
+                    "transform": {"translation": {"x": 9.0, "y": 9.0, "z": 0.0}, "rotation": q},
+                },
+            ]
+        }
+    )
+    feed.drain(watcher)  # type: ignore[arg-type]
+    ((t, pose),) = watcher.got
+    assert t == T0 and math.isclose(pose.x, 5.0, abs_tol=1e-9) and math.isclose(pose.y, 3.0, abs_tol=1e-9)
+    assert math.isclose(pose.yaw, math.pi, abs_tol=1e-9) or math.isclose(pose.yaw, -math.pi, abs_tol=1e-9)
