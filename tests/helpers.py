@@ -7,6 +7,7 @@ repository root on ``sys.path``); the fixtures built on them live in ``tests/con
 
 from __future__ import annotations
 
+import functools
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -15,6 +16,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     import numpy as np
 
+    from bimtools.extract.pipeline import ExtractedSite
     from bimtools.site.records import OccupancyGrid
     from initcli.match.pipeline import Hypothesis, MatchReport
 
@@ -22,6 +24,19 @@ ROOT = Path(__file__).resolve().parent.parent
 SAMPLES = ROOT / "sample_models"
 SCHEMAS = ROOT / "schemas"
 SHARED_IFC = ROOT.parent / "shared" / "ifc"
+
+
+def extracted_all_storeys(path: Path) -> ExtractedSite:
+    """``extract_site(path, storey="all")`` once per test session: the real models take a minute each,
+    and two test modules read them."""
+    return _extracted(Path(path).resolve())
+
+
+@functools.cache
+def _extracted(path: Path) -> ExtractedSite:
+    from bimtools.extract.pipeline import extract_site
+
+    return extract_site(path, storey="all")
 
 
 def shared_ifc_files() -> list[Path]:

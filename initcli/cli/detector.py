@@ -370,8 +370,8 @@ def export(
     """Export a single-file ONNX model (static 1x3xHxW input, metadata) and verify it against PyTorch."""
     target = out or model.with_suffix(".onnx")
     try:
-        owned = starts_with_marker(b"bim-init")  # its producer_name
-        check_outputs([model], [OutputFile(target, "-o/--out", (".onnx",), owned=owned, kind="model")])
+        onnx_out = OutputFile(target, "-o/--out", (".onnx",), starts_with_marker(b"bim-init"), "model")
+        check_outputs([model], [onnx_out])  # an existing model: ours only (its producer_name)
         _require_torch("export")
         try:
             import onnx  # noqa: F401
@@ -576,14 +576,8 @@ def calibrate(
     if split not in ("val", "train"):
         raise _fail(f"--split: expected val or train, got {split!r}")
     try:
-        check_outputs(
-            [data, None if model == "default" else Path(model)],
-            [
-                OutputFile(
-                    out, "-o/--out", (".json",), owned=json_of_format(PROFILE_FORMAT), kind="detector profile"
-                )
-            ],
-        )
+        profile_out = OutputFile(out, "-o/--out", (".json",), json_of_format(PROFILE_FORMAT), "profile")
+        check_outputs([data, None if model == "default" else Path(model)], [profile_out])
         profile, warnings = calibrate_model(model, data, split, conf, iou, max_images, threads)
         write_profile(profile, out)
     except InputError as exc:

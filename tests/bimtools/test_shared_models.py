@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from bimkit.atomic import RECORD
-from bimtools.extract.pipeline import ExtractedSite, extract_site
-from tests.helpers import SHARED_IFC, shared_ifc_files
+from bimtools.extract.pipeline import ExtractedSite
+from tests.helpers import SHARED_IFC, extracted_all_storeys, shared_ifc_files
 
 pytestmark = pytest.mark.skipif(not SHARED_IFC.is_dir(), reason=f"{SHARED_IFC} is absent")
 
@@ -28,9 +28,8 @@ WITH_LIFTS = {
 }
 
 
-@functools.cache
 def extracted(name: str) -> ExtractedSite:
-    return extract_site(SHARED_IFC / name, storey="all")
+    return extracted_all_storeys(SHARED_IFC / name)
 
 
 @functools.cache

@@ -14,9 +14,9 @@ import cv2
 import numpy as np
 import pytest
 
-from bimtools.extract.pipeline import MERGE_DISTANCE, ExtractedSite, extract_site
+from bimtools.extract.pipeline import MERGE_DISTANCE, ExtractedSite
 from bimtools.site.records import FREE, OCCUPIED
-from tests.helpers import shared_ifc_files
+from tests.helpers import extracted_all_storeys, shared_ifc_files
 
 NAMES = [p.name for p in shared_ifc_files()] or ["(none)"]
 PROBES = (0.35, 0.6, 0.9, 1.3)  # metres along a feature's normal
@@ -31,9 +31,8 @@ OPEN_FACADES = {
 LIFT_WORDS = re.compile(r"lift|elev|aufzug|ascenseur|elevador", re.IGNORECASE)
 
 
-@functools.cache
 def extracted(path: Path) -> ExtractedSite:
-    return extract_site(path, storey="all")
+    return extracted_all_storeys(path)
 
 
 def _site(shared_ifc_dir: Path, name: str) -> ExtractedSite:
