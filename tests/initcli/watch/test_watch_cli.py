@@ -8,10 +8,12 @@ import json
 import math
 from pathlib import Path
 
+import jsonschema
 import pytest
 import yaml
 from typer.testing import CliRunner
 
+from bimkit.schemas import schema_path
 from initcli.cli.main import app
 from initcli.io.log_records import Localiser, Odom, Scan
 from initcli.io.log_writer import write_log
@@ -51,6 +53,7 @@ def test_a_kidnap_is_lost_then_recovered_at_the_truth(corridor, kidnap_run):
     assert abs(math.degrees(math.remainder(pose["yaw"] - truth.yaw, math.tau))) <= 5.0
     assert "pose" not in lost and lost["reason"]
     assert doc["exit_code"] == 0 and doc["state"] == "tracking"
+    jsonschema.validate(doc, json.loads(schema_path("watch_result.schema.json").read_text()))
     assert "lost" not in kinds[2:], "the recovered pose is watched as right"
 
 
