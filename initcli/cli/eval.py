@@ -20,6 +20,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 from rich.table import Table
+from rich.text import Text
 
 from bimkit.atomic import claim
 from bimkit.cli import EXIT_INTERRUPTED, fail, number_option
@@ -54,19 +55,32 @@ EVAL_WRITES = ("results.jsonl", "table.csv", "table.md", "fig9.png", "fig12_*.pn
 MAX_TRIALS = 20_000  # a campaign of more trials (about 3 hours on 2 cores) runs only with --yes
 
 
-def _rich_table(title: str, header: list[str], rows: list[list[str]]) -> Table:
-    """The markdown table for a terminal: each ``(paper)`` column folded into the one before it
-    as ``ours (paper)``."""
+def _rich_table(title: str, header: list[str], rows: list[list[str]], width: int = 200) -> Table:
+    """The markdown table for a terminal ``width`` columns wide: each ``(paper)`` column folded into
+    the one before it as ``ours (paper)``; the columns that do not fit left out, from the right (the
+    caption says so: every column is in table.md)."""
     keep = [i for i, h in enumerate(header) if h != "(paper)"]
-    table = Table(title=title, title_justify="left")
-    for n, i in enumerate(keep):
-        table.add_column(header[i], justify="left" if n < 2 else "right")
+    cells = []
     for row in rows:
-        cells = []
+        line = []
         for i in keep:
             paired = i + 1 < len(header) and header[i + 1] == "(paper)"
-            cells.append(f"{row[i]} [dim]({row[i + 1]})[/dim]" if paired and row[i + 1] != NONE else row[i])
-        table.add_row(*cells)
+            line.append(f"{row[i]} [dim]({row[i + 1]})[/dim]" if paired and row[i + 1] != NONE else row[i])
+        cells.append(line)
+    shown, used = 0, 1
+    for k, i in enumerate(keep):
+        plain = [Text.from_markup(c[k]).plain for c in cells]
+        need = max([len(w) for w in header[i].split()] + [len(p) for p in plain]) + 3
+        if shown >= 2 and used + need > width:
+            break
+        shown, used = shown + 1, used + need
+    left_out = len(keep) - shown
+    caption = f"{left_out} more column(s) in table.md" if left_out else None
+    table = Table(title=title, title_justify="left", caption=caption, caption_justify="left")
+    for n, i in enumerate(keep[:shown]):
+        table.add_column(header[i], justify="left" if n < 2 else "right")
+    for line in cells:
+        table.add_row(*line[:shown])
     return table
 
 
@@ -221,16 +235,22 @@ def evaluate(
     summaries = [s for s in summaries if s.method != "watch"]  # its own table
     header, rows = table2(summaries, environments)
     if rows:
-        console.print(_rich_table("Table 2: BIM-based initialisation per site, ours (paper)", header, rows))
+        console.print(
+            _rich_table(
+                "Table 2: BIM-based initialisation per site, ours (paper)", header, rows, console.width
+            )
+        )
     header, rows = table3(summaries, environments, long_names=False)
     if rows:
-        console.print(_rich_table("Table 3: methods compared, ours (paper)", header, rows))
+        console.print(_rich_table("Table 3: methods compared, ours (paper)", header, rows, console.width))
     header, rows = consistency_rows(records)
     if rows:
-        console.print(_rich_table("Pose and covariance (NEES, the 99 % ellipse)", header, rows))
+        console.print(
+            _rich_table("Pose and covariance (NEES, the 99 % ellipse)", header, rows, console.width)
+        )
     header, rows = watch_rows(records)
     if rows:
-        console.print(_rich_table("Lost and found (bim-init watch, sim.kidnap)", header, rows))
+        console.print(_rich_table("Lost and found (bim-init watch, sim.kidnap)", header, rows, console.width))
     if ran:
         console.print(
             f"{ran} trials in {stats.seconds:.0f} s on {n_workers} worker(s): "

@@ -225,3 +225,31 @@ def test_bundled_eval_config_names_the_three_samples():
     assert [s.name for s in config.sites] == ["ntu_hallway", "block_a", "block_b"]
     assert [s.paper for s in config.sites] == ["NTU", "BlockA", "BlockB"]
     assert config.methods == ("bim", "bim+pf", "amcl", "markers") and config.sites[0].starts == 100
+
+
+def test_the_console_tables_fit_80_columns_and_say_what_they_leave_out() -> None:
+    from rich.console import Console
+
+    from initcli.cli.eval import _rich_table
+
+    header = ["Site", "Method", "Success %", "(paper)", "Distance m", "(paper)", "Error m", "(paper)"]
+    header += [
+        "Error °",
+        "(paper)",
+        "Error m median / P95",
+        "Confident wrong",
+        "Trials",
+        "Refused",
+        "s / trial",
+    ]
+    row = ["block_a", "bim+pf", "96.0", "92.0", "23.61", "30.2", "0.041", "0.07", "0.52", "0.9"]
+    row += ["0.032 / 0.091", "0", "100", "0", "12.5"]
+    console = Console(width=80, record=True, color_system=None)
+    console.print(_rich_table("Table 3", header, [row], console.width))
+    text = console.export_text()
+    assert "…" not in text and max(len(line) for line in text.splitlines()) <= 80
+    assert "more column(s) in table.md" in text
+    wide = Console(width=300, record=True, color_system=None)
+    wide.print(_rich_table("Table 3", header, [row], wide.width))
+    shown = wide.export_text()
+    assert "more column(s)" not in shown and "Refused" in shown
