@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from bimkit.errors import InputError
 from bimtools.site.features_csv import read_features
 from bimtools.site.manifest import SiteManifest, read_manifest
@@ -61,6 +63,36 @@ def _storeys(features: list[Feature], manifest: SiteManifest | None) -> dict[str
     return storeys
 
 
+DOOR_OFF_WALL_M = 1.0  # m: a door feature farther than this from every wall of its storey is off them
+DOORS_OFF_REFUSED = 0.5  # share of a storey's doors off its walls that makes the feature table another's
+DOORS_CHECKED = 3  # doors a storey needs before the check says anything
+
+
+def check_doors_on_walls(storey: StoreyModel, csv_path: Path) -> None:
+    """Refuse a storey whose doors mostly lie away from its walls (another building's features.csv
+    beside this one's walls.geojson): a door stands in a wall. A door or two off the walls is
+    possible (a passage drawn without one) and passes."""
+    doors = [f for f in storey.features if f.category.lower() == "door"]
+    if len(doors) < DOORS_CHECKED or not storey.walls:
+        return
+    seg = np.array([[w.x1, w.y1, w.x2, w.y2] for w in storey.walls], dtype=float)
+    p = np.array([[f.x, f.y] for f in doors], dtype=float)
+    a, b = seg[:, :2], seg[:, 2:]
+    ab = b - a
+    t = np.clip(
+        ((p[:, None, :] - a[None]) * ab[None]).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-12), 0.0, 1.0
+    )
+    nearest = np.hypot(*(p[:, None, :] - (a[None] + t[..., None] * ab[None])).transpose(2, 0, 1)).min(axis=1)
+    off = int((nearest > DOOR_OFF_WALL_M).sum())
+    if off >= DOORS_OFF_REFUSED * len(doors):
+        worst = doors[int(np.argmax(nearest))]
+        raise InputError(
+            f"{csv_path}: {off} of the {len(doors)} doors of storey {storey.name!r} lie more than"
+            f" {DOOR_OFF_WALL_M:g} m from every wall of walls.geojson (door {worst.id!r}"
+            f" {nearest.max():.1f} m): the feature table and the walls are not of one building"
+        )
+
+
 def load_site(path: Path, with_maps: bool = True) -> Site:
     """Read an OUTDIR (features.csv, walls.geojson, maps, site.json) or a features.csv alone."""
     path = Path(path)
@@ -87,6 +119,8 @@ def load_site(path: Path, with_maps: bool = True) -> Site:
         for o in obstacles:
             if o.storey in storeys:
                 storeys[o.storey].obstacles.append(o)
+        for storey in storeys.values():
+            check_doors_on_walls(storey, csv_path)
     if with_maps and manifest is not None:
         for info in manifest.storeys:
             if info.name in storeys and info.map_yaml and (path / info.map_yaml).exists():
