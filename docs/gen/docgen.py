@@ -657,6 +657,9 @@ def results_pages(root: Path = ROOT, figures: bool = True) -> list[Page]:
     if (root / REAL_LIDAR).is_file():
         index.append("* [Real laser logs](real-lidar.md): the lidar alone on real robots' logs, beside AMCL")
         nav.insert(0, "* [Real laser logs](real-lidar.md)")
+    if (root / WATCH).is_file():
+        index.append("* [Lost and found](watch.md): `bim-init watch` on kidnaps spliced from real laser logs")
+        nav.insert(1, "* [Lost and found](watch.md)")
     pages.append(Page(f"{RESULTS_PAGES}/index.md", "\n".join(index) + "\n"))
     pages.append(Page(f"{RESULTS_PAGES}/SUMMARY.md", "* [Results](index.md)\n" + "\n".join(nav) + "\n"))
     return pages
