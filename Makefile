@@ -74,7 +74,7 @@ profiles: install
 	$(BIN)/bim-init detector calibrate default --data $(PROFILES)/block_b_renders/data.yaml \
 		-o initcli/detector/models/default.renders.profile.json
 
-# Every file reader fed mutated and random files for FUZZ_SECONDS each (14 readers: under 2 minutes);
+# Every file reader fed mutated and random files for FUZZ_SECONDS each (17 readers: about 2 minutes);
 # an input that gives anything but the file read or one InputError line fails (tests/fuzz/targets.py).
 FUZZ_SECONDS ?= 6
 fuzz: install

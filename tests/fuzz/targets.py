@@ -144,6 +144,63 @@ def _bag() -> bytes:
         shutil.rmtree(folder, ignore_errors=True)
 
 
+def _carmen() -> bytes:
+    """A short CARMEN log: odometry and 12-beam FLASER scans in a 4 x 4 m room (1 degree beams from
+    -90 as the format writes them, here 15 degrees apart for brevity: 12 beams span 165 degrees)."""
+    lines = ["# CARMEN Logfile", "PARAM robot_front_laser_max 8.0 nohost 0.0"]
+    for k in range(6):
+        t = 0.5 * k
+        x = 0.3 * k
+        ranges = " ".join(f"{1.5 + 0.1 * ((k + b) % 5):.2f}" for b in range(180))
+        lines.append(f"ODOM {x:.3f} 0.000 0.000 0.3 0.0 0.0 {t:.3f} nohost {t:.3f}")
+        lines.append(f"FLASER 180 {ranges} {x:.3f} 0.000 0.000 {x:.3f} 0.000 0.000 {t:.3f} nohost {t:.3f}")
+    return ("\n".join(lines) + "\n").encode()
+
+
+def _watch_records() -> list[Any]:
+    import math
+
+    from initcli.io.log_records import NO_CAMERA, NO_MOUNT, Localiser, Meta, Odom, Scan
+
+    records: list[Any] = [Meta(NO_CAMERA, NO_MOUNT, camera_absent=True)]
+    for k in range(8):
+        t = 0.1 * k
+        records.append(Odom(t, 0.1 * k, 0.0, 0.0))
+        records.append(Scan(t + 0.01, -math.pi, math.tau / 16, 8.0, tuple(2.0 for _ in range(16))))
+        records.append(Localiser(t + 0.02, 3.0 + 0.1 * k, 1.0, 0.5))
+    return records
+
+
+def _watch_log() -> bytes:
+    from initcli.io.log_writer import format_record
+
+    return ("\n".join(format_record(r) for r in _watch_records()) + "\n").encode()
+
+
+@cache
+def _lidar_bag() -> bytes:
+    """A bag without a camera: /odom, /scan and the localiser on /amcl_pose."""
+    from initcli.io.log_records import Localiser, Odom, Scan
+    from initcli.ros.bag_writer import BagMessage, laser_scan, odometry, write_bag
+    from initcli.ros.nav2 import initial_pose_message
+    from initcli.ros.records import LASER_SCAN, ODOMETRY, POSE_WITH_COVARIANCE_STAMPED, InitialPose
+
+    messages = []
+    for r in _watch_records()[1:]:
+        if isinstance(r, Odom):
+            messages.append(BagMessage("/odom", ODOMETRY, r.t, odometry(r.t, r.pose)))
+        elif isinstance(r, Scan):
+            messages.append(BagMessage("/scan", LASER_SCAN, r.t, laser_scan(r.t, r)))
+        elif isinstance(r, Localiser):
+            pose = initial_pose_message(InitialPose(r.t, r.x, r.y, r.yaw, (0.0,) * 36))
+            messages.append(BagMessage("/amcl_pose", POSE_WITH_COVARIANCE_STAMPED, r.t, pose))
+    folder = Path(tempfile.mkdtemp(prefix="bim-fuzz-bag-"))
+    try:
+        return write_bag(folder / "lidar.mcap", messages).read_bytes()
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
 def _summary() -> bytes:
     doc = {
         "success": True,
@@ -235,6 +292,26 @@ def _read_bag(path: Path) -> None:
     bag_to_records(path)
 
 
+def _read_carmen(path: Path) -> None:
+    from initcli.io.carmen import carmen_to_records
+
+    carmen_to_records(path)
+
+
+def _read_watch_log(path: Path) -> None:
+    from initcli.io.detection_log import read_log
+    from initcli.watch.replay import check_recording
+
+    check_recording(read_log(path))
+
+
+def _read_lidar_bag(path: Path) -> None:
+    from initcli.ros.bag_reader import bag_to_records
+    from initcli.ros.records import Bag2LogOptions
+
+    bag_to_records(path, Bag2LogOptions(lidar_only=True))
+
+
 def _read_summary(path: Path) -> None:
     from initcli.ros.nav2 import initial_pose_message, read_summary, session_initial_pose
 
@@ -283,6 +360,9 @@ TARGETS = [
     Target("manifest", "site.json", _site_file("site.json"), _read_site, _site_but("site.json")),
     Target("log", "log.jsonl", _log, _read_log),
     Target("bag", "rec.mcap", _bag, _read_bag, cuts=2),
+    Target("carmen", "robot.log", _carmen, _read_carmen),
+    Target("watch-log", "watch.jsonl", _watch_log, _read_watch_log),
+    Target("lidar-bag", "lidar.mcap", _lidar_bag, _read_lidar_bag, cuts=2),
     Target("summary", "summary.json", _summary, _read_summary),
     Target("results", "results.jsonl", _results, _read_results),
     Target("image", "image.png", _image, _read_image),
