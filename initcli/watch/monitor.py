@@ -99,6 +99,7 @@ class Watcher:
         self._lost_since = 0.0  # travel where the lost pose went wrong
         self._path: PathEvidence | None = None  # the scans since then, while lost
         self._next_attempt = 0.0
+        self._next_probe = self.params.probe_every  # travel of the next registration while tracking
         self._why_not = ""
         self._fits: list[tuple[float, float]] = []  # (travel, fit) of the checks of a right pose
 
@@ -194,6 +195,8 @@ class Watcher:
             self.state = WatchState.TRACKING
         if self.state is WatchState.TRACKING and alarm:
             self._suspect(t, transform)
+        elif self.state is WatchState.TRACKING and p.probe_every > 0 and self.travel >= self._next_probe:
+            self._probe(t, transform)
         elif self.state is WatchState.LOST and self.travel >= self._next_attempt:
             self._recover(t)
         self.checks.append(
@@ -231,24 +234,13 @@ class Watcher:
             if statistic > UNCONFIRMED * self.params.threshold:
                 self._lose(t, since, path, f"evidence {statistic:.2f} and no place fits ({found.why})")
             return
-        ends = BeamEnds.of([s.thinned(max(1, len(s.ranges) // 180)) for s in kept])
-        tol = self.verification.scan_tolerance
         p = self.params
-        mine = best_scan_alignment(transform, ends, self.map.fit, tol, p.search_m, math.radians(p.search_deg))
-        theirs = best_scan_alignment(
-            best.pose * last.inverse(),
-            ends,
-            self.map.fit,
-            tol,
-            CONFIRM_SEARCH_M,
-            math.radians(CONFIRM_SEARCH_DEG),
-        )
-        fit_mine = mine[0] if mine else 0.0
-        fit_best = theirs[0] if theirs else 0.0
-        far = _far(transform * ends.last, best.pose * last.inverse() * ends.last, p.confirm_m, p.confirm_deg)
+        fit_mine, fit_best = self._fits_of(kept, transform, best.pose * last.inverse())
+        here = kept[-1].odom
+        far = _far(transform * here, best.pose * last.inverse() * here, p.confirm_m, p.confirm_deg)
         travelled = self.travel - since
         if far and fit_best >= fit_mine + p.confirm_margin:
-            ours, theirs_pose = transform * ends.last, best.pose * last.inverse() * ends.last
+            ours, theirs_pose = transform * here, best.pose * last.inverse() * here
             turned = abs(math.degrees(math.remainder(theirs_pose.yaw - ours.yaw, math.tau)))
             self._lose(
                 t,
@@ -279,6 +271,55 @@ class Watcher:
                 path,
                 f"evidence {statistic:.2f} over {travelled:.1f} m; the scans fit it {fit_mine:.2f}",
             )
+
+    def _probe(self, t: float, transform: Pose2D) -> None:
+        """While tracking, every ``watch.probe_every`` m: register the scans of the last
+        ``watch.probe_window`` m. A unique place that passes a session's claim checks, far from the
+        localiser's pose and fitting those scans clearly better, makes the pose lost (and found)
+        though the evidence never piled up: a wrong pose in a place alike."""
+        p = self.params
+        self._next_probe = self.travel + p.probe_every
+        since = max(self.travel - p.probe_window, 0.0)
+        if self._twins is not None or self.travel - since < p.min_scans_m:
+            return
+        path = self._since_path(since)
+        found, last = self._registration.attempt(path, self.travel)
+        best = found.best
+        kept = [s for _, s, _ in self.scans.since(since)]
+        if not found.unique or best is None or last is None or not kept:
+            return
+        theirs = best.pose * last.inverse()
+        here = kept[-1].odom
+        if not _far(transform * here, theirs * here, p.confirm_m, p.confirm_deg):
+            return
+        check = verify_transform(
+            theirs, self._evidence, path, [], self._view, claim_params(self.verification, True), None
+        )
+        if not check.passed and self.verification.enabled:
+            return
+        fit_mine, fit_best = self._fits_of(kept, transform, theirs)  # every beam, both alike
+        if fit_best < fit_mine + p.confirm_margin:
+            return
+        self._lose(
+            t,
+            since,
+            path,
+            f"the lidar registration of the last {self.travel - since:.1f} m places the robot"
+            f" {(transform * here).distance_to(theirs * here):.1f} m from the localiser (the scans fit"
+            f" it {fit_best:.2f}, the localiser's pose {fit_mine:.2f}; {found.why})",
+        )
+        self._recover(t)
+
+    def _fits_of(self, kept: list[ScanSample], mine: Pose2D, theirs: Pose2D) -> tuple[float, float]:
+        """The share of every beam end of ``kept`` on the map's walls placed by the localiser's
+        transform ``mine`` (aligned within its own error) and by a registration's ``theirs``."""
+        ends = BeamEnds.of([s.thinned(max(1, len(s.ranges) // 180)) for s in kept])
+        tol, p = self.verification.scan_tolerance, self.params
+        a = best_scan_alignment(mine, ends, self.map.fit, tol, p.search_m, math.radians(p.search_deg))
+        b = best_scan_alignment(
+            theirs, ends, self.map.fit, tol, CONFIRM_SEARCH_M, math.radians(CONFIRM_SEARCH_DEG)
+        )
+        return (a[0] if a else 0.0), (b[0] if b else 0.0)
 
     def _lose(self, t: float, since: float, path: PathEvidence, why: str) -> None:
         self.state = WatchState.LOST

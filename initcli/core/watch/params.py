@@ -101,6 +101,17 @@ class WatchParams:
     recover_every: float = setting(
         1.0, "m of travel between two registrations while lost", above=0, maximum=100
     )
+    probe_every: float = setting(
+        5.0,
+        "m of travel between two registrations while the pose is right (a wrong pose in a place alike"
+        " piles up little evidence; a unique place elsewhere that passes the claim checks makes it"
+        " lost); 0: only when the evidence asks",
+        minimum=0,
+        maximum=1000,
+    )
+    probe_window: float = setting(
+        10.0, "m of the latest path whose scans such a registration reads", above=0, maximum=200
+    )
     min_scans_m: float = setting(
         2.0,
         "m of travel since the change the registration needs before it is asked (fewer scans fit anywhere)",
