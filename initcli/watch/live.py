@@ -9,7 +9,8 @@ The watch's state goes to ``/bim_init/state`` (std_msgs/String: ``waiting``, ``t
 ``/diagnostics`` (OK tracking, WARN waiting, ERROR lost; the check's numbers as values). A
 recovered pose goes to Nav2 as ``run`` sends one (:func:`initcli.ros.delivery.deliver_initial_pose`:
 ``/initialpose`` stamped on the robot's clock, carried forward by odometry, confirmed on AMCL's
-pose topic). The watch runs until ``duration`` s pass (0: until Ctrl-C or SIGTERM)."""
+pose topic). With ``watch.drive: true`` the robot explores while lost (:class:`Explorer`). The
+watch runs until ``duration`` s pass (0: until Ctrl-C or SIGTERM)."""
 
 from __future__ import annotations
 
@@ -24,11 +25,11 @@ from typing import Any
 
 import numpy as np
 
-from bimkit.errors import InputError
 from initcli.config import SessionConfig
 from initcli.config.building import prepare_site
 from initcli.core.filters.particle_filter import FilterNoise
 from initcli.core.geometry.se2 import Pose2D
+from initcli.drivers.base import SensorFrame
 from initcli.io.log_records import NO_CAMERA, NO_MOUNT
 from initcli.ros.delivery import CarriedPose, deliver_initial_pose
 from initcli.ros.nav2 import stamp_dict, state_message
@@ -96,6 +97,35 @@ def _pose_message(msg: dict[str, Any]) -> tuple[float, Pose2D]:
     return header_stamp(msg), Pose2D(float(p["x"]), float(p["y"]), yaw)
 
 
+class Explorer:
+    """``watch.drive: true``: while the pose is lost, the robot explores as a session does (wall
+    following on ``/cmd_vel``) to gather scans for the re-initialisation; otherwise it sends nothing
+    (Nav2 drives), and a zero Twist once when it hands the robot back."""
+
+    def __init__(self, cfg: SessionConfig, driver: RosbridgeDriver) -> None:
+        from initcli.baselines.drive import WallFollowingExplorer
+
+        self.cfg, self.driver = cfg, driver
+        self.follow: WallFollowingExplorer | None = None
+        driver.drive = False  # nothing on /cmd_vel until lost
+
+    def step(self, frame: SensorFrame, state: WatchState) -> SensorFrame:
+        from initcli.baselines.drive import WallFollowingExplorer
+
+        if state is WatchState.LOST:
+            if self.follow is None:
+                self.follow = WallFollowingExplorer(self.cfg)
+                self.driver.drive = True
+            return self.driver.step(*self.follow.command(frame))
+        self.hand_back()
+        return self.driver.step(0.0, 0.0)
+
+    def hand_back(self) -> None:
+        if self.follow is not None:
+            self.driver.stop()  # a zero Twist: the robot is Nav2's again
+            self.driver.drive, self.follow = False, None
+
+
 class LocaliserFeed:
     """The localiser's poses as they arrive (roslibpy's thread), handed to the watcher in the loop:
     a PoseWithCovarianceStamped topic, or ``map -> odom`` on /tf composed with the robot's odometry."""
@@ -144,18 +174,25 @@ def watch_live(
     echo: Callable[[WatchEvent], None] = lambda event: None,
 ) -> WatchResult:
     """Watch the robot of ``cfg`` (module docstring); the result when ``duration`` s passed."""
-    if cfg.watch.drive:
-        raise InputError(
-            "watch.drive: true (exploring to re-initialise) is not available yet; the watch re-initialises"
-            " from the robot's own motion (watch.drive: false)"
-        )
     with tempfile.TemporaryDirectory(prefix="bim-init-watch-") as tmp:
         site = prepare_site(cfg, Path(tmp))
     name = watched_storey(site, storey if storey is not None else cfg.site.storey)
     watcher = Watcher(site, name, cfg.watch, replace(cfg.registration, enabled=True), cfg.verification)
     r = cfg.robot.rosbridge
     with RosbridgeLink(r.host, r.port) as link:
-        driver = RosbridgeDriver(link, NO_CAMERA, NO_MOUNT, r, drive=False, camera_topics=False)
+        rb = cfg.robot
+        drive = cfg.watch.drive
+        driver = RosbridgeDriver(
+            link,
+            NO_CAMERA,
+            NO_MOUNT,
+            r,
+            drive,
+            max_linear=rb.max_linear,
+            max_angular=rb.max_angular,
+            camera_topics=False,
+        )
+        explorer = Explorer(cfg, driver) if drive else None
         feed = LocaliserFeed(link, driver, pose_topic or cfg.watch.pose_topic)
         link.advertise(STATE_TOPIC, STRING)
         link.advertise(DIAGNOSTICS_TOPIC, DIAGNOSTIC_ARRAY)
@@ -175,7 +212,9 @@ def watch_live(
             if watcher.state != last_state or time.monotonic() - last_status >= STATUS_PERIOD_S:
                 _status(link, driver, watcher, stamp)
                 last_state, last_status = watcher.state, time.monotonic()
-            frame = driver.step(0.0, 0.0)
+            frame = explorer.step(frame, watcher.state) if explorer is not None else driver.step(0.0, 0.0)
+        if explorer is not None:
+            explorer.hand_back()
         link.flush()
     return WatchResult(
         name, watcher.events, watcher.checks, [], watcher.state, watcher.travel, watcher.why_not_recovered

@@ -149,6 +149,51 @@ def test_the_live_watch_finds_the_robot_again_and_tells_nav2(corridor, tmp_path)
     assert all(header_stamp(m) >= T0 for m in server.published("/diagnostics"))
 
 
+def _live_config(tmp_path, corridor, port: int, **sections: dict) -> str:
+    doc = {
+        "site": {"path": str(corridor.site)},
+        "robot": {
+            "driver": "rosbridge",
+            "rosbridge": {"host": "127.0.0.1", "port": port, "camera_wait": 0.5},
+        },
+        "nav2": {"advertise_delay": 0.1, "confirm": {"timeout": 3.0, "republish_period": 0.5}},
+        **sections,
+    }
+    path = tmp_path / "live.yaml"
+    path.write_text(yaml.safe_dump(doc))
+    return str(path)
+
+
+def test_lost_with_watch_drive_the_robot_explores_then_is_handed_back(corridor, tmp_path):
+    """``watch.drive: true`` and a place never found again: nothing on /cmd_vel while the pose is
+    right, wall following once lost, a zero Twist last."""
+    with RosbridgeServer() as server, ReplayRobot(server, corridor.kidnap):
+        config = _live_config(
+            tmp_path,
+            corridor,
+            server.port,
+            watch={"drive": True},
+            registration={"margin": 1.0, "see_through": 0},
+        )
+        duration = corridor.kidnap.truth[-1][0] / SPEED + 1.0
+        result = CliRunner().invoke(app, ["watch", "--config", config, "--duration", f"{duration:.1f}"])
+        assert result.exit_code == 1, (result.stdout, result.stderr)  # lost, not recovered
+        ops = list(server.ops)
+    lost_at = next(
+        i
+        for i, o in enumerate(ops)
+        if o.get("op") == "publish" and o.get("topic") == "/bim_init/state" and o["msg"]["data"] == "lost"
+    )
+    commands = [
+        (i, o["msg"]) for i, o in enumerate(ops) if o.get("op") == "publish" and o.get("topic") == "/cmd_vel"
+    ]
+    assert commands, "no exploring while lost"
+    assert all(i > lost_at for i, _ in commands), "/cmd_vel before the pose was lost"
+    assert any(m["linear"]["x"] != 0.0 or m["angular"]["z"] != 0.0 for _, m in commands)
+    last = commands[-1][1]
+    assert last["linear"]["x"] == 0.0 and last["angular"]["z"] == 0.0
+
+
 def test_the_localiser_from_tf_is_map_to_odom_times_the_robots_odometry():
     """``--pose-topic tf`` live: each ``map -> odom`` on /tf composed with the odometry the robot sent
     at its stamp (Nav2's ``map -> base_link``); other parents ignored."""
