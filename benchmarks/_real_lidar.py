@@ -36,6 +36,9 @@ __all__ = [
     "whole_log_map",
     "window_records",
     "windows",
+    "write_site",
+    "drift_scales",
+    "drifted_poses",
 ]
 
 RESOLUTION = 0.05  # m per cell of both maps
@@ -168,18 +171,30 @@ def windows(truth: LogTruth, length: float, count: int) -> list[tuple[int, int]]
     return found
 
 
-def _drifted(odom: list[Odom], drift: Drift, rng: np.random.Generator) -> list[Odom]:
-    scale = 1.0 + rng.normal(0.0, drift.scale_sd)
-    turn = 1.0 + rng.normal(0.0, drift.turn_sd)
-    pose = Pose2D(odom[0].x, odom[0].y, odom[0].yaw)
-    out = [odom[0]]
+def drifted_poses(
+    odom: list[Odom], start: Pose2D, drift: Drift, rng: np.random.Generator, scale: float, turn: float
+) -> list[Pose2D]:
+    """The motion of ``odom`` from ``start`` as drifting wheels count it: each step's distance times
+    ``scale``, its turn times ``turn`` plus the heading's random walk."""
+    pose, out = start, [start]
     for a, b in zip(odom[:-1], odom[1:], strict=True):
-        step = Pose2D(a.x, a.y, a.yaw).inverse() * Pose2D(b.x, b.y, b.yaw)
+        step = a.pose.inverse() * b.pose
         dist = math.hypot(step.x, step.y)
         noise = rng.normal(0.0, drift.heading_per_m * math.sqrt(dist)) if dist > 0 else 0.0
         pose = pose * Pose2D(step.x * scale, step.y * scale, step.yaw * turn + noise)
-        out.append(Odom(b.t, pose.x, pose.y, pose.yaw))
+        out.append(pose)
     return out
+
+
+def drift_scales(drift: Drift, rng: np.random.Generator) -> tuple[float, float]:
+    """One window's scale errors of the distance and of the turns."""
+    return 1.0 + rng.normal(0.0, drift.scale_sd), 1.0 + rng.normal(0.0, drift.turn_sd)
+
+
+def _drifted(odom: list[Odom], drift: Drift, rng: np.random.Generator) -> list[Odom]:
+    scale, turn = drift_scales(drift, rng)
+    poses = drifted_poses(odom, odom[0].pose, drift, rng, scale, turn)
+    return [odom[0]] + [Odom(b.t, p.x, p.y, p.yaw) for b, p in zip(odom[1:], poses[1:], strict=True)]
 
 
 def window_records(
@@ -197,3 +212,15 @@ def window_records(
 
 def _t(record: Odom | Scan) -> float:
     return record.t
+
+
+def write_site(grid: OccupancyGrid, name: str, workdir: Path) -> Path:
+    """``grid`` as a Nav2 map, then ``bim-extract MAP.yaml -o SITE``'s site (its storey ``name``)."""
+    from bimtools.extract.from_map import extract_map_site, write_map_site
+    from bimtools.site.occupancy_map import write_map
+
+    yaml_path = workdir / f"{name}.yaml"
+    write_map(yaml_path, grid)
+    site = workdir / f"{name}_site"
+    write_map_site(site, extract_map_site(yaml_path), preview=False)
+    return site

@@ -17,7 +17,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from _real_lidar import DRIFT, Drift, LogTruth
+from _real_lidar import DRIFT, Drift, LogTruth, drift_scales, drifted_poses
 
 from initcli.core.geometry.se2 import Pose2D
 from initcli.io.log_records import Localiser, Meta, Odom, Scan
@@ -55,19 +55,6 @@ def _odom(truth: LogTruth, first: int, last: int) -> list[Odom]:
     return [o for o in truth.odom if t0 <= o.t <= t1]
 
 
-def _drifted_steps(
-    odom: list[Odom], start: Pose2D, drift: Drift, rng: np.random.Generator, scale: float, turn: float
-) -> list[Pose2D]:
-    pose, out = start, [start]
-    for a, b in zip(odom[:-1], odom[1:], strict=True):
-        step = a.pose.inverse() * b.pose
-        dist = math.hypot(step.x, step.y)
-        noise = rng.normal(0.0, drift.heading_per_m * math.sqrt(dist)) if dist > 0 else 0.0
-        pose = pose * Pose2D(step.x * scale, step.y * scale, step.yaw * turn + noise)
-        out.append(pose)
-    return out
-
-
 def _noisy(pose: Pose2D, rng: np.random.Generator) -> Pose2D:
     m, rad = LOCALISER_NOISE
     return Pose2D(pose.x + rng.normal(0, m), pose.y + rng.normal(0, m), pose.yaw + rng.normal(0, rad))
@@ -77,11 +64,11 @@ def kidnap(
     truth: LogTruth, a: tuple[int, int], b: tuple[int, int], rng: np.random.Generator, drift: Drift = DRIFT
 ) -> Case:
     """The stretch of scans ``a`` then, carried, the stretch ``b`` (module docstring)."""
-    scale, turn = 1.0 + rng.normal(0.0, drift.scale_sd), 1.0 + rng.normal(0.0, drift.turn_sd)
+    scale, turn = drift_scales(drift, rng)
     odom_a, odom_b = _odom(truth, *a), _odom(truth, *b)
     shift = odom_a[-1].t + GAP_S - odom_b[0].t
-    drift_a = _drifted_steps(odom_a, odom_a[0].pose, drift, rng, scale, turn)
-    drift_b = _drifted_steps(odom_b, drift_a[-1], drift, rng, scale, turn)  # the wheels felt nothing
+    drift_a = drifted_poses(odom_a, odom_a[0].pose, drift, rng, scale, turn)
+    drift_b = drifted_poses(odom_b, drift_a[-1], drift, rng, scale, turn)  # the wheels felt nothing
     stale = odom_a[-1].pose * drift_a[-1].inverse()  # the localiser's odom -> map when carried
     records: list[Meta | Odom | Scan | Localiser] = [truth.meta]
     for o, d in zip(odom_a, drift_a, strict=True):
@@ -107,9 +94,9 @@ def kidnap(
 
 def control(truth: LogTruth, a: tuple[int, int], rng: np.random.Generator, drift: Drift = DRIFT) -> Case:
     """The stretch ``a`` with the localiser's pose right all along (a little noise)."""
-    scale, turn = 1.0 + rng.normal(0.0, drift.scale_sd), 1.0 + rng.normal(0.0, drift.turn_sd)
+    scale, turn = drift_scales(drift, rng)
     odom_a = _odom(truth, *a)
-    drift_a = _drifted_steps(odom_a, odom_a[0].pose, drift, rng, scale, turn)
+    drift_a = drifted_poses(odom_a, odom_a[0].pose, drift, rng, scale, turn)
     records: list[Meta | Odom | Scan | Localiser] = []
     for o, d in zip(odom_a, drift_a, strict=True):
         records.append(Odom(o.t, d.x, d.y, d.yaw))

@@ -36,24 +36,21 @@ from typing import Any
 
 import numpy as np
 from _common import ROOT, parse_args
-from _real_lidar import DRIFT, LogTruth, log_truth, walls_only, whole_log_map, window_records, windows
+from _real_lidar import (
+    DRIFT,
+    LogTruth,
+    log_truth,
+    walls_only,
+    whole_log_map,
+    window_records,
+    windows,
+    write_site,
+)
 
 from initcli.core.geometry.se2 import Pose2D
 
 REAL_LIDAR = ROOT.parent / "shared" / "real_lidar"
 ATTEMPTS: list[dict[str, Any]] = []  # every registration along the windows (--attempts)
-
-
-def write_site(grid: Any, name: str, workdir: Path) -> Path:
-    """``grid`` as a Nav2 map, then ``bim-extract MAP.yaml -o SITE``'s site (its storey ``name``)."""
-    from bimtools.extract.from_map import extract_map_site, write_map_site
-    from bimtools.site.occupancy_map import write_map
-
-    yaml_path = workdir / f"{name}.yaml"
-    write_map(yaml_path, grid)
-    site = workdir / f"{name}_site"
-    write_map_site(site, extract_map_site(yaml_path), preview=False)
-    return site
 
 
 def match_window(records: list[Any], site: Path, workdir: Path) -> tuple[Any, float]:

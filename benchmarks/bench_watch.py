@@ -33,23 +33,12 @@ from typing import Any
 
 import numpy as np
 from _common import ROOT, parse_args
-from _real_lidar import LogTruth, log_truth, walls_only, whole_log_map
+from _real_lidar import LogTruth, log_truth, walls_only, whole_log_map, write_site
 from _watch_splice import Case, control, kidnap, stretch
 
 REAL_LIDAR = ROOT.parent / "shared" / "real_lidar"
 MIN_APART_M = 3.0  # m: a kidnap carries the robot at least this far ...
 MIN_APART_TRAVEL = 20.0  # m: ... from a part of the log at least this much travel away
-
-
-def write_site(grid: Any, name: str, workdir: Path) -> Path:
-    from bimtools.extract.from_map import extract_map_site, write_map_site
-    from bimtools.site.occupancy_map import write_map
-
-    yaml_path = workdir / f"{name}.yaml"
-    write_map(yaml_path, grid)
-    site = workdir / f"{name}_site"
-    write_map_site(site, extract_map_site(yaml_path), preview=False)
-    return site
 
 
 def cases(truth: LogTruth, args: argparse.Namespace, rng: np.random.Generator) -> list[Case]:

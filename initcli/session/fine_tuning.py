@@ -201,12 +201,13 @@ class FineTuning:
             carried = transform * frame.odom
             carried_fit = scan_fit(carried, scan.angles, scan.ranges, scan.range_max, pf.field)
             verdict = settle(estimate.pose, fit, carried, carried_fit, reseeded, cfg, self.min_scan_fit)
+            # what is sent with either pose: the cloud's covariance and what the cloud cannot see
+            sent = honest_covariance(
+                cov, estimate.pose, carried, cfg.covariance_floor_m, cfg.covariance_floor_deg
+            )
             if verdict is Settlement.KEEP_RECTIFIED:
                 hooks.note(
                     frame.t, f"filter drifted (scan fit {fit:.0%}); rectified pose kept ({carried_fit:.0%})"
-                )
-                sent = honest_covariance(
-                    cov, estimate.pose, carried, cfg.covariance_floor_m, cfg.covariance_floor_deg
                 )
                 return FineTuned(frame, carried, sent, converged=False)
             if verdict is Settlement.LOST:
@@ -218,9 +219,6 @@ class FineTuning:
                 pf.seed(estimate.pose, cfg.reseed_sigma_xy, math.radians(cfg.seed_sigma_yaw))
                 start_distance, converged_at = driver.distance, None
                 continue
-            sent = honest_covariance(
-                cov, estimate.pose, carried, cfg.covariance_floor_m, cfg.covariance_floor_deg
-            )
             return FineTuned(frame, estimate.pose, sent, converged=converged_at is not None)
 
 

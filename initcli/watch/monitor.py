@@ -30,7 +30,7 @@ from initcli.config.building import twin_reason
 from initcli.core.geometry.se2 import Pose2D
 from initcli.core.lidar.registration import RegistrationMap
 from initcli.core.lidar.registration_params import RegistrationParams
-from initcli.core.lidar.scan_fit import BeamEnds, ScanSample, best_scan_alignment
+from initcli.core.lidar.scan_fit import ScanSample, best_scan_alignment
 from initcli.core.verify.checks import CameraView
 from initcli.core.verify.params import VerificationParams
 from initcli.core.watch.lost_test import CusumTest, wrongness
@@ -41,7 +41,7 @@ from initcli.match.load import site_class_map
 from initcli.verify.evidence import PathEvidence, StoreyEvidence, claim_params, verify_transform
 from initcli.verify.registration import SubmapRegistration
 from initcli.watch.records import EventKind, WatchCheck, WatchEvent, WatchState
-from initcli.watch.scans import RecentScans
+from initcli.watch.scans import RecentScans, check_beams
 
 __all__ = ["Watcher"]
 
@@ -313,7 +313,7 @@ class Watcher:
     def _fits_of(self, kept: list[ScanSample], mine: Pose2D, theirs: Pose2D) -> tuple[float, float]:
         """The share of every beam end of ``kept`` on the map's walls placed by the localiser's
         transform ``mine`` (aligned within its own error) and by a registration's ``theirs``."""
-        ends = BeamEnds.of([s.thinned(max(1, len(s.ranges) // 180)) for s in kept])
+        ends = check_beams(kept)
         tol, p = self.verification.scan_tolerance, self.params
         a = best_scan_alignment(mine, ends, self.map.fit, tol, p.search_m, math.radians(p.search_deg))
         b = best_scan_alignment(

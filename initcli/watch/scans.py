@@ -11,12 +11,17 @@ import numpy as np
 
 from initcli.core.lidar.scan_fit import BeamEnds, ScanSample
 
-__all__ = ["RecentScans"]
+__all__ = ["RecentScans", "check_beams"]
 
 KEEP_STEP_M = 0.05  # m of travel between two kept scans ...
 KEEP_TURN = math.radians(3.0)  # ... or this much turn
 CHECK_BEAMS = 180  # beams per scan the pose check reads at most (every n-th)
 CHECK_POINTS = 3000  # beam ends a pose check reads at most (evenly picked)
+
+
+def check_beams(scans: list[ScanSample]) -> BeamEnds:
+    """The beam ends of ``scans``, every n-th beam so that each reads at most CHECK_BEAMS."""
+    return BeamEnds.of([s.thinned(max(1, len(s.ranges) // CHECK_BEAMS)) for s in scans])
 
 
 @dataclass
@@ -54,8 +59,7 @@ class RecentScans:
             return None
         now = self.travel[-1]
         chosen = [s for s, d in zip(self.scans, self.travel, strict=True) if now - d <= metres]
-        thinned = [s.thinned(max(1, len(s.ranges) // CHECK_BEAMS)) for s in chosen]
-        ends = BeamEnds.of(thinned)
+        ends = check_beams(chosen)
         if len(ends.xy) <= CHECK_POINTS:
             return ends
         keep = np.linspace(0, len(ends.xy) - 1, CHECK_POINTS).astype(np.intp)
