@@ -735,8 +735,9 @@ def real_lidar_page(root: Path = ROOT) -> list[Page]:
             "Every registration a session would make along the windows (every `registration.every` m),"
             " before the checks that a claim passes (beams through walls, the path in free space, the"
             " scan fit): the best places a pair of `registration.min_fit` (rows) and `registration.margin`"
-            " (columns) would let through, right (within the bounds above) / not right (off by more,"
-            " imprecise or wrong). A window stops at its first claim; these go on to its end.",
+            " (columns) would let through: right (within the bounds above) / imprecise / wrong (more"
+            " than the confident-wrong bounds off). A window stops at its first claim; these go on to"
+            " its end, so one window's drifting odometry counts its imprecise places many times.",
             "",
             *table,
             "",

@@ -23,7 +23,7 @@ class RegistrationParams:
     every: float = setting(5.0, "m of travel between two registrations", above=0, maximum=1000)
     window: float = setting(20.0, "m of the latest path whose scans make the submap", above=0, maximum=200)
     min_fit: float = setting(
-        0.8,
+        0.7,
         "share of the submap's beam ends within verification.scan_tolerance of a mapped wall that the"
         " best pose must reach",
         minimum=0,
