@@ -3,6 +3,7 @@ error line, and the console-script runner that turns usage errors into that line
 
 from __future__ import annotations
 
+import errno
 import inspect
 import os
 import re
@@ -26,12 +27,14 @@ __all__ = [
     "EXIT_TERMINATED",
     "HELP",
     "HelpGroup",
+    "STORAGE_ERRORS",
     "Terminated",
     "error_line",
     "fail",
     "native_stderr_silenced",
     "number_option",
     "run_cli",
+    "storage_problem",
     "summary",
 ]
 
@@ -126,6 +129,21 @@ class HelpGroup(TyperGroup):
 HELP: dict[str, Any] = {"rich_markup_mode": None, "cls": HelpGroup}
 
 
+# What the machine's storage, not the command, refuses: a full disk or quota, a read-only or
+# vanished folder, a file too large, a failing device. One line and exit 2, as for bad input.
+STORAGE_ERRORS = frozenset(
+    {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EPERM, errno.ENOENT, errno.ENOTDIR}
+    | {errno.EFBIG, errno.EIO, errno.ESTALE}
+)
+
+
+def storage_problem(exc: OSError) -> str:
+    """What a storage error says to a user: the reason, and the file where the error names one
+    (a failed write does not)."""
+    where = f" ({exc.filename})" if exc.filename else ""
+    return f"stopped: {exc.strerror or exc}{where}"
+
+
 def error_line(prog: str, message: object) -> str:
     """``prog: error: message`` on one line (white space folded)."""
     return f"{prog}: error: {' '.join(str(message).split())}"
@@ -210,6 +228,11 @@ def run_cli(app: Any, prog: str) -> None:
     except KeyboardInterrupt:
         print(f"{prog}: interrupted", file=sys.stderr)
         sys.exit(EXIT_INTERRUPTED)
+    except OSError as exc:
+        if exc.errno not in STORAGE_ERRORS:
+            raise
+        print(error_line(prog, storage_problem(exc)), file=sys.stderr)
+        sys.exit(EXIT_BAD_INPUT)
     if signal.SIGINT in _deferred:  # held off in a finaliser, and the command ended before it came
         sys.exit(EXIT_INTERRUPTED)
     if _terminated or signal.SIGTERM in _deferred:

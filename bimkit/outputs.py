@@ -19,16 +19,18 @@ from __future__ import annotations
 
 import fnmatch
 import os
+import shutil
 import stat
 import tempfile
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 from pathlib import Path
 
 from bimkit.atomic import RECORD, STAGE_PREFIX, owned_files
 from bimkit.errors import InputError
 
-__all__ = ["OutputFile", "OutputFolder", "check_outputs"]
+__all__ = ["OutputFile", "OutputFolder", "check_outputs", "removed_on_storage_error"]
 
 
 @dataclass(frozen=True)
@@ -208,3 +210,27 @@ def check_outputs(
             _check_file(out, resolved)
         elif isinstance(out, OutputFolder):
             _check_folder(out, resolved, force)
+
+
+@contextmanager
+def removed_on_storage_error(folder: Path) -> Iterator[None]:
+    """What a command adds to its output ``folder`` is taken away again when writing fails (a full
+    disk or quota mid-way, ``OSError``): the entries that were not there before, and the folder
+    itself when the command made it. What was there before stays as it was; the error goes on."""
+    existed = folder.is_dir()
+    before = set(os.listdir(folder)) if existed else set()
+    try:
+        yield
+    except OSError:
+        if folder.is_dir() and not folder.is_symlink():
+            for name in set(os.listdir(folder)) - before:
+                entry = folder / name
+                with suppress(OSError):
+                    if entry.is_dir() and not entry.is_symlink():
+                        shutil.rmtree(entry)
+                    else:
+                        entry.unlink()
+            if not existed:
+                with suppress(OSError):
+                    folder.rmdir()
+        raise

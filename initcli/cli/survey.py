@@ -16,7 +16,7 @@ from rich.text import Text
 from bimkit.atomic import claim, write_text_atomic
 from bimkit.cli import EXIT_INTERRUPTED, fail, number_option
 from bimkit.errors import InputError
-from bimkit.outputs import OutputFolder, check_outputs
+from bimkit.outputs import OutputFolder, check_outputs, removed_on_storage_error
 from bimtools.site.load import Site, load_site
 from bimtools.site.names import storey_slugs
 from initcli.cli import PROG
@@ -171,33 +171,34 @@ def survey(
     }
     stems = _stems(model)
     table = _survey_table()
-    try:
-        with Progress(
-            TextColumn("[bold]survey[/bold] {task.fields[storey]}"),
-            BarColumn(),
-            MofNCompleteColumn(),
-            TimeElapsedColumn(),
-            console=err,
-        ) as progress:
-            for name, plan in plans.items():
-                stem = stems[name]
-                entry, chosen = _survey_one(name, plan, params, runner, landmarks, progress, out, stem)
-                storeys.append(entry)
-                table.add_row(*_table_row(name, entry))
-                line = _landmarks_line(name, chosen)
-                if line:
-                    suggested.append(line)
-    except KeyboardInterrupt:
-        runner.close(cancel=True)
-        if out.is_dir():
-            claim(out, SURVEY_WRITES)
-        err.print("interrupted: nothing written for the unfinished storey")
-        raise typer.Exit(EXIT_INTERRUPTED) from None
-    finally:
-        runner.close()
-    out.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(out / "survey.json", json.dumps(report, indent=2) + "\n")
-    claim(out, SURVEY_WRITES)
+    with removed_on_storage_error(out):  # a full disk mid-way: none of this run's maps left
+        try:
+            with Progress(
+                TextColumn("[bold]survey[/bold] {task.fields[storey]}"),
+                BarColumn(),
+                MofNCompleteColumn(),
+                TimeElapsedColumn(),
+                console=err,
+            ) as progress:
+                for name, plan in plans.items():
+                    stem = stems[name]
+                    entry, chosen = _survey_one(name, plan, params, runner, landmarks, progress, out, stem)
+                    storeys.append(entry)
+                    table.add_row(*_table_row(name, entry))
+                    line = _landmarks_line(name, chosen)
+                    if line:
+                        suggested.append(line)
+        except KeyboardInterrupt:
+            runner.close(cancel=True)
+            if out.is_dir():
+                claim(out, SURVEY_WRITES)
+            err.print("interrupted: nothing written for the unfinished storey")
+            raise typer.Exit(EXIT_INTERRUPTED) from None
+        finally:
+            runner.close()
+        out.mkdir(parents=True, exist_ok=True)
+        write_text_atomic(out / "survey.json", json.dumps(report, indent=2) + "\n")
+        claim(out, SURVEY_WRITES)
     console.print(table)
     for line in suggested:
         console.print(line, markup=False, highlight=False)

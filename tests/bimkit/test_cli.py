@@ -94,3 +94,39 @@ def test_a_signal_in_an_llvmlite_callback_is_held_off_like_one_in_a_finaliser() 
     ):
         exec(compile("def here():\n    return sys._getframe()\n", path, "exec"), {"sys": sys}, where)
         assert _in_finaliser(where["here"]()) is (name == "callback")
+
+
+STORAGE = """
+import errno, sys
+import typer
+from bimkit.cli import run_cli
+
+app = typer.Typer()
+
+
+@app.command()
+def main(code: str) -> None:
+    raise OSError(getattr(errno, code), "the reason", *(["/x/out.png"] if code == "EROFS" else []))
+
+
+run_cli(app, "tool")
+"""
+
+
+@pytest.mark.parametrize("code", ["ENOSPC", "EROFS", "EDQUOT"])
+def test_a_full_disk_or_a_read_only_folder_is_one_line_and_exit_2(tmp_path: Path, code: str) -> None:
+    script = tmp_path / "tool.py"
+    script.write_text(STORAGE)
+    done = subprocess.run([sys.executable, str(script), code], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2
+    (line,) = done.stderr.splitlines()
+    assert line.startswith("tool: error: stopped: the reason")
+    assert ("/x/out.png" in line) == (code == "EROFS")
+
+
+def test_an_os_error_of_the_program_itself_stays_a_traceback(tmp_path: Path) -> None:
+    """A bad file descriptor is a bug, not the machine's storage: it is not hidden."""
+    script = tmp_path / "tool.py"
+    script.write_text(STORAGE)
+    done = subprocess.run([sys.executable, str(script), "EBADF"], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 1 and "Traceback" in done.stderr

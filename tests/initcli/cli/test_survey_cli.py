@@ -60,3 +60,32 @@ def test_unknown_storey_and_executor_exit_2(site_dir, tmp_path):
         result = runner.invoke(app, ["survey", str(site_dir), "--out", str(tmp_path), *extra])
         assert result.exit_code == 2
         assert result.output.count("\n") <= 2 and "error" in result.output
+
+
+def test_a_full_disk_mid_way_leaves_no_map_and_no_folder(site_dir, tmp_path, monkeypatch):
+    """The disk fills while the map is written: the folder the survey made goes with what it had
+    begun to write, and the error goes on to the command's one line (``run_cli``)."""
+    import errno
+
+    import initcli.survey.plots as plots
+
+    def full(path: Path, *args: object) -> None:
+        path.write_bytes(b"\x89PNG half")  # the part that fitted
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(plots, "survey_png", full)
+    out = tmp_path / "new" / "out"
+    result = runner.invoke(
+        app, ["survey", str(site_dir), "--out", str(out), "--spacing", "3", "--workers", "1"]
+    )
+    assert isinstance(result.exception, OSError) and result.exception.errno == errno.ENOSPC
+    assert not out.exists()
+    kept = tmp_path / "kept"
+    kept.mkdir()
+    (kept / "notes.txt").write_text("mine")
+    result = runner.invoke(
+        app, ["survey", str(site_dir), "--out", str(kept), "--spacing", "3", "--workers", "1", "--force"]
+    )
+    assert isinstance(result.exception, OSError)
+    assert sorted(p.name for p in kept.iterdir()) == ["notes.txt"]
+    assert (kept / "notes.txt").read_text() == "mine"
