@@ -6,9 +6,15 @@
   the starts ``bim-init eval`` draws) against the eval's measured coarse distance of the ``bim``
   method (100 starts; by default the README's numbers below, with ``--results DIR/results.jsonl``
   of an ideal-world eval run its own: the mean and median over its localised ``bim`` starts, and
-  per start as well, the share within 25 %).
+  per start as well, the share within 25 %);
+- initialised: the share of those starts the survey places within ``limits.max_distance`` (the
+  camera's Algorithm 1 or the session's lidar registration along the loop, whichever first) beside
+  the eval's share localised, per storey, and the mean distance of those placed. ``--camera off``
+  surveys a robot whose camera sees nothing, for an eval with ``sim.miss_rate: 1``; ``--method`` and
+  ``--sweep-value`` pick the eval's rows (``--sweep registration.min_fit=0.7,0.8``: ``0.7``).
 
     python benchmarks/bench_survey.py [--quick] [--workers 2] [--starts 100] [--models ...] [--results FILE]
+                                      [--method bim+pf] [--sweep-value V] [--camera on|off]
 """
 
 from __future__ import annotations
@@ -18,6 +24,7 @@ import json
 import math
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -36,7 +43,7 @@ def main() -> None:
     from initcli.sim.build import build_sim
     from initcli.survey.landmarks import suggest_landmarks
     from initcli.survey.plan import plan_storey
-    from initcli.survey.run import survey_storey, unique_distances
+    from initcli.survey.run import lidar_along, survey_storey, unique_distances
     from initcli.survey.sequences import sample_views, sequences
     from initcli.survey.summary import summarise
 
@@ -47,6 +54,16 @@ def main() -> None:
     ap.add_argument(
         "--results", type=Path, default=None, help="an eval results.jsonl for per-start agreement"
     )
+    ap.add_argument("--method", default="bim", help="the eval method of --results compared")
+    ap.add_argument(
+        "--sweep-value", default=None, help="with a swept --results: the rows of this sweep value only"
+    )
+    ap.add_argument(
+        "--camera",
+        choices=("on", "off"),
+        default="on",
+        help="off: the survey of a robot whose camera sees nothing (an eval with sim.miss_rate 1)",
+    )
     ap.add_argument("--no-landmarks", action="store_true")
     ap.add_argument("--spacing", type=float, default=1.0, help="m between surveyed positions")
     ap.add_argument("--headings", type=int, default=4, help="headings surveyed at each position")
@@ -55,7 +72,10 @@ def main() -> None:
     if args.results is not None:
         for line in args.results.read_text().splitlines():
             r = json.loads(line)
-            if r["method"] == "bim" and not r.get("sweep_key"):
+            swept = (
+                str(r.get("sweep_value")) == args.sweep_value if args.sweep_value else not r.get("sweep_key")
+            )
+            if r["method"] == args.method and swept:
                 measured[(r["site"], int(r["start"]))] = (
                     float(r["distance_m"]) if r["localised"] else math.inf
                 )
@@ -66,7 +86,9 @@ def main() -> None:
             config = load_config(SAMPLES / f"{name}.site.yaml")
             site = prepare_site(config, Path(tmp) / name)
             simulated, _ = choose_storey(config, site)
-            params = survey_params(config, args.spacing, args.headings)
+            params = replace(
+                survey_params(config, args.spacing, args.headings), camera_on=args.camera == "on"
+            )
             t0 = time.perf_counter()
             plan = plan_storey(site.storeys[simulated], params)
             result, views = survey_storey(plan, params, executor)
@@ -82,8 +104,15 @@ def main() -> None:
             plan.starts = np.array([[s.x, s.y, s.yaw] for s in starts])
             plan.position = np.arange(len(starts))
             v = sample_views(plan, params)
-            seqs, dists = sequences(plan, v, params)
-            at = np.minimum(unique_distances(plan, seqs, dists, params, executor), params.limit_m)
+            at = np.full(len(starts), np.inf)
+            if params.camera_on:
+                seqs, dists = sequences(plan, v, params)
+                at = unique_distances(plan, seqs, dists, params, executor)
+            lidar = lidar_along(plan, v, params)
+            if lidar is not None:  # the session's lidar registration, whichever places it first
+                at = np.minimum(at, lidar)
+            placed = np.isfinite(at) & (at <= params.limit_m)
+            at = np.minimum(at, params.limit_m)
             eval_mean, eval_median = EVAL_MEAN.get(name), EVAL_MEDIAN.get(name)
             localised = [m for (where, _), m in measured.items() if where == name and math.isfinite(m)]
             if localised:  # the given eval's own numbers (localised bim starts), not the README's
@@ -102,7 +131,12 @@ def main() -> None:
                 "eval_mean_m": eval_mean,
                 "eval_median_m": eval_median,
                 "mean_ratio": round(float(at.mean()) / eval_mean, 2) if eval_mean else None,
+                "survey_initialised": round(float(placed.mean()), 2),
+                "survey_initialised_mean_m": round(float(at[placed].mean()), 1) if placed.any() else None,
             }
+            mine = [m for (where, _), m in measured.items() if where == name]
+            if mine:  # the eval's share of its starts initialised, beside the survey's
+                line["eval_initialised"] = round(len(localised) / len(mine), 2)
             pairs = [(at[k], measured[(name, k)]) for k in range(len(at)) if (name, k) in measured]
             if pairs:
                 within = [
@@ -114,15 +148,17 @@ def main() -> None:
             print(json.dumps(line), flush=True)
     executor.close()
     print(
-        "\n| model | starts surveyed | survey s | landmarks s "
-        "| survey at eval starts mean / median | eval mean / median | ratio |"
+        "\n| model | starts surveyed | survey s | landmarks s | survey at eval starts mean / median"
+        " | eval mean / median | ratio | initialised: survey / eval | mean m of those: survey / eval |"
     )
-    print("|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         print(
             f"| {r['model']} | {r['samples']} | {r['survey_s']} | {r['landmarks_s']} | "
             f"{r['at_eval_starts_mean_m']} / {r['at_eval_starts_median_m']} m | "
-            f"{r['eval_mean_m']} / {r['eval_median_m']} m | {r['mean_ratio']} |"
+            f"{r['eval_mean_m']} / {r['eval_median_m']} m | {r['mean_ratio']} | "
+            f"{r['survey_initialised']} / {r.get('eval_initialised', '-')} | "
+            f"{r['survey_initialised_mean_m']} / {r['eval_mean_m']} |"
         )
 
 

@@ -25,6 +25,7 @@ from initcli.core.features.visibility import CameraModel
 from initcli.executor import Executor, make_executor
 from initcli.match.pipeline import site_class_map
 from initcli.survey.landmarks import Landmark, suggest_landmarks
+from initcli.survey.lidar import LidarModel
 from initcli.survey.plan import StoreyPlan, SurveyParams, plan_storey
 from initcli.survey.run import StoreySurvey, survey_storey
 from initcli.survey.summary import summarise
@@ -39,7 +40,8 @@ MAX_STARTS = 100_000  # a survey of more starts (positions x headings) runs only
 
 
 def survey_params(config: SessionConfig, spacing: float, headings: int) -> SurveyParams:
-    """The survey's settings from a session config (camera, matching, exploration, limits)."""
+    """The survey's settings from a session config (camera, matching, exploration, limits, the lidar
+    and its registration)."""
     camera, mount = camera_of(config)
     m = config.matching
     return SurveyParams(
@@ -51,6 +53,9 @@ def survey_params(config: SessionConfig, spacing: float, headings: int) -> Surve
         side=followed_side(config),
         min_sightings=m.min_sightings,
         scan_tolerance=config.verification.scan_tolerance,
+        camera_on=config.robot.rosbridge.camera != "absent" and config.sim.miss_rate < 1.0,
+        registration=config.registration,
+        lidar=LidarModel(config.lidar.beams, config.lidar.fov, config.lidar.max_range),
         camera=CameraModel(
             camera, mount, max_range=config.camera.range, max_view_angle_deg=config.camera.max_view_angle
         ),

@@ -41,8 +41,9 @@ def _with_landmark(
     ]
     distance = current[which].copy()
     if changed:
-        distance[changed] = unique_distances(
-            plan, [seqs[j] for j in changed], [dists[j] for j in changed], params, executor
+        distance[changed] = np.minimum(
+            unique_distances(plan, [seqs[j] for j in changed], [dists[j] for j in changed], params, executor),
+            distance[changed],  # the lidar's distance, or the camera's without the landmark
         )
     return distance
 
@@ -115,4 +116,4 @@ def suggest_landmarks(
         chosen.append(
             Landmark(float(x), float(y), float(nx), float(ny), cls, float(np.minimum(current, limit).mean()))
         )
-    return chosen, StoreySurvey(plan, current, params)
+    return chosen, StoreySurvey(plan, current, params, result.lidar_distance)

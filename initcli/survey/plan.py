@@ -14,14 +14,18 @@ from initcli.config.building import self_similar
 from initcli.core.features.classes import ClassMap
 from initcli.core.features.visibility import CameraModel, FeatureArrays, visible
 from initcli.core.geometry.projection import DEFAULT_CAMERA, DEFAULT_MOUNT
+from initcli.core.lidar.registration import RegistrationMap
+from initcli.core.lidar.registration_params import RegistrationParams
 from initcli.core.lidar.symmetry import Turn
 from initcli.core.verify.params import VerificationParams
 from initcli.storey.circulation import Circulation
 from initcli.storey.doors import closed_doors, door_ids
 from initcli.storey.outlines import polygon_edges
 from initcli.survey.exploration import Loop, follow_loops
+from initcli.survey.lidar import LidarModel
 from initcli.survey.spaces import LidarTwin, ShutInRoom, lidar_twin_spaces, shut_in_rooms
 from initcli.survey.uniqueness import UniquenessParams
+from initcli.verify.registration import storey_registration_map
 
 __all__ = [
     "FACED_BY",
@@ -57,6 +61,10 @@ class SurveyParams:
     landmark_spacing: float = 4.0  # m between candidate landmark positions along a corridor wall
     landmark_candidates: int = 30  # candidates tried at most per landmark
     landmark_stride: int = 4  # candidates are scored on every n-th start, the chosen one on all
+    camera_on: bool = True  # false: the robot's camera sees nothing (absent, or every image missed)
+    # the session's lidar registration along the loops (enabled: false, the camera alone: the paper)
+    registration: RegistrationParams = field(default_factory=RegistrationParams)
+    lidar: LidarModel = field(default_factory=LidarModel)
 
 
 @dataclass
@@ -78,6 +86,8 @@ class StoreyPlan:
     twin: Turn | None = None  # the turn that maps the storey onto itself: no start initialises
     lidar_twins: list[LidarTwin] = field(default_factory=list)
     lidar_twin_cells: np.ndarray | None = None  # bool mask over the grid: where lidar_twins lie
+    scan_segments: np.ndarray | None = None  # (W, 4) what a scan sees: occluders and closed door leaves
+    registration_map: RegistrationMap | None = None  # the storey's map as the registration reads it
 
     @property
     def lidar_twin_start_share(self) -> float:
@@ -165,4 +175,6 @@ def plan_storey(storey: StoreyModel, params: SurveyParams, cmap: ClassMap | None
         self_similar(storey),
         twins,
         twin_cells,
+        np.concatenate([occluders, *(polygon_edges(np.asarray(leaf.exterior)) for leaf in leaves)]),
+        storey_registration_map(storey.name, storey, cmap or ClassMap()),
     )

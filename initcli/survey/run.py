@@ -10,11 +10,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from initcli.executor import Executor, LocalExecutor, map_unordered
+from initcli.survey.lidar import lidar_distances, placed_along
 from initcli.survey.plan import StoreyPlan, SurveyParams
 from initcli.survey.sequences import SampleViews, sample_views, sequences
 from initcli.survey.uniqueness import UniquenessParams, first_unique
 
-__all__ = ["StoreySurvey", "survey_storey", "unique_distances"]
+__all__ = ["StoreySurvey", "lidar_along", "survey_storey", "unique_distances"]
 
 
 def _match_chunk(
@@ -57,8 +58,9 @@ class StoreySurvey:
     """The survey of one storey: the plan, the per-start distances, the per-position map values."""
 
     plan: StoreyPlan
-    distance: np.ndarray  # (S,) m, inf: never unique
+    distance: np.ndarray  # (S,) m, inf: never unique (the camera or the lidar, whichever is first)
     params: SurveyParams
+    lidar_distance: np.ndarray | None = None  # (S,) m until the lidar places the start; None: not run
 
     @property
     def position_distance(self) -> np.ndarray:
@@ -80,6 +82,35 @@ def survey_storey(
     on_done: Callable[[int], None] | None = None,
 ) -> tuple[StoreySurvey, SampleViews]:
     views = sample_views(plan, params)
-    seqs, dists = sequences(plan, views, params)
-    distance = unique_distances(plan, seqs, dists, params, executor, on_done)
-    return StoreySurvey(plan, distance, params), views
+    if params.camera_on:
+        seqs, dists = sequences(plan, views, params)
+        distance = unique_distances(plan, seqs, dists, params, executor, on_done)
+    else:  # no camera: the lidar alone
+        distance = np.full(len(plan.starts), np.inf)
+        if on_done is not None:
+            on_done(len(plan.starts))
+    lidar = lidar_along(plan, views, params)
+    if lidar is not None:
+        distance = np.minimum(distance, lidar)
+    return StoreySurvey(plan, distance, params, lidar), views
+
+
+def lidar_along(plan: StoreyPlan, views: SampleViews, params: SurveyParams) -> np.ndarray | None:
+    """(S,) m until the session's lidar registration places each start (:mod:`initcli.survey.lidar`);
+    None where the registration is off or the storey has no map."""
+    reg = params.registration
+    if not reg.enabled or plan.registration_map is None or plan.scan_segments is None:
+        return None
+    placed = [
+        placed_along(
+            loop,
+            plan.scan_segments,
+            [plan.registration_map],
+            plan.name,
+            reg,
+            params.scan_tolerance,
+            params.lidar,
+        )
+        for loop in plan.loops
+    ]
+    return lidar_distances(views.entries, placed, plan.loops, reg, params.limit_m)

@@ -23,6 +23,7 @@ def summarise(result: StoreySurvey) -> dict[str, object]:
     finite = d[np.isfinite(d)]
     median = float(np.median(d)) if n else math.inf
     twin = result.plan.twin
+    lidar = result.lidar_distance
     return {
         "storey": result.plan.name,
         "samples": n,
@@ -36,6 +37,10 @@ def summarise(result: StoreySurvey) -> dict[str, object]:
         "mean_distance_m": round(float(finite.mean()), 2) if len(finite) else None,
         "never_unique_share": round(float(np.mean(~np.isfinite(d))) if n else 0.0, 4),
         "never_unique_area_m2": round(float(result.position_never.sum() * cell), 2),
+        # the share the session's lidar registration places within the limit (null: registration off)
+        "lidar_placed_share": None
+        if lidar is None
+        else round(float(np.mean(np.isfinite(lidar))) if n else 0.0, 4),
         # rooms closed off by their doors: a robot there is shut in (cannot initialise from here)
         "shut_in_area_m2": round(sum(r.area_m2 for r in result.plan.shut_in), 1),
         "shut_in_rooms": [{"x": r.x, "y": r.y, "area_m2": r.area_m2} for r in result.plan.shut_in],

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bimtools.site.load import Site, load_site
+from bimtools.site.load import Site, StoreyModel, load_site
 from bimtools.site.records import Feature
 from initcli.config.building import twin_reason
 from initcli.core.features.classes import ClassMap
@@ -67,6 +67,7 @@ __all__ = [
     "registered_hypothesis",
     "registration_record",
     "replay_registration",
+    "storey_registration_map",
 ]
 
 
@@ -89,24 +90,8 @@ class SubmapRegistration:
         if self._maps is None:
             names = [self.storey] if self.storey is not None else list(self.site.storeys)
             cmap = site_class_map(self.site)
-            self._maps = []
-            for name in names:
-                storey = self.site.storeys[name]
-                if storey.grid is None:
-                    continue
-                doors = door_openings(storey.features, cmap)
-                field_ = likelihood_field(storey.grid)
-                through = fit = field_  # no doors: the map as drawn, doors open or shut
-                if len(doors):
-                    opened = open_doorways(
-                        storey.grid, doors, GRID.door_slack, GRID.door_depth, GRID.door_front
-                    )
-                    through = likelihood_field(opened)
-                    shut = shut_doorways(
-                        storey.grid, doors, GRID.door_slack, GRID.door_depth, GRID.door_front
-                    )
-                    fit = likelihood_field(shut)
-                self._maps.append(RegistrationMap(name, storey.grid, field_, through=through, fit=fit))
+            found = (storey_registration_map(name, self.site.storeys[name], cmap) for name in names)
+            self._maps = [m for m in found if m is not None]
         return self._maps
 
     def _submap_scans(self, path: PathEvidence, lines: float) -> list[ScanSample]:
@@ -143,6 +128,22 @@ class SubmapRegistration:
             return Registration((), False, "no scans" if not scans else "no map", 0), None
         ends = BeamEnds.of(scans)
         return register(ends, self.maps(), self.params, self.tolerance), ends.last
+
+
+def storey_registration_map(name: str, storey: StoreyModel, cmap: ClassMap) -> RegistrationMap | None:
+    """A storey's map prepared for the registration (None: it has no map): placed and scored on
+    with its doors shut, the wall-crossing test on the map as drawn and with its doors open."""
+    if storey.grid is None:
+        return None
+    doors = door_openings(storey.features, cmap)
+    field_ = likelihood_field(storey.grid)
+    through = fit = field_  # no doors: the map as drawn, doors open or shut
+    if len(doors):
+        opened = open_doorways(storey.grid, doors, GRID.door_slack, GRID.door_depth, GRID.door_front)
+        through = likelihood_field(opened)
+        shut = shut_doorways(storey.grid, doors, GRID.door_slack, GRID.door_depth, GRID.door_front)
+        fit = likelihood_field(shut)
+    return RegistrationMap(name, storey.grid, field_, through=through, fit=fit)
 
 
 def door_openings(features: Iterable[Feature], cmap: ClassMap) -> np.ndarray:

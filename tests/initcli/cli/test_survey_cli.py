@@ -76,7 +76,8 @@ def test_a_full_disk_mid_way_leaves_no_map_and_no_folder(site_dir, tmp_path, mon
     monkeypatch.setattr(plots, "survey_png", full)
     out = tmp_path / "new" / "out"
     result = runner.invoke(
-        app, ["survey", str(site_dir), "--out", str(out), "--spacing", "3", "--workers", "1"]
+        app,
+        ["survey", str(site_dir), "--out", str(out), "--spacing", "5", "--headings", "1", "--workers", "1"],
     )
     assert isinstance(result.exception, OSError) and result.exception.errno == errno.ENOSPC
     assert not out.exists()
@@ -84,7 +85,20 @@ def test_a_full_disk_mid_way_leaves_no_map_and_no_folder(site_dir, tmp_path, mon
     kept.mkdir()
     (kept / "notes.txt").write_text("mine")
     result = runner.invoke(
-        app, ["survey", str(site_dir), "--out", str(kept), "--spacing", "3", "--workers", "1", "--force"]
+        app,
+        [
+            "survey",
+            str(site_dir),
+            "--out",
+            str(kept),
+            "--spacing",
+            "5",
+            "--headings",
+            "1",
+            "--workers",
+            "1",
+            "--force",
+        ],
     )
     assert isinstance(result.exception, OSError)
     assert sorted(p.name for p in kept.iterdir()) == ["notes.txt"]

@@ -60,6 +60,7 @@ def test_survey_json_and_the_terminal_name_the_lidar_twins(sites, tmp_path) -> N
     jsonschema.validate(doc, json.loads((SCHEMAS / "survey.schema.json").read_text()))
     (storey,) = doc["storeys"]
     assert storey["lidar_twin_start_share"] == 1.0
+    assert storey["lidar_placed_share"] == 0.0  # and the registration along its loop places none
     assert storey["lidar_twin_tolerance_m"] == 0.25  # the session's verification.scan_tolerance
     (corridor,) = [t for t in storey["lidar_twins"] if t["start_region"]]
     assert corridor["turn_deg"] == 180.0

@@ -1,0 +1,122 @@
+"""Where a session's lidar registration places a survey start (beyond the paper).
+
+A session without a camera claim registers the submap of its last ``registration.window`` m every
+``registration.every`` m (:func:`initcli.core.lidar.registration.register`). The survey does the
+same along each wall-following loop, noise-free: a scan every ``TRACK_STEP_M`` m of the loop
+(ray-cast against the obstacle outlines with every door leaf closed, as the simulated world stands),
+the window before each registration point registered over the storey's map. A point is *placed*
+where that registration is unique and right (within ``RIGHT_M`` and ``RIGHT_DEG`` of the loop's
+pose): a unique place elsewhere is a wrong claim the session's checks must catch, not a start
+placed. A start is placed by the lidar at the first placed point it reaches along its loop once it
+has driven a whole window (its submap is then that point's), so the survey's distance is an upper
+bound where a shorter submap is unique already.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from initcli.core.geometry.raycast import cast_rays
+from initcli.core.geometry.se2 import Pose2D
+from initcli.core.lidar.registration import RegistrationMap, register
+from initcli.core.lidar.registration_params import RegistrationParams
+from initcli.core.lidar.scan_fit import BeamEnds, ScanSample
+from initcli.survey.exploration import Entry, Loop
+
+__all__ = ["LidarModel", "RIGHT_DEG", "RIGHT_M", "TRACK_STEP_M", "lidar_distances", "placed_along"]
+
+TRACK_STEP_M = 0.5  # m of the loop between two scans of the submap (the session keeps one per 0.5 m)
+BEAM_STEP = 2  # every second beam of a scan, as the session's submap
+RIGHT_M = 0.5  # m: a registration this close to the loop's pose is right ...
+RIGHT_DEG = 5.0  # ... and turned at most this much
+
+
+@dataclass(frozen=True)
+class LidarModel:
+    """The session's lidar (``lidar:`` of site.yaml), noise-free."""
+
+    beams: int = 360
+    fov_deg: float = 360.0
+    max_range: float = 20.0
+
+    def angles(self) -> np.ndarray:
+        fov = math.radians(self.fov_deg)
+        full = self.fov_deg >= 360.0
+        return -fov / 2 + np.arange(self.beams) * (fov / (self.beams if full else max(1, self.beams - 1)))
+
+
+def _scan(pose: np.ndarray, lidar: LidarModel, angles: np.ndarray, segments: np.ndarray) -> ScanSample:
+    ranges = cast_rays(pose[:2], pose[2] + angles, segments, lidar.max_range)
+    ranges = np.where(ranges >= lidar.max_range, np.inf, ranges)  # no return
+    return ScanSample(Pose2D(float(pose[0]), float(pose[1]), float(pose[2])), angles, ranges, lidar.max_range)
+
+
+def placed_along(
+    loop: Loop,
+    segments: np.ndarray,
+    maps: list[RegistrationMap],
+    storey: str,
+    params: RegistrationParams,
+    tolerance: float,
+    lidar: LidarModel,
+) -> np.ndarray:
+    """(P,) bool over the loop's points: True where the registration of the window before the point
+    (every ``params.every`` m of the loop, the points between take the last one's outcome) is
+    unique and right on ``storey``."""
+    n = len(loop)
+    placed = np.zeros(n, dtype=bool)
+    if n == 0 or not maps:
+        return placed
+    every = max(1, int(round(params.every / loop.step)))
+    keep = max(1, int(round(TRACK_STEP_M / loop.step)))
+    span = min(n, max(1, int(round(params.window / loop.step))))
+    angles = lidar.angles()[::BEAM_STEP]
+    cache: dict[int, ScanSample] = {}
+    for at in range(0, n, every):
+        idx = [(at - k) % n for k in range(span - 1, -1, -keep)]
+        scans = []
+        for i in idx:
+            if i not in cache:
+                cache[i] = _scan(loop.poses[i], lidar, angles, segments)
+            scans.append(cache[i])
+        found = register(BeamEnds.of(scans), maps, params, tolerance)
+        best, truth = found.best, scans[-1].odom
+        right = (
+            found.unique
+            and best is not None
+            and best.storey == storey
+            and best.pose.distance_to(truth) <= RIGHT_M
+            and best.pose.yaw_error(truth) <= math.radians(RIGHT_DEG)
+        )
+        placed[at : at + every] = right
+    return placed
+
+
+def lidar_distances(
+    entries: list[Entry | None],
+    placed: list[np.ndarray],
+    loops: list[Loop],
+    params: RegistrationParams,
+    limit_m: float,
+) -> np.ndarray:
+    """(S,) m driven until the lidar places each start (``inf``: not within ``limit_m``): its
+    approach, then along its loop from where it joins, to the first placed point reached with a
+    whole window driven."""
+    out = np.full(len(entries), np.inf)
+    for s, entry in enumerate(entries):
+        if entry is None:
+            continue
+        loop, ok = loops[entry.loop], placed[entry.loop]
+        n = len(loop)
+        if not ok.any():
+            continue
+        first = max(0, int(math.ceil((params.window - entry.length) / loop.step)))
+        last = min(int((limit_m - entry.length) / loop.step), first + n)
+        ahead = np.roll(ok, -entry.index)  # ahead[k]: the point k steps on from where it joins
+        hits = np.flatnonzero(ahead[np.arange(first, last + 1) % n]) if last >= first else np.zeros(0, int)
+        if len(hits):
+            out[s] = entry.length + (first + int(hits[0])) * loop.step
+    return out
