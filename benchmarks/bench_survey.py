@@ -115,9 +115,9 @@ def main() -> None:
             at = np.minimum(at, params.limit_m)
             eval_mean, eval_median = EVAL_MEAN.get(name), EVAL_MEDIAN.get(name)
             localised = [m for (where, _), m in measured.items() if where == name and math.isfinite(m)]
-            if localised:  # the given eval's own numbers (localised bim starts), not the README's
-                eval_mean = round(float(np.mean(localised)), 1)
-                eval_median = round(float(np.median(localised)), 1)
+            if any(where == name for where, _ in measured):  # the given eval's own numbers, not the README's
+                eval_mean = round(float(np.mean(localised)), 1) if localised else None
+                eval_median = round(float(np.median(localised)), 1) if localised else None
             line = {
                 "model": name,
                 "storey": simulated,

@@ -99,6 +99,9 @@ class ClaimChecks:
         # m of travel when a claim was last held back by rivals that pass the checks: claims soon
         # after get the wide rival search, however many features they have
         self.doubted_at: float | None = None
+        # m: the lidar is judged by its beams on straight lines this long once a registration on its
+        # wall beams placed the robot (the map lacks what the other beams end on); 0: every beam
+        self.lines = 0.0
         self._evidence: dict[str, StoreyEvidence] = {}
 
     # -- one hypothesis ------------------------------------------------------------------------------
@@ -130,6 +133,7 @@ class ClaimChecks:
             self.view,
             checks,
             self.perception.lidar if self.perception.landmarks is not None else None,  # None: untracked
+            self.lines,
         )
 
     def blind(self) -> bool:
@@ -380,7 +384,10 @@ class ClaimChecks:
             # it picked a place 40-60 m off in the test halls (CHANGELOG, lidar registration).
             return None
         transform = best.pose * last.inverse()
+        before, self.lines = self.lines, found.lines  # placed on its wall beams: judged on them from now
         verified, aligned = self.registered(frame, best, transform, found)
+        if not verified:
+            self.lines = before
         if not verified:
             return None
         hypothesis = registered_hypothesis(best.storey, transform, frame.odom)

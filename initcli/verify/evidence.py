@@ -22,6 +22,7 @@ from initcli.core.features.detection_filter import Sighting
 from initcli.core.filters.particle_filter import LikelihoodField, likelihood_field
 from initcli.core.geometry.se2 import Pose2D
 from initcli.core.lidar.scan_fit import ScanSample
+from initcli.core.lidar.wall_beams import wall_beams
 from initcli.core.verify.checks import (
     TRACK_HYPOTHESES,
     CameraView,
@@ -272,13 +273,20 @@ def verify_transform(
     view: CameraView,
     params: VerificationParams,
     seen_landmarks: Sequence[Located] | None = None,
+    lines: float = 0.0,
 ) -> Verification:
     """The checks of :func:`initcli.core.verify.checks.verify_hypothesis` for ``transform`` (odom ->
     BIM) on ``storey``, with the images of the last ``PATH_WINDOW_M`` m and the scans of the last
     ``RECENT_SCANS_M`` m; the storey's lidar landmarks predicted from the path's scans of the last
     ``LANDMARK_WINDOW_M`` m against ``seen_landmarks``, the confirmed ones (odom frame; None: the
-    lidar's landmarks are not tracked, so none is predicted either)."""
+    lidar's landmarks are not tracked, so none is predicted either). ``lines`` > 0: the scans
+    judged by their beams on straight lines that long (:func:`wall_beams`), as a registration on
+    its wall beams placed them (the map lacks the furniture the other beams end on)."""
     poses, scans = path.recent(PATH_WINDOW_M, RECENT_SCANS_M)
+    if lines > 0:
+        raw, _ = path.along(RECENT_SCANS_M, raw=True)
+        if raw:
+            scans = [wall_beams(s, lines).thinned(SCAN_BEAM_STEP) for s in raw[-MAX_SCANS:]]
     recent_path, _ = path.recent(PATH_CHECK_M, 0.0)
     landmarks = None
     if storey.landmarks is not None and seen_landmarks is not None:

@@ -119,7 +119,7 @@ class SubmapRegistration:
         if self.params.wall_lines > 0 and best is not None and best.fit < self.params.min_fit:
             walls, at = self._register(path, self.params.wall_lines)
             if walls.best is not None:
-                return replace(walls, why=f"on its wall beams: {walls.why}"), at
+                return replace(walls, why=f"on its wall beams: {walls.why}", lines=self.params.wall_lines), at
         return found, last
 
     def _register(self, path: PathEvidence, lines: float) -> tuple[Registration, Pose2D | None]:
@@ -264,7 +264,14 @@ def replay_registration(
         evidence = StoreyEvidence.of(site.storeys[best.storey], cmap)
         confirmed = None if report.landmarks is None else [f for f in report.landmarks if f.t <= t]
         check = verify_transform(
-            transform, evidence, path, sightings, view, claim_params(verification, blind), confirmed
+            transform,
+            evidence,
+            path,
+            sightings,
+            view,
+            claim_params(verification, blind),
+            confirmed,
+            found.lines,
         )
         if check.passed or not verification.enabled:
             claimed = registered_hypothesis(best.storey, transform, report.odom_pose)

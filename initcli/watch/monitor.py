@@ -293,7 +293,14 @@ class Watcher:
         if not _far(transform * here, theirs * here, p.confirm_m, p.confirm_deg):
             return
         check = verify_transform(
-            theirs, self._evidence, path, [], self._view, claim_params(self.verification, True), None
+            theirs,
+            self._evidence,
+            path,
+            [],
+            self._view,
+            claim_params(self.verification, True),
+            None,
+            found.lines,
         )
         if not check.passed and self.verification.enabled:
             return
@@ -340,7 +347,9 @@ class Watcher:
             return
         transform = best.pose * last.inverse()
         params = claim_params(self.verification, True)  # no camera counted: it confirmed nothing here
-        check = verify_transform(transform, self._evidence, self._path, [], self._view, params, None)
+        check = verify_transform(
+            transform, self._evidence, self._path, [], self._view, params, None, found.lines
+        )
         if not check.passed and self.verification.enabled:
             self._why_not = f"{found.why}, but it fails the checks ({'; '.join(check.reasons)})"
             return

@@ -115,6 +115,7 @@ class Registration:
     contested: tuple[Candidate, ...] = ()  # distinct places within margin of a best pose fitting min_fit
     through: tuple[float, ...] = ()  # share of beams crossing walls: the best pose, then each contested
     doors_open: bool = False  # ``through`` measured on the map with its doors open (else as drawn)
+    lines: float = 0.0  # m: registered on the beams on straight lines this long (0: every beam)
 
     @property
     def best(self) -> Candidate | None:

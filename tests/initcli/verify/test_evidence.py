@@ -166,3 +166,48 @@ def test_a_camera_that_fires_a_false_box_now_and_then_is_still_blind() -> None:
     assert claim_params(params, camera_blind(300, seen)) == params
     assert camera_blind(300, SEEING_FEATURES - 1)  # one feature may be a poster seen as a door
     assert not camera_blind(0, 0)  # no images: nothing to judge the camera by
+
+
+def test_a_place_registered_on_its_wall_beams_is_judged_on_them() -> None:
+    """A room the map draws with its walls only, 0.4 m boxes along them that the scans see: every
+    beam fits the walls too poorly for the scan-fit check, the beams on straight lines (``lines``,
+    as a registration on its wall beams placed the robot) fit them; the room turned a quarter
+    round still fails on them."""
+    from initcli.core.filters.particle_filter import LikelihoodField
+    from initcli.core.geometry.projection import CameraMount
+    from initcli.core.geometry.raycast import ray_segment_distances
+    from initcli.core.geometry.se2 import Pose2D
+    from initcli.core.verify.checks import CameraView, FreeSpace
+    from initcli.verify.evidence import verify_transform
+    from tests.helpers import rooms_map
+
+    grid = rooms_map([(0.0, 0.0, 12.0, 6.0)], 16.0, 10.0)
+    empty = np.zeros((0, 2))
+    storey = StoreyEvidence(
+        [], empty, empty, np.zeros(0), [], np.zeros((0, 4)), LikelihoodField(grid), FreeSpace(grid, 0.3)
+    )
+    walls = [[0.0, 0.0, 12.0, 0.0], [12.0, 0.0, 12.0, 6.0], [12.0, 6.0, 0.0, 6.0], [0.0, 6.0, 0.0, 0.0]]
+    boxes = []
+    for x in np.arange(0.6, 11.0, 0.9):  # furniture the map lacks, along both long walls
+        for y in (0.3, 5.3):
+            boxes += [[x, y, x + 0.4, y], [x + 0.4, y, x + 0.4, y + 0.4]]
+            boxes += [[x + 0.4, y + 0.4, x, y + 0.4], [x, y + 0.4, x, y]]
+    segments = np.array(walls + boxes)
+    angles = np.linspace(-np.pi, np.pi, 360, endpoint=False)
+    evidence = PathEvidence()
+    for x in np.arange(2.0, 10.0, 0.25):
+        ranges = ray_segment_distances(np.array([x, 3.0]), angles, segments, 12.0)
+        odom = Pose2D(x, 3.0, 0.0)  # odometry is the truth: the transform is the identity
+        evidence.add_scan(odom, x - 2.0, angles, np.where(ranges < 12.0, ranges, np.inf), 12.0)
+        evidence.add_image(odom, x - 2.0)
+    view = CameraView(CAMERA, CameraMount(0.2, 0.0, 1.0, 0.0, 0.0, 0.0), min_depth=0.5)
+    params = VerificationParams()
+    right = Pose2D(0.0, 0.0, 0.0)
+    every = verify_transform(right, storey, evidence, [], view, params)
+    assert every.scan_fit is not None and every.scan_fit < params.min_scan_fit and not every.passed
+    on_walls = verify_transform(right, storey, evidence, [], view, params, None, 1.0)
+    assert on_walls.passed, on_walls.reasons
+    centre = Pose2D(6.0, 3.0, 0.0)
+    turned = centre * Pose2D(0.0, 0.0, math.pi / 2) * centre.inverse()  # the room turned a quarter
+    across = verify_transform(turned, storey, evidence, [], view, params, None, 1.0)
+    assert not across.passed and across.scan_fit is not None and across.scan_fit < params.min_scan_fit
