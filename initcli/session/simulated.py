@@ -17,7 +17,7 @@ from bimtools.site.load import Site
 from initcli.config import SessionConfig, config_to_dict
 from initcli.config.building import choose_storey, prepare_site, prepare_world
 from initcli.core.geometry.se2 import Pose2D
-from initcli.session.outputs import render_report, summary_document, write_summary
+from initcli.session.outputs import render_report, report_title, summary_document, write_summary
 from initcli.session.result import CANNOT_LEAVE, SessionResult
 from initcli.session.runner import Observer, Session
 from initcli.sim.build import SimSetup, build_sim
@@ -104,7 +104,7 @@ def run_simulated(
             stage / "report.png",
             result,
             site.storeys[result.storey or built.simulated_storey],
-            f"{config.site.path}: {'success' if result.success else 'failure'} - {result.reason}",
+            report_title(result, Path(config.site.path).name),
             world_segments=setup.world.static,
         )
     return doc

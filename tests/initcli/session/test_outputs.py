@@ -100,3 +100,28 @@ def test_render_report_writes_a_png(tmp_path: Path) -> None:
     render_report(out, _result(), storey, "a title")
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert out.stat().st_size > 10_000
+
+
+def test_report_title_says_what_decided_the_pose_and_its_error_beside_its_sigma() -> None:
+    from initcli.session.outputs import report_title
+    from initcli.session.result import DecidedBy
+
+    result = _result()
+    result.decided_by = DecidedBy.REGISTRATION
+    first, second = report_title(result, "block_b").split("\n")
+    assert first == "block_b, storey L0: initialised - converged"
+    assert second == "decided by lidar registration after 4.5 m; final error 0.23 m, 0.0 deg; sigma 0.14 m"
+    failed = SessionResult(False, "max distance reached", None)
+    assert report_title(failed, "x") == "x: not initialised - max distance reached"
+    assert report_title(SessionResult(True, "initialised", None), "x") == "x: initialised"  # said once
+
+
+def test_the_plan_is_cropped_to_the_building_not_to_a_hypothesis_far_outside() -> None:
+    from initcli.session.outputs import PLAN_MARGIN_M, _plan_limits
+
+    storey = StoreyModel("L0", 0.0, [], [WallSegment("L0", "w", "IfcWall", 0.0, -1.0, 6.0, -1.0, (0.0, 1.0))])
+    result = _result()
+    result.match_steps = [MatchStep(5.0, 2, "ambiguous", [(120.0, -80.0, 0.0)])]
+    (x0, x1), (y0, y1) = _plan_limits(storey, result) or ((0, 0), (0, 0))
+    assert (x0, x1) == (-PLAN_MARGIN_M, 6.0 + PLAN_MARGIN_M)
+    assert (y0, y1) == (-1.0 - PLAN_MARGIN_M, 2.0 + PLAN_MARGIN_M)  # the true path ends at y 2
