@@ -111,9 +111,36 @@ def draw_plan(
         cv2.line(img, tuple(int(v) for v in a), tuple(int(v) for v in b), (0, 0, 0), 1, cv2.LINE_AA)
 
 
+LABEL_SCALE = 0.33  # OpenCV font scale of the features' IDs
+LABEL_STEPS = (1.35, 1.9, 2.5, 3.1)  # arrow lengths out along the normal tried for an ID ...
+LABEL_SHIFTS = (0.0, -1.2, 1.2)  # ... each also moved this many text heights across
+
+
+def _label_box(
+    text: str, x: float, y: float, nx: float, ny: float, arrow: int, taken: list[tuple[int, int, int, int]]
+) -> tuple[int, int] | None:
+    """Where the ID ``text`` of a feature at pixel (x, y) facing (nx, ny) goes: out along its
+    normal past the arrow, the first spot clear of the labels already ``taken`` (x0, y0, x1, y1,
+    to which it is added); None where every spot tried overlaps one."""
+    (w, h), base = cv2.getTextSize(text, _FONT, LABEL_SCALE, 1)
+    for step in LABEL_STEPS:
+        for shift in LABEL_SHIFTS:
+            cx = x + nx * arrow * step - ny * shift * (h + 4)
+            cy = y - ny * arrow * step - nx * shift * (h + 4)
+            box = (int(cx - w / 2) - 1, int(cy - h / 2) - 1, int(cx + w / 2) + 1, int(cy + h / 2 + base) + 1)
+            if all(box[2] < t[0] or t[2] < box[0] or box[3] < t[1] or t[3] < box[1] for t in taken):
+                taken.append(box)
+                return int(cx - w / 2), int(cy + h / 2)
+    return None
+
+
 def draw_features(canvas: Canvas, features: list[Feature]) -> list[str]:
-    """Markers, normals (arrows) and IDs; returns the categories drawn, in order."""
+    """Markers, normals (arrows) and IDs (an ID that would overlap another is left out, and the
+    picture says how many); returns the categories drawn, in order."""
     img = canvas.image
+    taken: list[tuple[int, int, int, int]] = []
+    labels: list[tuple[Feature, float, float, tuple[int, int, int]]] = []
+    hidden = 0
     extra = sorted({f.category for f in features} - set(CATEGORY_STYLE))
     arrow = max(18, int(0.8 * canvas.scale))
     drawn: list[str] = []
@@ -130,10 +157,27 @@ def draw_features(canvas: Canvas, features: list[Feature]) -> list[str]:
         tip = (int(x + f.norm_x * arrow), int(y - f.norm_y * arrow))
         cv2.arrowedLine(img, (int(x), int(y)), tip, colour, 2, cv2.LINE_AA, tipLength=0.3)
         _marker(img, (int(x), int(y)), shape, colour)
-        label_at = (int(x + f.norm_x * arrow * 1.35) - 3 * len(f.id), int(y - f.norm_y * arrow * 1.35) + 4)
-        cv2.putText(img, f.id, label_at, _FONT, 0.33, colour, 1, cv2.LINE_AA)
+        # the marker and arrow, that no ID may cover
+        taken.append(
+            (
+                min(int(x), tip[0]) - 7,
+                min(int(y), tip[1]) - 7,
+                max(int(x), tip[0]) + 7,
+                max(int(y), tip[1]) + 7,
+            )
+        )
+        labels.append((f, x, y, colour))
         if f.category not in drawn:
             drawn.append(f.category)
+    for f, x, y, colour in labels:  # after every marker and arrow is known
+        label_at = _label_box(f.id, x, y, f.norm_x, f.norm_y, arrow, taken)
+        if label_at is None:
+            hidden += 1
+        else:
+            cv2.putText(img, f.id, label_at, _FONT, LABEL_SCALE, colour, 1, cv2.LINE_AA)
+    if hidden:
+        note = f"{hidden} ID(s) left out where they would overlap another (features.csv lists every one)"
+        cv2.putText(img, note, (60, img.shape[0] - 25), _FONT, 0.45, (0, 0, 0), 1, cv2.LINE_AA)
     return drawn
 
 
@@ -141,7 +185,7 @@ def draw_legend(canvas: Canvas, categories: list[str], counts: dict[str, int]) -
     img = canvas.image
     extra = sorted(set(categories) - set(CATEGORY_STYLE))
     x0, y0 = img.shape[1] - 190, 50
-    height = 22 * len(categories) + 34
+    height = 22 * len(categories) + 56
     cv2.rectangle(img, (x0 - 10, y0 - 18), (x0 + 175, y0 + height - 18), _WHITE, -1)
     cv2.rectangle(img, (x0 - 10, y0 - 18), (x0 + 175, y0 + height - 18), (0, 0, 0), 1)
     for i, category in enumerate(categories):
@@ -161,6 +205,10 @@ def draw_legend(canvas: Canvas, categories: list[str], counts: dict[str, int]) -
     y = y0 + 22 * len(categories)
     cv2.line(img, (x0, y - 4), (x0 + 16, y - 4), (0, 0, 0), 1, cv2.LINE_AA)
     cv2.putText(img, "wall surface", (x0 + 24, y), _FONT, 0.5, (0, 0, 0), 1, cv2.LINE_AA)
+    y += 22
+    cv2.rectangle(img, (x0, y - 10), (x0 + 16, y + 1), (205, 205, 205), -1)
+    cv2.rectangle(img, (x0, y - 10), (x0 + 16, y + 1), (0, 0, 0), 1)
+    cv2.putText(img, "walls, columns (cut)", (x0 + 24, y), _FONT, 0.5, (0, 0, 0), 1, cv2.LINE_AA)
 
 
 def draw_scale_bar(canvas: Canvas, span_m: float) -> None:

@@ -66,3 +66,23 @@ def test_landmarks_are_drawn_small_without_ids_and_listed_in_the_legend() -> Non
     assert 0 < drawn["corner"] < (2 * LANDMARK_MARKER + 1) ** 2 + 40  # a dot and a tick, no label
     assert drawn["door"] > 4 * drawn["corner"]  # a door: square, arrow and its ID
     assert colour != CATEGORY_STYLE["ConvexCorner"][0]
+
+
+def test_ids_never_overlap_and_the_picture_counts_those_left_out() -> None:
+    """Doors 0.3 m apart along a corridor wall (GUID-long IDs) are drawn; twelve IDs wanting one
+    spot: each placed ID is clear of every other, the rest are left out (None) and not drawn."""
+    from bimtools.extract.preview import _label_box, draw_features
+
+    ids = [f"2d24hq3H2EhLi7osekr{k:03d}" for k in range(12)]
+    doors = [Feature(i, "Door", 1.0 + 0.3 * k, 0.0, 0.0, 1.0, 1.0, 2.1) for k, i in enumerate(ids)]
+    canvas = Canvas((0.0, -1.0, 6.0, 3.0), max_side=600)
+    draw_features(canvas, doors)
+    taken: list[tuple[int, int, int, int]] = []
+    placed = [_label_box(i, 300.0, 300.0, 0.0, 1.0, 20, taken) for i in ids]
+    boxes = taken
+    for a in range(len(boxes)):
+        for b in range(a + 1, len(boxes)):
+            p, q = boxes[a], boxes[b]
+            assert p[2] < q[0] or q[2] < p[0] or p[3] < q[1] or q[3] < p[1]
+    assert placed[0] is not None and None in placed  # twelve at one spot: some left out
+    assert len(boxes) == sum(p is not None for p in placed)
