@@ -15,6 +15,7 @@
 
     python benchmarks/bench_survey.py [--quick] [--workers 2] [--starts 100] [--models ...] [--results FILE]
                                       [--method bim+pf] [--sweep-value V] [--camera on|off]
+                                      [--eval-config sample_models/eval_real.yaml]
 """
 
 from __future__ import annotations
@@ -52,6 +53,12 @@ def main() -> None:
     ap.add_argument("--starts", type=int, default=100, help="eval starts compared per sample")
     ap.add_argument("--models", default="ntu_hallway,block_a,block_b")
     ap.add_argument(
+        "--eval-config",
+        type=Path,
+        default=None,
+        help="survey the sites of this eval config instead of --models (sample_models/eval_real.yaml)",
+    )
+    ap.add_argument(
         "--results", type=Path, default=None, help="an eval results.jsonl for per-start agreement"
     )
     ap.add_argument("--method", default="bim", help="the eval method of --results compared")
@@ -76,14 +83,15 @@ def main() -> None:
                 str(r.get("sweep_value")) == args.sweep_value if args.sweep_value else not r.get("sweep_key")
             )
             if r["method"] == args.method and swept:
-                measured[(r["site"], int(r["start"]))] = (
+                # by the trial's seed (an eval resumed with another seed numbers its starts anew)
+                measured[(r["site"], int(r.get("seed", 1 + int(r["start"]))))] = (
                     float(r["distance_m"]) if r["localised"] else math.inf
                 )
     executor = LocalExecutor(args.workers)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        for name in args.models.split(","):
-            config = load_config(SAMPLES / f"{name}.site.yaml")
+        for name, config_path in _sites(args):
+            config = load_config(config_path)
             site = prepare_site(config, Path(tmp) / name)
             simulated, _ = choose_storey(config, site)
             params = replace(
@@ -137,7 +145,8 @@ def main() -> None:
             mine = [m for (where, _), m in measured.items() if where == name]
             if mine:  # the eval's share of its starts initialised, beside the survey's
                 line["eval_initialised"] = round(len(localised) / len(mine), 2)
-            pairs = [(at[k], measured[(name, k)]) for k in range(len(at)) if (name, k) in measured]
+            seeds = [trial_seed(1, k) for k in range(len(at))]
+            pairs = [(at[k], measured[(name, q)]) for k, q in enumerate(seeds) if (name, q) in measured]
             if pairs:
                 within = [
                     abs(a - min(m, params.limit_m)) <= 0.25 * max(min(m, params.limit_m), 1.0)
@@ -160,6 +169,21 @@ def main() -> None:
             f"{r['survey_initialised']} / {r.get('eval_initialised', '-')} | "
             f"{r['survey_initialised_mean_m']} / {r['eval_mean_m']} |"
         )
+
+
+def _sites(args: argparse.Namespace) -> list[tuple[str, Path]]:
+    """(name, site config) of every site surveyed: an eval config's sites (named as the eval names
+    them, the config's stem), or the bundled samples of ``--models``."""
+    if args.eval_config is None:
+        return [(name, SAMPLES / f"{name}.site.yaml") for name in args.models.split(",")]
+    import yaml
+
+    doc = yaml.safe_load(args.eval_config.read_text())
+    found = []
+    for entry in doc["sites"]:
+        path = (args.eval_config.parent / entry["config"]).resolve()
+        found.append((path.name.removesuffix(".site.yaml"), path))
+    return found
 
 
 if __name__ == "__main__":

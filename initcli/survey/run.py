@@ -96,11 +96,13 @@ def survey_storey(
 
 
 def lidar_along(plan: StoreyPlan, views: SampleViews, params: SurveyParams) -> np.ndarray | None:
-    """(S,) m until the session's lidar registration places each start (:mod:`initcli.survey.lidar`);
-    None where the registration is off or the storey has no map."""
+    """(S,) m until the session's lidar registration places each start (:mod:`initcli.survey.lidar`;
+    none on a self-similar storey); None where the registration is off or the storey has no map."""
     reg = params.registration
     if not reg.enabled or plan.registration_map is None or plan.scan_segments is None:
         return None
+    if plan.twin is not None:  # a self-similar storey: the session ends at once, whatever it scans
+        return np.full(len(plan.starts), np.inf)
     placed = [
         placed_along(
             loop,

@@ -228,3 +228,24 @@ def test_starts_stay_out_of_a_room_behind_a_door_the_map_leaves_open() -> None:
     assert len(plan.positions) > 10
     assert plan.positions[:, 1].max() < 2.0  # all in the corridor
     assert not plan.circulation.label[plan.circulation.grid.world_to_cell(5.0, 3.5)]  # the room's middle
+
+
+def test_the_lidar_model_places_no_start_on_a_self_similar_storey() -> None:
+    """The survey's lidar model (the session's registration along the loop) gives a distance per
+    start; none is finite on a self-similar storey, where the session ends at once; with the
+    registration off there is no lidar model at all."""
+    import dataclasses
+    import math as m
+
+    from initcli.core.lidar.symmetry import Turn
+    from initcli.survey.run import lidar_along
+
+    plan = plan_storey(_room(), PARAMS)
+    views = sample_views(plan, PARAMS)
+    lidar = lidar_along(plan, views, PARAMS)
+    assert lidar is not None and len(lidar) == len(plan.starts)
+    twin = dataclasses.replace(plan, twin=Turn(m.pi, (W / 2, H / 2), 0.1))
+    never = lidar_along(twin, views, PARAMS)
+    assert never is not None and not np.isfinite(never).any()
+    off = dataclasses.replace(PARAMS, registration=dataclasses.replace(PARAMS.registration, enabled=False))
+    assert lidar_along(plan, views, off) is None
