@@ -4,12 +4,14 @@ A session without a camera claim registers the submap of its last ``registration
 ``registration.every`` m (:func:`initcli.core.lidar.registration.register`). The survey does the
 same along each wall-following loop, noise-free: a scan every ``TRACK_STEP_M`` m of the loop
 (ray-cast against the obstacle outlines with every door leaf closed, as the simulated world stands),
-the window before each registration point registered over the storey's map. A point is *placed*
-where that registration is unique and right (within ``RIGHT_M`` and ``RIGHT_DEG`` of the loop's
-pose): a unique place elsewhere is a wrong claim the session's checks must catch, not a start
-placed. A start is placed by the lidar at the first placed point it reaches along its loop once it
-has driven a whole window (its submap is then that point's), so the survey's distance is an upper
-bound where a shorter submap is unique already.
+the last quarter, half and whole window before each registration point registered over the
+storey's map (a session's submap is the path so far until it has driven a window). A point is
+*placed* where that registration is unique and right (within ``RIGHT_M`` and ``RIGHT_DEG`` of the
+loop's pose): a unique place elsewhere is a wrong claim the session's checks must catch, not a
+start placed. A start is placed by the lidar at the first point it reaches along its loop that the
+longest submap it has driven places (the loop's metres before the point standing for the start's
+own path), so the survey's distance is an upper bound where the start's first scans, turning on the
+spot, are unique already.
 """
 
 from __future__ import annotations
@@ -26,12 +28,22 @@ from initcli.core.lidar.registration_params import RegistrationParams
 from initcli.core.lidar.scan_fit import BeamEnds, ScanSample
 from initcli.survey.exploration import Entry, Loop
 
-__all__ = ["LidarModel", "RIGHT_DEG", "RIGHT_M", "TRACK_STEP_M", "lidar_distances", "placed_along"]
+__all__ = [
+    "LidarModel",
+    "RIGHT_DEG",
+    "RIGHT_M",
+    "SUBMAP_FRACTIONS",
+    "TRACK_STEP_M",
+    "lidar_distances",
+    "placed_along",
+    "submap_lengths",
+]
 
 TRACK_STEP_M = 0.5  # m of the loop between two scans of the submap (the session keeps one per 0.5 m)
 BEAM_STEP = 2  # every second beam of a scan, as the session's submap
 RIGHT_M = 0.5  # m: a registration this close to the loop's pose is right ...
 RIGHT_DEG = 5.0  # ... and turned at most this much
+SUBMAP_FRACTIONS = (0.25, 0.5, 1.0)  # of registration.window: the submap lengths registered
 
 
 @dataclass(frozen=True)
@@ -54,6 +66,12 @@ def _scan(pose: np.ndarray, lidar: LidarModel, angles: np.ndarray, segments: np.
     return ScanSample(Pose2D(float(pose[0]), float(pose[1]), float(pose[2])), angles, ranges, lidar.max_range)
 
 
+def submap_lengths(params: RegistrationParams) -> tuple[float, ...]:
+    """The submap lengths the survey registers along a loop: a quarter, a half and the whole
+    ``params.window`` (a session's submap is the path so far until it has driven a window)."""
+    return tuple(params.window * f for f in SUBMAP_FRACTIONS)
+
+
 def placed_along(
     loop: Loop,
     segments: np.ndarray,
@@ -63,35 +81,36 @@ def placed_along(
     tolerance: float,
     lidar: LidarModel,
 ) -> np.ndarray:
-    """(P,) bool over the loop's points: True where the registration of the window before the point
-    (every ``params.every`` m of the loop, the points between take the last one's outcome) is
-    unique and right on ``storey``."""
+    """(L, P) bool, per submap length of :func:`submap_lengths` and loop point: True where the
+    registration of that many metres of the loop before the point (every ``params.every`` m of the
+    loop, the points between take the last one's outcome) is unique and right on ``storey``."""
     n = len(loop)
-    placed = np.zeros(n, dtype=bool)
+    lengths = submap_lengths(params)
+    placed = np.zeros((len(lengths), n), dtype=bool)
     if n == 0 or not maps:
         return placed
     every = max(1, int(round(params.every / loop.step)))
     keep = max(1, int(round(TRACK_STEP_M / loop.step)))
-    span = min(n, max(1, int(round(params.window / loop.step))))
     angles = lidar.angles()[::BEAM_STEP]
     cache: dict[int, ScanSample] = {}
-    for at in range(0, n, every):
-        idx = [(at - k) % n for k in range(span - 1, -1, -keep)]
-        scans = []
-        for i in idx:
-            if i not in cache:
-                cache[i] = _scan(loop.poses[i], lidar, angles, segments)
-            scans.append(cache[i])
-        found = register(BeamEnds.of(scans), maps, params, tolerance)
-        best, truth = found.best, scans[-1].odom
-        right = (
-            found.unique
-            and best is not None
-            and best.storey == storey
-            and best.pose.distance_to(truth) <= RIGHT_M
-            and best.pose.yaw_error(truth) <= math.radians(RIGHT_DEG)
-        )
-        placed[at : at + every] = right
+    for level, length in enumerate(lengths):
+        span = min(n, max(1, int(round(length / loop.step))))
+        for at in range(0, n, every):
+            scans = []
+            for i in ((at - k) % n for k in range(span - 1, -1, -keep)):
+                if i not in cache:
+                    cache[i] = _scan(loop.poses[i], lidar, angles, segments)
+                scans.append(cache[i])
+            found = register(BeamEnds.of(scans), maps, params, tolerance)
+            best, truth = found.best, scans[-1].odom
+            right = (
+                found.unique
+                and best is not None
+                and best.storey == storey
+                and best.pose.distance_to(truth) <= RIGHT_M
+                and best.pose.yaw_error(truth) <= math.radians(RIGHT_DEG)
+            )
+            placed[level, at : at + every] = right
     return placed
 
 
@@ -103,8 +122,9 @@ def lidar_distances(
     limit_m: float,
 ) -> np.ndarray:
     """(S,) m driven until the lidar places each start (``inf``: not within ``limit_m``): its
-    approach, then along its loop from where it joins, to the first placed point reached with a
-    whole window driven."""
+    approach, then along its loop from where it joins, to the first point placed by the longest
+    submap of :func:`submap_lengths` it has driven (``placed``: per loop, :func:`placed_along`)."""
+    lengths = submap_lengths(params)
     out = np.full(len(entries), np.inf)
     for s, entry in enumerate(entries):
         if entry is None:
@@ -113,10 +133,18 @@ def lidar_distances(
         n = len(loop)
         if not ok.any():
             continue
-        first = max(0, int(math.ceil((params.window - entry.length) / loop.step)))
-        last = min(int((limit_m - entry.length) / loop.step), first + n)
-        ahead = np.roll(ok, -entry.index)  # ahead[k]: the point k steps on from where it joins
-        hits = np.flatnonzero(ahead[np.arange(first, last + 1) % n]) if last >= first else np.zeros(0, int)
-        if len(hits):
-            out[s] = entry.length + (first + int(hits[0])) * loop.step
+        last = int((limit_m - entry.length) / loop.step)
+        for level, length in enumerate(lengths):
+            # the steps along the loop at which this submap length is the longest one driven
+            lo = max(0, int(math.ceil((length - entry.length) / loop.step)))
+            hi = min(last, lo + n - 1)
+            if level + 1 < len(lengths):  # until the next length is driven
+                hi = min(hi, int(math.ceil((lengths[level + 1] - entry.length) / loop.step)) - 1)
+            if hi < lo or not ok[level].any():
+                continue
+            ahead = np.roll(ok[level], -entry.index)  # ahead[k]: k steps on from where it joins
+            hits = np.flatnonzero(ahead[np.arange(lo, hi + 1) % n])
+            if len(hits):
+                out[s] = entry.length + (lo + int(hits[0])) * loop.step
+                break
     return out

@@ -97,7 +97,8 @@ def survey_storey(
 
 def lidar_along(plan: StoreyPlan, views: SampleViews, params: SurveyParams) -> np.ndarray | None:
     """(S,) m until the session's lidar registration places each start (:mod:`initcli.survey.lidar`;
-    none on a self-similar storey); None where the registration is off or the storey has no map."""
+    none on a self-similar storey or in a lidar twin's space, where sessions fail while the doors
+    stay shut); None where the registration is off or the storey has no map."""
     reg = params.registration
     if not reg.enabled or plan.registration_map is None or plan.scan_segments is None:
         return None
@@ -115,4 +116,12 @@ def lidar_along(plan: StoreyPlan, views: SampleViews, params: SurveyParams) -> n
         )
         for loop in plan.loops
     ]
-    return lidar_distances(views.entries, placed, plan.loops, reg, params.limit_m)
+    distance = lidar_distances(views.entries, placed, plan.loops, reg, params.limit_m)
+    if plan.lidar_twin_cells is not None and len(plan.starts):  # a lidar twin's space, doors shut
+        cells = plan.lidar_twin_cells
+        row, col = plan.circulation.grid.world_to_cell(plan.starts[:, 0], plan.starts[:, 1])
+        inside = (row >= 0) & (row < cells.shape[0]) & (col >= 0) & (col < cells.shape[1])
+        twin = np.zeros(len(plan.starts), dtype=bool)
+        twin[inside] = cells[row[inside], col[inside]]
+        distance[twin] = np.inf  # (a noise-free scan may tell them apart, a real one did not)
+    return distance

@@ -58,21 +58,22 @@ def test_a_room_that_is_its_own_twin_turned_half_round_places_no_start() -> None
     outline = np.array([[0.0, 0.0], [12.0, 0.0], [12.0, 4.0], [0.0, 4.0]])
     inner = np.array([[0.7, 0.7], [11.3, 0.7], [11.3, 3.3], [0.7, 3.3]])
     placed = _placed(outline, inner)
-    assert len(placed) > 200 and not placed.any()
+    assert placed.shape[1] > 200 and not placed.any()
 
 
 def test_a_room_with_a_corner_of_its_own_places_the_robot_along_its_loop() -> None:
     outline = np.array([[0.0, 0.0], [12.0, 0.0], [12.0, 4.0], [5.0, 4.0], [5.0, 8.0], [0.0, 8.0]])
     inner = np.array([[0.7, 0.7], [11.3, 0.7], [11.3, 3.3], [4.3, 3.3], [4.3, 7.3], [0.7, 7.3]])
     placed = _placed(outline, inner)
-    assert placed.mean() > 0.5
+    assert placed[-1].mean() > 0.5  # the whole window
+    assert placed[-1].sum() >= placed[0].sum()  # a quarter of it places less
 
 
-def test_a_start_is_placed_at_the_first_placed_point_once_it_has_driven_a_window() -> None:
+def test_a_start_is_placed_at_the_first_point_its_longest_submap_places() -> None:
     n, step = 400, 0.1  # a 40 m loop
     loop = Loop(np.zeros((n, 2)), np.zeros(n), step)
-    placed = np.zeros(n, dtype=bool)
-    placed[300:320] = True
+    placed = np.zeros((3, n), dtype=bool)  # a quarter, a half and the whole 10 m window
+    placed[2, 300:320] = True
     entries = [
         Entry(0, 100, np.zeros((0, 3)), 2.0),  # 8 m along the loop make its window, then on to 300
         Entry(0, 310, np.zeros((0, 3)), 0.0),  # at a placed point, but with no window driven yet
@@ -85,3 +86,8 @@ def test_a_start_is_placed_at_the_first_placed_point_once_it_has_driven_a_window
     assert math.isinf(found[2])
     short = lidar_distances(entries[2:3], [placed], [loop], PARAMS, 15.0)
     assert math.isinf(short[0])
+    placed[0, 150:160] = True  # a 2.5 m submap places these: a start driven 2.5-5 m gets them
+    early = lidar_distances([Entry(0, 120, np.zeros((0, 3)), 0.0)], [placed], [loop], PARAMS, 150.0)
+    assert early[0] == pytest.approx(30 * step)
+    late = lidar_distances([Entry(0, 100, np.zeros((0, 3)), 0.0)], [placed], [loop], PARAMS, 150.0)
+    assert late[0] == pytest.approx(200 * step)  # 150-160 comes at 5-6 m: the 2.5 m submap no longer
