@@ -93,6 +93,20 @@ def check_doors_on_walls(storey: StoreyModel, csv_path: Path) -> None:
         )
 
 
+def _read_maps(path: Path, manifest: SiteManifest, storeys: dict[str, StoreyModel]) -> None:
+    """Each storey's occupancy map that site.json names; one it names and the folder lacks (a site
+    copied without its maps) is refused, not guessed."""
+    for info in manifest.storeys:
+        if info.name not in storeys or not info.map_yaml:
+            continue
+        if not (path / info.map_yaml).exists():
+            raise InputError(
+                f"{path / 'site.json'}: storey {info.name!r} names the map {info.map_yaml}, which is not"
+                f" in {path} (copy the whole folder bim-extract wrote, or extract the model again)"
+            )
+        storeys[info.name].grid = read_map(path / info.map_yaml)
+
+
 def load_site(path: Path, with_maps: bool = True) -> Site:
     """Read an OUTDIR (features.csv, walls.geojson, maps, site.json) or a features.csv alone."""
     path = Path(path)
@@ -122,7 +136,5 @@ def load_site(path: Path, with_maps: bool = True) -> Site:
         for storey in storeys.values():
             check_doors_on_walls(storey, csv_path)
     if with_maps and manifest is not None:
-        for info in manifest.storeys:
-            if info.name in storeys and info.map_yaml and (path / info.map_yaml).exists():
-                storeys[info.name].grid = read_map(path / info.map_yaml)
+        _read_maps(path, manifest, storeys)
     return Site(root=path, storeys=storeys, manifest=manifest)

@@ -156,6 +156,8 @@ def survey(
                 plans[name] = plan_storey(model.storeys[name], params, cmap)
             except ValueError as exc:
                 err.print(f"storey {name}: skipped ({exc})")
+        if not plans:  # nothing to survey is no survey: refused, not written empty
+            raise InputError(f"{site}: no storey with an occupancy map to survey ({', '.join(names)})")
         n_starts = sum(len(p.starts) for p in plans.values())
         if n_starts > MAX_STARTS and not yes:
             raise InputError(

@@ -29,3 +29,24 @@ def test_load_site_from_folder_and_from_csv(tmp_path):
     (tmp_path / "empty").mkdir()
     with pytest.raises(InputError, match="no features.csv"):
         load_site(tmp_path / "empty")
+
+
+def test_a_site_copied_without_the_map_its_manifest_names_is_refused(tmp_path):
+    """site.json names each storey's map; a folder that lacks one (copied in part) is refused by
+    name, not loaded as a storey without a map (a survey of it was "successful" and empty)."""
+    from pathlib import Path
+
+    from bimtools.extract.from_map import extract_map_site, write_map_site
+    from bimtools.site.load import load_site as load
+    from tests.bimtools.extract.test_from_map import corridor_cells, write_map_files
+
+    yaml_path = write_map_files(tmp_path / "maps", corridor_cells())
+    site = tmp_path / "site"
+    write_map_site(site, extract_map_site(yaml_path), preview=False)
+    assert load(site).storeys["corridor"].grid is not None
+    for name in ("map_corridor.yaml", "map_corridor.pgm"):
+        assert (site / name).exists()
+    (site / "map_corridor.yaml").unlink()
+    with pytest.raises(InputError, match=r"site\.json: storey 'corridor' names the map map_corridor\.yaml"):
+        load(Path(site))
+    assert load(site, with_maps=False).storeys["corridor"].grid is None  # asked without maps: fine

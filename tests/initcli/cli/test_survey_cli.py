@@ -103,3 +103,16 @@ def test_a_full_disk_mid_way_leaves_no_map_and_no_folder(site_dir, tmp_path, mon
     assert isinstance(result.exception, OSError)
     assert sorted(p.name for p in kept.iterdir()) == ["notes.txt"]
     assert (kept / "notes.txt").read_text() == "mine"
+
+
+def test_a_site_without_any_map_is_refused_not_surveyed_empty(site_dir, tmp_path):
+    import shutil
+
+    bare = tmp_path / "bare"
+    bare.mkdir()
+    shutil.copy(site_dir / "features.csv", bare / "features.csv")  # no site.json, no maps
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["survey", str(bare), "--out", str(out), "--workers", "1"])
+    assert result.exit_code == 2
+    assert "no storey with an occupancy map to survey" in " ".join(result.output.split())
+    assert not out.exists()
