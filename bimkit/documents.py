@@ -309,13 +309,26 @@ def _depth(doc: Any) -> int:
     return deepest
 
 
+def _json_object(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """A JSON object whose keys are each given once (the later one would silently win)."""
+    doc: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in doc:
+            raise _Limit(f"duplicate key {key!r} (the later one would silently win)")
+        doc[key] = value
+    return doc
+
+
 def parse_json(text: str | bytes, where: str, line: int | None = None, finite: bool = True) -> Any:
-    """The JSON document in ``text`` within the limits (depth, integer digits) and, with ``finite``,
+    """The JSON document in ``text`` within the limits (depth, integer digits, each key of an object
+    once) and, with ``finite``,
     every number finite (``NaN``, ``Infinity``, ``1e999`` refused naming their path); an error names
     ``where`` and the line (``line``: the text is that line of the file)."""
     at = where if line is None else f"{where}:{line}"
     try:
-        doc = json.loads(text, parse_int=_json_int, parse_constant=_json_constant)
+        doc = json.loads(
+            text, parse_int=_json_int, parse_constant=_json_constant, object_pairs_hook=_json_object
+        )
     except _Limit as exc:
         raise InputError(f"{at}: {exc.problem}") from None
     except RecursionError:

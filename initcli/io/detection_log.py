@@ -367,8 +367,24 @@ def read_log(path: Path | str, skip_bad: bool = False) -> DetectionLog:
     if unknown:
         kinds = ", ".join(f"{k!r} x{n}" for k, n in sorted(unknown.items()))
         log.warnings.append(f"{path}: skipped record(s) of unknown type: {kinds}")
+    _one_clock(log)
     _sort_by_time(log)
     return log
+
+
+ONE_TIME_MIN = 3  # timed records needed before a log whose every record shares one time is refused
+
+
+def _one_clock(log: DetectionLog) -> None:
+    """A log whose timed records (odometry, scans, images) all carry one and the same time has no
+    clock: which odometry goes with which scan or image cannot be told. Refused by name."""
+    times = {t for t in (_record_time(r) for r in log.records) if t is not None}
+    timed = sum(_record_time(r) is not None for r in log.records)
+    if timed >= ONE_TIME_MIN and len(times) == 1:
+        raise InputError(
+            f"{log.path}: all {timed} records carry the one time t={next(iter(times)):g}: the log has no"
+            " clock (write each message's header stamp, the robot's clock)"
+        )
 
 
 def _read_text(path: Path) -> str:

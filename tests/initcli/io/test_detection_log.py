@@ -127,6 +127,8 @@ def test_hand_written_log_with_unknown_types_and_extra_keys(tmp_path: Path) -> N
             r"missing field pose\.'yaw'",
         ),
         ((META, META), r"log.jsonl:2: a second meta record"),
+        ((META, ODOM.replace('"t":', '"t":3,"t":')), r"log.jsonl:2: duplicate key 't'"),
+        ((META, ODOM, ODOM, ODOM), r"log.jsonl: all 3 records carry the one time t=.*: the log has no clock"),
         ((ODOM, META), r"log.jsonl:1: missing meta record"),
         (
             (META.replace('"version":1', '"version":2'), ODOM),
