@@ -372,15 +372,14 @@ def read_log(path: Path | str, skip_bad: bool = False) -> DetectionLog:
     return log
 
 
-ONE_TIME_MIN = 3  # timed records needed before a log whose every record shares one time is refused
-
-
 def _one_clock(log: DetectionLog) -> None:
-    """A log whose timed records (odometry, scans, images) all carry one and the same time has no
-    clock: which odometry goes with which scan or image cannot be told. Refused by name."""
+    """A log whose odometry moves while every record carries one and the same time has no clock:
+    which odometry goes with which scan or image cannot be told. Refused by name. (A session that
+    ended where it started, at once, writes a few records of one time and one pose: that is fine.)"""
     times = {t for t in (_record_time(r) for r in log.records) if t is not None}
     timed = sum(_record_time(r) is not None for r in log.records)
-    if timed >= ONE_TIME_MIN and len(times) == 1:
+    poses = {(r.x, r.y, r.yaw) for r in log.records if isinstance(r, Odom)}
+    if len(times) == 1 and len(poses) > 1:
         raise InputError(
             f"{log.path}: all {timed} records carry the one time t={next(iter(times)):g}: the log has no"
             " clock (write each message's header stamp, the robot's clock)"

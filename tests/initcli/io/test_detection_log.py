@@ -128,7 +128,10 @@ def test_hand_written_log_with_unknown_types_and_extra_keys(tmp_path: Path) -> N
         ),
         ((META, META), r"log.jsonl:2: a second meta record"),
         ((META, ODOM.replace('"t":', '"t":3,"t":')), r"log.jsonl:2: duplicate key 't'"),
-        ((META, ODOM, ODOM, ODOM), r"log.jsonl: all 3 records carry the one time t=.*: the log has no clock"),
+        (
+            (META, ODOM, ODOM.replace('"x":0', '"x":1'), ODOM.replace('"x":0', '"x":2')),
+            r"log.jsonl: all 3 records carry the one time t=.*: the log has no clock",
+        ),
         ((ODOM, META), r"log.jsonl:1: missing meta record"),
         (
             (META.replace('"version":1', '"version":2'), ODOM),
@@ -175,6 +178,11 @@ def test_skip_bad_counts_and_warns(tmp_path: Path) -> None:
     bad_meta = write(tmp_path, META.replace('"version":1', '"version":7'), ODOM, name="v7.jsonl")
     with pytest.raises(InputError, match=r"v7.jsonl:1: unsupported detection log version 7"):
         read_log(bad_meta, skip_bad=True)
+
+
+def test_a_log_of_one_time_and_one_place_is_read(tmp_path: Path) -> None:
+    """A session that ended at once writes a few records of one time and one pose: not refused."""
+    assert len(read_log(write(tmp_path, META, ODOM, ODOM, ODOM)).records) == 3
 
 
 def test_records_out_of_time_order_are_sorted_with_a_warning(tmp_path: Path) -> None:
