@@ -88,6 +88,9 @@ class StoreyPlan:
     lidar_twin_cells: np.ndarray | None = None  # bool mask over the grid: where lidar_twins lie
     scan_segments: np.ndarray | None = None  # (W, 4) what a scan sees: occluders and closed door leaves
     registration_map: RegistrationMap | None = None  # the storey's map as the registration reads it
+    # the lidar's placed loop points, once per settings (initcli.survey.run.lidar_along): the loops
+    # do not change when the starts do (an evaluation's own starts surveyed after the survey's)
+    lidar_placed: dict[tuple[object, ...], list[np.ndarray]] = field(default_factory=dict)
 
     @property
     def lidar_twin_start_share(self) -> float:

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from initcli.executor import Executor, LocalExecutor, map_unordered
-from initcli.survey.lidar import lidar_distances, placed_along
+from initcli.survey.lidar import lidar_distances, placed_along, submap_lengths
 from initcli.survey.plan import StoreyPlan, SurveyParams
 from initcli.survey.sequences import SampleViews, sample_views, sequences
 from initcli.survey.uniqueness import UniquenessParams, first_unique
@@ -104,24 +104,27 @@ def lidar_along(plan: StoreyPlan, views: SampleViews, params: SurveyParams) -> n
         return None
     if plan.twin is not None:  # a self-similar storey: the session ends at once, whatever it scans
         return np.full(len(plan.starts), np.inf)
-    placed = [
-        placed_along(
-            loop,
-            plan.scan_segments,
-            [plan.registration_map],
-            plan.name,
-            reg,
-            params.scan_tolerance,
-            params.lidar,
-        )
-        for loop in plan.loops
-    ]
+    twins = plan.lidar_twin_cells
+    key = (repr(reg), repr(params.lidar), params.scan_tolerance)  # the settings it was made with
+    placed = plan.lidar_placed.get(key, [])
+    for loop in plan.loops[len(placed) :]:
+        if twins is not None and _inside(twins, plan, loop.xy).all():  # a lidar twin's loop: never
+            placed.append(np.zeros((len(submap_lengths(reg)), len(loop)), dtype=bool))
+            continue
+        maps = [plan.registration_map]
+        tolerance = params.scan_tolerance
+        placed.append(placed_along(loop, plan.scan_segments, maps, plan.name, reg, tolerance, params.lidar))
+    plan.lidar_placed[key] = placed
     distance = lidar_distances(views.entries, placed, plan.loops, reg, params.limit_m)
-    if plan.lidar_twin_cells is not None and len(plan.starts):  # a lidar twin's space, doors shut
-        cells = plan.lidar_twin_cells
-        row, col = plan.circulation.grid.world_to_cell(plan.starts[:, 0], plan.starts[:, 1])
-        inside = (row >= 0) & (row < cells.shape[0]) & (col >= 0) & (col < cells.shape[1])
-        twin = np.zeros(len(plan.starts), dtype=bool)
-        twin[inside] = cells[row[inside], col[inside]]
-        distance[twin] = np.inf  # (a noise-free scan may tell them apart, a real one did not)
+    if twins is not None and len(plan.starts):  # a lidar twin's space, doors shut
+        distance[_inside(twins, plan, plan.starts[:, :2])] = np.inf  # (noise-free scans may differ)
     return distance
+
+
+def _inside(cells: np.ndarray, plan: StoreyPlan, xy: np.ndarray) -> np.ndarray:
+    """(N,) bool: which points of ``xy`` lie on a True cell of the mask ``cells`` (the plan's grid)."""
+    row, col = plan.circulation.grid.world_to_cell(xy[:, 0], xy[:, 1])
+    inside = (row >= 0) & (row < cells.shape[0]) & (col >= 0) & (col < cells.shape[1])
+    found = np.zeros(len(xy), dtype=bool)
+    found[inside] = cells[row[inside], col[inside]]
+    return found

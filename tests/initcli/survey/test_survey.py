@@ -244,6 +244,9 @@ def test_the_lidar_model_places_no_start_on_a_self_similar_storey() -> None:
     views = sample_views(plan, PARAMS)
     lidar = lidar_along(plan, views, PARAMS)
     assert lidar is not None and len(lidar) == len(plan.starts)
+    assert len(plan.lidar_placed) == 1  # the loops registered once per settings ...
+    again = lidar_along(plan, views, PARAMS)
+    assert again is not None and np.array_equal(again, lidar)  # ... and read again
     twin = dataclasses.replace(plan, twin=Turn(m.pi, (W / 2, H / 2), 0.1))
     never = lidar_along(twin, views, PARAMS)
     assert never is not None and not np.isfinite(never).any()
