@@ -44,8 +44,7 @@ def main() -> None:
     from initcli.sim.build import build_sim
     from initcli.survey.landmarks import suggest_landmarks
     from initcli.survey.plan import plan_storey
-    from initcli.survey.run import lidar_along, survey_storey, unique_distances
-    from initcli.survey.sequences import sample_views, sequences
+    from initcli.survey.run import survey_storey
     from initcli.survey.summary import summarise
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -111,14 +110,7 @@ def main() -> None:
             starts = [build_sim(config, site, simulated, trial_seed(1, k)).start for k in range(args.starts)]
             plan.starts = np.array([[s.x, s.y, s.yaw] for s in starts])
             plan.position = np.arange(len(starts))
-            v = sample_views(plan, params)
-            at = np.full(len(starts), np.inf)
-            if params.camera_on:
-                seqs, dists = sequences(plan, v, params)
-                at = unique_distances(plan, seqs, dists, params, executor)
-            lidar = lidar_along(plan, v, params)
-            if lidar is not None:  # the session's lidar registration, whichever places it first
-                at = np.minimum(at, lidar)
+            at = survey_storey(plan, params, executor)[0].distance  # the camera or the lidar, first
             placed = np.isfinite(at) & (at <= params.limit_m)
             at = np.minimum(at, params.limit_m)
             eval_mean, eval_median = EVAL_MEAN.get(name), EVAL_MEDIAN.get(name)

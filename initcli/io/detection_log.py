@@ -376,12 +376,11 @@ def _one_clock(log: DetectionLog) -> None:
     """A log whose odometry moves while every record carries one and the same time has no clock:
     which odometry goes with which scan or image cannot be told. Refused by name. (A session that
     ended where it started, at once, writes a few records of one time and one pose: that is fine.)"""
-    times = {t for t in (_record_time(r) for r in log.records) if t is not None}
-    timed = sum(_record_time(r) is not None for r in log.records)
+    stamps = [t for t in (_record_time(r) for r in log.records) if t is not None]
     poses = {(r.x, r.y, r.yaw) for r in log.records if isinstance(r, Odom)}
-    if len(times) == 1 and len(poses) > 1:
+    if len(set(stamps)) == 1 and len(poses) > 1:
         raise InputError(
-            f"{log.path}: all {timed} records carry the one time t={next(iter(times)):g}: the log has no"
+            f"{log.path}: all {len(stamps)} records carry the one time t={stamps[0]:g}: the log has no"
             " clock (write each message's header stamp, the robot's clock)"
         )
 

@@ -388,7 +388,6 @@ class ClaimChecks:
         verified, aligned = self.registered(frame, best, transform, found)
         if not verified:
             self.lines = before
-        if not verified:
             return None
         hypothesis = registered_hypothesis(best.storey, transform, frame.odom)
         verdict = f"unique pose by lidar registration ({found.why})"

@@ -95,11 +95,20 @@ class StoreyPlan:
     @property
     def lidar_twin_start_share(self) -> float:
         """Share of the start positions in a space with a lidar twin (camera off: none initialises)."""
-        cells = self.lidar_twin_cells
-        if cells is None or not len(self.positions):
+        if not len(self.positions):
             return 0.0
-        row, col = self.circulation.grid.world_to_cell(self.positions[:, 0], self.positions[:, 1])
-        return float(np.mean(cells[row, col]))
+        return float(np.mean(self.in_lidar_twin(self.positions)))
+
+    def in_lidar_twin(self, xy: np.ndarray) -> np.ndarray:
+        """(N,) bool: which of the points ``xy`` (N, 2) lie in a space with a lidar twin."""
+        cells = self.lidar_twin_cells
+        found = np.zeros(len(xy), dtype=bool)
+        if cells is None:
+            return found
+        row, col = self.circulation.grid.world_to_cell(xy[:, 0], xy[:, 1])
+        inside = (row >= 0) & (row < cells.shape[0]) & (col >= 0) & (col < cells.shape[1])
+        found[inside] = cells[row[inside], col[inside]]
+        return found
 
 
 def storey_features(storey: StoreyModel, cmap: ClassMap | None = None) -> FeatureArrays:
@@ -179,5 +188,7 @@ def plan_storey(storey: StoreyModel, params: SurveyParams, cmap: ClassMap | None
         twins,
         twin_cells,
         np.concatenate([occluders, *(polygon_edges(np.asarray(leaf.exterior)) for leaf in leaves)]),
-        storey_registration_map(storey.name, storey, cmap or ClassMap()),
+        storey_registration_map(storey.name, storey, cmap or ClassMap())
+        if params.registration.enabled
+        else None,
     )

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from initcli.executor import Executor, LocalExecutor, map_unordered
+from initcli.survey.exploration import Loop
 from initcli.survey.lidar import lidar_distances, placed_along, submap_lengths
 from initcli.survey.plan import StoreyPlan, SurveyParams
 from initcli.survey.sequences import SampleViews, sample_views, sequences
@@ -104,27 +105,21 @@ def lidar_along(plan: StoreyPlan, views: SampleViews, params: SurveyParams) -> n
         return None
     if plan.twin is not None:  # a self-similar storey: the session ends at once, whatever it scans
         return np.full(len(plan.starts), np.inf)
-    twins = plan.lidar_twin_cells
     key = (repr(reg), repr(params.lidar), params.scan_tolerance)  # the settings it was made with
-    placed = plan.lidar_placed.get(key, [])
-    for loop in plan.loops[len(placed) :]:
-        if twins is not None and _inside(twins, plan, loop.xy).all():  # a lidar twin's loop: never
-            placed.append(np.zeros((len(submap_lengths(reg)), len(loop)), dtype=bool))
-            continue
-        maps = [plan.registration_map]
-        tolerance = params.scan_tolerance
-        placed.append(placed_along(loop, plan.scan_segments, maps, plan.name, reg, tolerance, params.lidar))
-    plan.lidar_placed[key] = placed
-    distance = lidar_distances(views.entries, placed, plan.loops, reg, params.limit_m)
-    if twins is not None and len(plan.starts):  # a lidar twin's space, doors shut
-        distance[_inside(twins, plan, plan.starts[:, :2])] = np.inf  # (noise-free scans may differ)
+    if key not in plan.lidar_placed:
+        plan.lidar_placed[key] = [_placed(plan, loop, params) for loop in plan.loops]
+    distance = lidar_distances(views.entries, plan.lidar_placed[key], plan.loops, reg, params.limit_m)
+    if len(plan.starts):  # a lidar twin's space, doors shut (noise-free scans may tell it apart)
+        distance[plan.in_lidar_twin(plan.starts[:, :2])] = np.inf
     return distance
 
 
-def _inside(cells: np.ndarray, plan: StoreyPlan, xy: np.ndarray) -> np.ndarray:
-    """(N,) bool: which points of ``xy`` lie on a True cell of the mask ``cells`` (the plan's grid)."""
-    row, col = plan.circulation.grid.world_to_cell(xy[:, 0], xy[:, 1])
-    inside = (row >= 0) & (row < cells.shape[0]) & (col >= 0) & (col < cells.shape[1])
-    found = np.zeros(len(xy), dtype=bool)
-    found[inside] = cells[row[inside], col[inside]]
-    return found
+def _placed(plan: StoreyPlan, loop: Loop, params: SurveyParams) -> np.ndarray:
+    """:func:`placed_along` for one of the plan's loops; none placed on a loop wholly inside a lidar
+    twin's space (not registered at all)."""
+    assert plan.scan_segments is not None and plan.registration_map is not None
+    reg = params.registration
+    if plan.in_lidar_twin(loop.xy).all():
+        return np.zeros((len(submap_lengths(reg)), len(loop)), dtype=bool)
+    maps = [plan.registration_map]
+    return placed_along(loop, plan.scan_segments, maps, plan.name, reg, params.scan_tolerance, params.lidar)
