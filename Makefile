@@ -10,24 +10,26 @@ DOCS_STAMP := $(VENV)/.installed-docs
 
 install: $(STAMP)
 
-# The package alone (what `make run` needs): no test tools, no torch, no Ray, no rosbridge client.
+# The package alone (what `make run` needs): no extra. --no-compile: Python byte-compiles the modules
+# a command imports when it first runs them, not every module of every dependency at install time.
 $(CORE_STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e .
+	$(BIN)/python -m pip install --quiet --no-compile -e .
 	touch $(CORE_STAMP)
 
 # Every extra the tests and the other targets need: [test] (pytest, ruff, mypy), [train] (torch, the
-# detector's training), [ros] (roslibpy, the live link), [cluster] (Ray).
+# detector's training), [ros] (roslibpy, the live link), [cluster] (Ray), [fast] (numba), [detector]
+# (onnxruntime).
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[test,train,ros,cluster]"
+	$(BIN)/python -m pip install --quiet -e ".[test,train,ros,cluster,fast,detector]"
 	touch $(STAMP)
 
 run: $(CORE_STAMP)
 	$(BIN)/bim-extract sample_models/block_a.ifc -o runs/block_a_site
-	$(BIN)/bim-init run --config sample_models/block_a.site.yaml --out runs/block_a_session
+	$(BIN)/bim-init run --config sample_models/block_a.site.yaml --site runs/block_a_site --out runs/block_a_session
 
 # The sample bag a user tries first: a simulated session on block_a as a ROS 2 MCAP (opens in Foxglove).
 sample-bag: install

@@ -42,8 +42,10 @@ PY
 echo "wheel_smoke: installing into a fresh venv"
 "$PYTHON" -m venv "$WORK/venv"
 VPY=$WORK/venv/bin/python
-"$VPY" -m pip install --quiet "$WHEEL" || fail "pip install of the wheel"
-if "$VPY" -c "import torch" 2>/dev/null; then fail "torch got installed (it must stay optional)"; fi
+"$VPY" -m pip install --quiet --no-compile "$WHEEL" || fail "pip install of the wheel"
+for extra in torch numba onnxruntime scipy ray; do
+  if "$VPY" -c "import $extra" 2>/dev/null; then fail "$extra got installed (it must stay an extra)"; fi
+done
 
 RUN=$WORK/run
 mkdir -p "$RUN"
@@ -60,12 +62,10 @@ for mod in (bimkit, bimtools, initcli):
         sys.exit(f"{mod.__name__} imported from the source tree: {path}")
 from bimtools.ifc.categories import DEFAULT_CATEGORIES
 from initcli.detector import DEFAULT_MODEL
-import onnxruntime
 for f in (DEFAULT_CATEGORIES, DEFAULT_MODEL):
     if not f.is_file():
         sys.exit(f"missing packaged file {f}")
-onnxruntime.InferenceSession(str(DEFAULT_MODEL), providers=["CPUExecutionProvider"])
-print("wheel_smoke: installed package imports; default categories and ONNX model load")
+print("wheel_smoke: installed package imports; default categories and ONNX model present")
 PY
 "$WORK/venv/bin/bim-extract" block_a.ifc -o block_a_site || fail "bim-extract"
 test -s block_a_site/features.csv || fail "bim-extract wrote no features.csv"
@@ -92,4 +92,18 @@ print(f"wheel_smoke: bim-init match: {match['verdict']}, the session's claim is 
 PY
 if "$WORK/venv/bin/bim-init" eval --out eval_out 2>err.txt; then fail "bim-init eval without --config ran"; fi
 grep -q -- "--config" err.txt || fail "bim-init eval without --config: $(cat err.txt)"
+# The package alone, after a session (the README's size; it depends on the registry's versions,
+# so it is reported, not enforced).
+SIZE=$(du -sm "$WORK/venv" | cut -f1)
+echo "wheel_smoke: the package alone, after a session: $SIZE MB installed (pip --no-compile)"
+# Without the [detector] extra the network is one line naming it; with it, the default model loads.
+"$VPY" -c "import cv2, numpy; cv2.imwrite('blank.png', numpy.zeros((32, 32, 3), numpy.uint8))"
+if "$WORK/venv/bin/bim-init" detector predict default blank.png >/dev/null 2>err.txt; then fail "predict without onnxruntime ran"; fi
+grep -q "bim-init\[detector\]" err.txt || fail "predict without onnxruntime: $(cat err.txt)"
+"$VPY" -m pip install --quiet --no-compile "$WHEEL[detector]" || fail "pip install of the wheel's [detector] extra"
+"$VPY" - <<'PY' || fail "the default ONNX model does not load with the [detector] extra"
+import onnxruntime
+from initcli.detector import DEFAULT_MODEL
+onnxruntime.InferenceSession(str(DEFAULT_MODEL), providers=["CPUExecutionProvider"])
+PY
 echo "wheel_smoke: OK ($(basename "$WHEEL"))"

@@ -40,7 +40,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import shapely
-from scipy.spatial import cKDTree
 
 from bimtools.settings import LandmarkSettings
 from bimtools.site.records import LANDMARK_CATEGORIES, Feature, WallSegment
@@ -221,12 +220,12 @@ def _openings(legs: list[Leg], walls: Sequence[WallSegment], s: LandmarkSettings
     solid = [w for w in walls if not w.glass]
     lines = shapely.linestrings([[[w.x1, w.y1], [w.x2, w.y2]] for w in solid]) if solid else None
     tree = shapely.STRtree(lines) if lines is not None else None
-    starts = cKDTree(np.array([f.start for f in faces]))
+    starts = np.array([f.start for f in faces])
     out: list[_Landmark] = []
     for a in faces:
         d, n = a.direction, a.normal
         nearest: tuple[float, Leg] | None = None  # the next face along the line
-        for j in starts.query_ball_point(a.end, hi + LINE_TOLERANCE):
+        for j in np.flatnonzero(np.hypot(*(starts - a.end).T) <= hi + LINE_TOLERANCE):
             b = faces[j]
             if b is a or abs(_turn(d, b.direction)) >= LEG_COLLINEAR:
                 continue

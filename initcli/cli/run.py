@@ -127,6 +127,12 @@ def run(
         str | None,
         typer.Option("--start", metavar="x,y,yaw", help="Override sim.start (BIM frame, yaw in degrees)."),
     ] = None,
+    site: Annotated[
+        Path | None,
+        typer.Option(
+            "--site", metavar="SITE", help="Override site.path (an IFC file or a bim-extract output folder)."
+        ),
+    ] = None,
     quiet: Annotated[
         bool, typer.Option("--quiet", help="No live view or table; print the summary path only.")
     ] = False,
@@ -146,6 +152,10 @@ def run(
     console = Console()
     try:
         cfg = load_config(config)
+        if site is not None:
+            if not site.exists():
+                raise InputError(f"--site: {site} does not exist")
+            cfg.site.path = str(site.resolve())  # site.path is relative to the config, --site to here
         start_pose = parse_start(start) if start else None
         the_seed = int(cfg.sim.seed if seed is None else seed)
         target = out or Path("runs") / datetime.now().strftime("%Y%m%d-%H%M%S")

@@ -17,6 +17,7 @@ from bimkit.checks import show_number
 from bimkit.errors import InputError
 from initcli.config.session import SessionConfig
 from initcli.config.sim import PROFILE_REPLACES
+from initcli.detector import RUNTIME_AVAILABLE, RUNTIME_MISSING
 from initcli.detector.profile import DetectorProfile, read_profile, resolve_profile
 from initcli.io.lidar_profile import (
     LIDAR_PROFILE_REPLACES,
@@ -153,6 +154,12 @@ def profile_or_rates(c: SessionConfig, given: set[str]) -> str | None:
     return None
 
 
+def detector_runtime(c: SessionConfig, given: set[str]) -> str | None:
+    if c.detector.kind == "onnx" and not RUNTIME_AVAILABLE:
+        return f"detector.kind onnx {RUNTIME_MISSING}"
+    return None
+
+
 def profile_file(c: SessionConfig, given: set[str]) -> str | None:
     if not c.sim.detector.profile:
         return None
@@ -187,6 +194,7 @@ CHECKS: tuple[Check, ...] = (
     wall_distance,
     fine_travel,
     profile_or_rates,
+    detector_runtime,
     profile_file,
     lidar_profile_or_values,
 )

@@ -13,17 +13,20 @@ import ast
 import json
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
-import onnxruntime as ort
 
 from bimkit.documents import check_regular
 from bimkit.errors import InputError
 from bimkit.limits import MAX_MODEL_BYTES
-from initcli.detector import DEFAULT_MODEL, DETECTOR_CONFIDENCE, resolve_model_path
+from initcli.detector import DEFAULT_MODEL, DETECTOR_CONFIDENCE, RUNTIME_MISSING, resolve_model_path
 from initcli.detector.layouts import LayoutError, decode, infer_layout, nms
 from initcli.detector.preprocess import PAD_VALUE, Letterbox, letterbox
+
+if TYPE_CHECKING:
+    import onnxruntime as ort
 
 __all__ = ["DEFAULT_IMGSZ", "Detection", "Detector", "Preprocess", "session_options"]
 
@@ -102,6 +105,8 @@ def _first_line(exc: BaseException) -> str:
 
 def session_options(threads: int = 2) -> ort.SessionOptions:
     """onnxruntime settings for a robot that shares its cores: fixed threads, no idle spinning."""
+    import onnxruntime as ort
+
     so = ort.SessionOptions()
     so.intra_op_num_threads = max(1, int(threads))
     so.inter_op_num_threads = 1
@@ -136,6 +141,10 @@ class Detector:
             raise InputError(f"{path}: is a folder, expected an .onnx model file")
         check_regular(path, "an ONNX model", MAX_MODEL_BYTES)
         self.conf, self.iou, self.max_det = conf, iou, max_det
+        try:
+            import onnxruntime as ort
+        except ImportError:
+            raise InputError(f"{path}: the detector {RUNTIME_MISSING}") from None
         try:
             self.session = ort.InferenceSession(
                 str(path), session_options(threads), providers=providers or ["CPUExecutionProvider"]

@@ -7,6 +7,9 @@ roslibpy is in the ``[ros]`` extra: ``pip install 'bim-init[ros]'``.
 
 from __future__ import annotations
 
+import base64
+import os
+import socket
 import threading
 from collections.abc import Callable
 from typing import Any
@@ -17,6 +20,7 @@ __all__ = [
     "CONNECT_TIMEOUT_S",
     "DEFAULT_PORT",
     "RosbridgeLink",
+    "probe_websocket",
     "ros_type",
 ]
 
@@ -26,9 +30,57 @@ HANDSHAKE_SERVICE = "/bim_init/handshake"  # no robot offers it: rosbridge answe
 ROSAPI_PUBLISHERS = "/rosapi/publishers"  # rosapi (launched with rosbridge): a topic's publishers
 
 
+def _quiet_autobahn() -> None:
+    """autobahn logs each dropped connection (and roslibpy reconnects three times) on stderr: our
+    errors say what failed in one line, so its log keeps to the critical."""
+    import txaio
+
+    txaio.use_twisted()
+    txaio.set_global_log_level("critical")  # type: ignore[attr-defined]  # set by use_twisted
+
+
 def ros_type(msgtype: str) -> str:
     """rosbridge's spelling (``geometry_msgs/Twist``), which ROS 1 and ROS 2 bridges both accept."""
     return msgtype.replace("/msg/", "/")
+
+
+def probe_websocket(host: str, port: int, timeout: float) -> None:
+    """Ask ``host:port`` for a websocket (RFC 6455's upgrade) before roslibpy does: a server that
+    refuses, closes or answers something else (an HTTP server, garbage) is one line saying which,
+    where roslibpy would retry three times, log each drop and say "Failed to connect"."""
+    where = f"ws://{host}:{port}"
+    key = base64.b64encode(os.urandom(16)).decode()
+    request = (
+        f"GET / HTTP/1.1\r\nHost: {host}:{port}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+        f"Sec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n\r\n"
+    )
+    try:
+        conn = socket.create_connection((host, port), timeout=timeout)
+    except TimeoutError:
+        raise InputError(f"cannot reach rosbridge at {where} (no connection in {timeout:g} s)") from None
+    except OSError as exc:
+        raise InputError(f"cannot reach rosbridge at {where} ({exc.strerror or exc})") from None
+    answer = b""
+    with conn:
+        try:
+            conn.sendall(request.encode())
+            while b"\r\n" not in answer and len(answer) < 1024:
+                chunk = conn.recv(1024)
+                if not chunk:
+                    break
+                answer += chunk
+        except TimeoutError:
+            silent = f"{where} does not answer a websocket request (no reply in {timeout:g} s)"
+            raise InputError(silent) from None
+        except (ConnectionResetError, BrokenPipeError):
+            pass  # closed on us: said below
+    line = answer.split(b"\r\n", 1)[0].decode("latin-1").strip()
+    if not line:
+        raise InputError(f"{where} closed the connection without answering a websocket request")
+    parts = line.split()
+    if len(parts) < 2 or not parts[0].startswith("HTTP/") or parts[1] != "101":
+        shown = line if len(line) <= 80 else line[:77] + "..."
+        raise InputError(f"{where} is not a rosbridge server: it answered {shown!r} to a websocket request")
 
 
 class RosbridgeLink:
@@ -41,6 +93,8 @@ class RosbridgeLink:
             raise InputError("the rosbridge link needs roslibpy: pip install 'bim-init[ros]'") from None
         self._roslibpy = roslibpy
         self.host, self.port = host, port
+        probe_websocket(host, port, timeout)
+        _quiet_autobahn()
         self.ros = roslibpy.Ros(host=host, port=port)
         try:
             self.ros.run(timeout=timeout)

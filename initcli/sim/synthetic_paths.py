@@ -12,18 +12,17 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import ndimage
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import dijkstra
 
 from bimtools.site.records import OccupancyGrid
+from initcli.core.geometry.raster import distance_to_outside
+from initcli.core.navigation.shortest_paths import csr_from_edges, dijkstra
 
 __all__ = ["random_path"]
 
 
 def _coarse_clearance(grid: OccupancyGrid, cell: float) -> tuple[np.ndarray, float, np.ndarray]:
     free = grid.occupancy() == 0
-    clearance = ndimage.distance_transform_edt(free) * grid.resolution
+    clearance = distance_to_outside(free) * grid.resolution
     step = max(1, int(round(cell / grid.resolution)))
     rows, cols = clearance.shape[0] // step, clearance.shape[1] // step
     blocks = clearance[: rows * step, : cols * step].reshape(rows, step, cols, step)
@@ -71,10 +70,9 @@ def random_path(
         src.append(i)
         dst.append(j)
         w.append(cost)
-    graph = coo_matrix(
-        (np.concatenate(w), (np.concatenate(src), np.concatenate(dst))), shape=(len(cells),) * 2
+    graph = csr_from_edges(
+        len(cells), np.concatenate(src), np.concatenate(dst), np.concatenate(w), undirected=True
     )
-    graph = graph.tocsr()
 
     def centre(k: int) -> tuple[float, float]:
         r, c = cells[k]
@@ -89,7 +87,7 @@ def random_path(
             start = int(np.argmin(np.hypot(*(centres - target).T)))
         else:
             start = int(rng.integers(len(cells)))
-        dist, pred = dijkstra(graph, directed=False, indices=start, return_predecessors=True)
+        dist, pred = dijkstra(graph, start)
         # geometric length along the path is below the weighted cost; pick goals by weighted cost range
         reachable = np.flatnonzero(
             np.isfinite(dist) & (dist >= min_length * 1.5) & (dist <= max_length * 2.5)

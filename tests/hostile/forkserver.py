@@ -1,5 +1,5 @@
 """Run the installed CLIs' entry points in fresh child processes, fast: this process imports them once
-(numpy, numba, scipy, typer, ... take seconds), then forks one child per request.
+(numpy, numba, OpenCV, typer, ... take seconds), then forks one child per request.
 
 A child is a real process: its own stdin (``/dev/null``), stdout and stderr (files), working
 folder, exit code and signals; it runs the console script's entry point (``initcli.cli.main:main``

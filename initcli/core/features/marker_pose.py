@@ -21,6 +21,7 @@ from typing import Protocol
 import cv2
 import numpy as np
 
+from initcli.core.geometry.least_squares import levenberg_marquardt
 from initcli.core.geometry.projection import R_BODY_OPTICAL, CameraIntrinsics, CameraMount, odom_to_pixel
 from initcli.core.geometry.se2 import Pose2D, wrap_angle
 
@@ -71,8 +72,6 @@ def robot_pose_from_marker(
     camera) only seeds a 3-DOF fit: the planar pose (x, y, yaw) that minimises the corners'
     reprojection error (inverse Eq. 1-2). The mirror has no level counterpart and falls away.
     """
-    from scipy.optimize import least_squares
-
     k = np.array([[intrinsics.fx, 0.0, intrinsics.cx], [0.0, intrinsics.fy, intrinsics.cy], [0.0, 0.0, 1.0]])
     pixels = np.asarray(corners_px, dtype=np.float64).reshape(4, 2)
     corners = marker.object_points() @ marker.rotation().T + marker.centre  # (4, 3) in the BIM frame
@@ -93,7 +92,7 @@ def robot_pose_from_marker(
         t_opt_marker = _homogeneous(cv2.Rodrigues(rvec)[0], tvec.reshape(3))
         t_bim_base = t_bim_marker @ np.linalg.inv(t_opt_marker) @ np.linalg.inv(t_base_opt)
         seed = np.array([t_bim_base[0, 3], t_bim_base[1, 3], math.atan2(t_bim_base[1, 0], t_bim_base[0, 0])])
-        fit = least_squares(residuals, seed, method="lm")
+        fit = levenberg_marquardt(residuals, seed)
         cost = float(np.sum(fit.fun**2))
         if best is None or cost < best[0]:
             best = (cost, fit.x)

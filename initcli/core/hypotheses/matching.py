@@ -11,7 +11,8 @@ random cases):
   (Eq. 8; the angle difference is wrapped, see :func:`initcli.core.hypotheses.pattern.angle_difference`);
 - partial matches that find no b_w for s_i are dropped.
 
-Indexing (instead of scanning all of B): per class, a KD-tree of the BIM positions. For a triple,
+Indexing (instead of scanning all of B): per class, a bucket grid of the BIM positions
+(:class:`initcli.core.geometry.nearest.PointGrid`, exact radius queries). For a triple,
 (b_u, b_v) and the odom triangle fix where b_w must lie -- within alpha of the distance d^S_{i-2,i}
 from b_u and within beta of the angle theta_ijk from the direction b_u->b_v, an annular sector --
 so one batched ball query per step around the predicted point returns a superset of the
@@ -47,14 +48,13 @@ place while a chance fit survives.
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
+from initcli.core.geometry.nearest import PointGrid
 from initcli.core.hypotheses.pattern import angle_difference, pair_distance, rotation_angle
 
 __all__ = [
@@ -138,11 +138,9 @@ class BimIndex:
         self.members: dict[str, np.ndarray] = {}
         for name in sorted(set(self.classes)):
             self.members[name] = np.array([i for i, c in enumerate(self.classes) if c == name], dtype=np.intp)
-        self.trees: dict[str, cKDTree] = {name: cKDTree(self.xy[idx]) for name, idx in self.members.items()}
-        self.density: dict[str, float] = {}  # features per square metre of the class's bounding box
-        for name, idx in self.members.items():
-            span = np.ptp(self.xy[idx], axis=0) + 1.0 if len(idx) else np.ones(2)
-            self.density[name] = len(idx) / float(span[0] * span[1])
+        self.grids: dict[str, PointGrid] = {
+            name: PointGrid(self.xy[idx]) for name, idx in self.members.items()
+        }
 
     def __len__(self) -> int:
         return len(self.xy)
@@ -151,47 +149,14 @@ class BimIndex:
         return self.members.get(cls, np.zeros(0, dtype=np.intp))
 
     def ball(self, centres: np.ndarray, cls: str, radius: float) -> tuple[np.ndarray, np.ndarray]:
-        """All pairs (query row, BIM index) with a ``cls`` feature within ``radius`` of the centre.
-
-        Small balls use k-nearest-neighbour queries bounded by the radius (arrays, no Python lists;
-        k doubles for the rows that come back full); large balls use ``query_ball_point``.
-        """
+        """All pairs (query row, BIM index) with a ``cls`` feature within ``radius`` of the centre,
+        sorted by row, then index (one batched query of the class's bucket grid)."""
         centres = np.asarray(centres, dtype=float).reshape(-1, 2)
         idx = self.members.get(cls)
         if idx is None or len(centres) == 0 or radius < 0:
             return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
-        tree = self.trees[cls]
-        expected = self.density[cls] * math.pi * radius * radius
-        if expected <= 16.0:
-            return self._knn_ball(tree, idx, centres, radius, expected)
-        found = tree.query_ball_point(centres, radius, return_sorted=False)
-        lengths = np.fromiter((len(f) for f in found), dtype=np.intp, count=len(found))
-        total = int(lengths.sum())
-        local = np.fromiter(itertools.chain.from_iterable(found), dtype=np.intp, count=total)
-        rows = np.repeat(np.arange(len(centres), dtype=np.intp), lengths)
+        rows, local = self.grids[cls].within(centres, radius)
         return rows, idx[local]
-
-    @staticmethod
-    def _knn_ball(
-        tree: cKDTree, idx: np.ndarray, centres: np.ndarray, radius: float, expected: float
-    ) -> tuple[np.ndarray, np.ndarray]:
-        n = len(idx)
-        k = int(min(n, max(4, 2 ** math.ceil(math.log2(max(2.0 * expected, 1.0))))))
-        pending = np.arange(len(centres))
-        rows_out: list[np.ndarray] = []
-        cand_out: list[np.ndarray] = []
-        while len(pending):
-            dist, nn = tree.query(centres[pending], k=k, distance_upper_bound=radius)
-            dist = dist.reshape(len(pending), k)
-            nn = nn.reshape(len(pending), k)
-            full = np.isfinite(dist[:, -1]) if k < n else np.zeros(len(pending), dtype=bool)
-            done = ~full
-            hit = np.isfinite(dist[done])
-            rows_out.append(np.broadcast_to(pending[done][:, None], hit.shape)[hit])
-            cand_out.append(idx[nn[done][hit]])
-            pending = pending[full]
-            k = min(n, 2 * k)
-        return np.concatenate(rows_out), np.concatenate(cand_out)
 
 
 @dataclass

@@ -1,8 +1,9 @@
 """Robot pose in the BIM frame for one match: the paper's method (Eq. 10-13) and rigid Kabsch.
 
 *paper* (§3.3.3): the position (x_g, y_g) by trilateration on the last three matched features
-(Eq. 10, non-linear least squares with scipy), d_i being the robot's measured (odom) distance to
-feature i; the heading theta_g from the last matched feature seen in the robot frame (Eq. 11-13).
+(Eq. 10, non-linear least squares by Levenberg-Marquardt), d_i being the robot's measured (odom)
+distance to feature i; the heading theta_g from the last matched feature seen in the robot frame
+(Eq. 11-13).
 Eq. 10 has two minima when the three features are (nearly) collinear -- doors along one corridor
 wall -- mirror images across that line; the paper does not say which one it takes. Here the
 least squares runs from every pairwise circle intersection and the minimum whose handedness
@@ -18,8 +19,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import least_squares
 
+from initcli.core.geometry.least_squares import levenberg_marquardt
 from initcli.core.geometry.se2 import Pose2D, wrap_angle
 
 __all__ = [
@@ -72,7 +73,7 @@ def trilaterate(
     odom_anchors: np.ndarray | None = None,
     odom_robot: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Eq. 10: (x_g, y_g) = argmin sum (d_i^2 - ((x - x_i)^2 + (y - y_i)^2))^2 (scipy least squares).
+    """Eq. 10: (x_g, y_g) = argmin sum (d_i^2 - ((x - x_i)^2 + (y - y_i)^2))^2 (Levenberg-Marquardt).
 
     ``anchors`` are the BIM positions of the features, ``dists`` the measured distances. If the odom
     positions of the same features and of the robot are given, the solution on the robot's side of
@@ -85,15 +86,9 @@ def trilaterate(
         for j in range(i + 1, len(anchors)):
             starts.extend(_circle_points(anchors[i], dists[i], anchors[j], dists[j]))
     solutions: list[tuple[float, np.ndarray]] = []
-    for x0 in starts:
-        res = least_squares(
-            trilateration_residuals,
-            x0,
-            args=(anchors, dists),
-            method="lm" if len(anchors) >= 2 else "trf",
-            xtol=1e-15,
-            ftol=1e-15,
-            gtol=1e-15,
+    for x0 in starts:  # one feature: the minimisers are a circle, the solver ends on one of them
+        res = levenberg_marquardt(
+            trilateration_residuals, x0, args=(anchors, dists), xtol=1e-15, ftol=1e-15, gtol=1e-15
         )
         solutions.append((float(np.sum(res.fun**2)), res.x))
     if odom_anchors is not None and odom_robot is not None and len(anchors) >= 2:

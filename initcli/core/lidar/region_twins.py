@@ -27,10 +27,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
-from scipy import ndimage
-from scipy.spatial import cKDTree
 
+from initcli.core.geometry.nearest import PointGrid
+from initcli.core.geometry.raster import distance_to_outside
 from initcli.core.geometry.se2 import Pose2D, wrap_angle
 from initcli.core.lidar.symmetry import TOLERANCE
 
@@ -44,6 +45,7 @@ SAMPLE = 256  # wall cells the refinement is scored on; the best motion is then 
 IDENTITY_M = 1.0  # m: a motion that moves no wall cell of the region further than this is no twin
 ROUND = 0.1  # a region whose second moments differ by less than this share has no principal axis
 SWEEP_DEG = 5.0  # degrees between the turns tried on such a region
+BUCKET = 0.51  # the wall cells' bucket grid: buckets a little over half a tolerance (a query looks at 5 x 5)
 
 
 @dataclass(frozen=True)
@@ -76,13 +78,13 @@ def region_twins(
     labels = np.pad(np.asarray(labels, dtype=np.int64), 1)
     origin = (origin[0] - resolution, origin[1] - resolution)
     free = labels > 0
-    walls = ~free & ndimage.binary_dilation(free, structure=np.ones((3, 3), dtype=bool))
+    walls = ~free & _dilated(free)
     wall_xy = _xy(np.nonzero(walls), labels.shape, resolution, origin)
     if len(wall_xy) < 3:
         return []
-    tree = cKDTree(wall_xy)
-    near = _Lookup(ndimage.distance_transform_edt(~walls) * resolution, resolution, origin)
-    beyond = ndimage.distance_transform_edt(free) * resolution >= tolerance + 1.5 * resolution
+    grid = PointGrid(wall_xy, cell=BUCKET * tolerance)
+    near = _Lookup(distance_to_outside(~walls) * resolution, resolution, origin)
+    beyond = distance_to_outside(free) * resolution >= tolerance + 1.5 * resolution
     counts = np.bincount(labels.ravel(), minlength=int(labels.max()) + 1)
     shape = _Shapes(labels, walls, beyond, resolution, origin)
     out: list[RegionTwin] = []
@@ -96,7 +98,7 @@ def region_twins(
             and abs(len(shape.walls(other)) - n_walls) <= WALL_SLACK * n_walls
         ]
         for other in [label, *(o for o in similar if o != label)]:
-            motion = _fit(shape, tree, near, labels, label, other, tolerance)
+            motion = _fit(shape, grid, near, labels, label, other, tolerance)
             if motion is not None:
                 out.append(RegionTwin(label, other, motion))
                 break
@@ -117,13 +119,15 @@ class _Shapes:
     ) -> None:
         self.labels, self.walls_mask, self.beyond = labels, walls, beyond
         self.resolution, self.origin = resolution, origin
-        self.boxes = ndimage.find_objects(labels)
+        self.boxes = _boxes(labels)
         self._walls: dict[int, np.ndarray] = {}
         self._inner: dict[int, np.ndarray] = {}
         self._axes: dict[int, tuple[np.ndarray, float | None]] = {}
 
     def _box(self, label: int, pad: int) -> tuple[slice, slice]:
-        rows, cols = self.boxes[label - 1]
+        box = self.boxes[label - 1]
+        assert box is not None  # a region tried has cells
+        rows, cols = box
         h, w = self.labels.shape
         return (
             slice(max(0, rows.start - pad), min(h, rows.stop + pad)),
@@ -139,7 +143,7 @@ class _Shapes:
     def walls(self, label: int) -> np.ndarray:
         if label not in self._walls:
             box = self._box(label, 2)
-            near = ndimage.binary_dilation(self.labels[box] == label, structure=np.ones((3, 3), dtype=bool))
+            near = _dilated(self.labels[box] == label)
             self._walls[label] = self._cells(near & self.walls_mask[box], box)
         return self._walls[label]
 
@@ -168,7 +172,13 @@ class _Shapes:
 
 
 def _fit(
-    shape: _Shapes, tree: cKDTree, near: _Lookup, labels: np.ndarray, label: int, other: int, tolerance: float
+    shape: _Shapes,
+    grid: PointGrid,
+    near: _Lookup,
+    labels: np.ndarray,
+    label: int,
+    other: int,
+    tolerance: float,
 ) -> Pose2D | None:
     """The motion laying region ``label`` on region ``other``, or None."""
     walls, back = shape.walls(label), shape.walls(other)
@@ -178,13 +188,15 @@ def _fit(
     for angle0 in _angles(theta, theta2):
         if other == label and abs(wrap_angle(angle0)) < math.radians(SWEEP_DEG):
             continue  # the identity
-        motions = _refined(near, sample, c, c2, angle0, shape.resolution, tolerance)
+        motions, placed = _refined(near, sample, c, c2, angle0, shape.resolution, tolerance)
         if not motions:
             continue
-        motion = min(motions, key=lambda m: _worst(tree, m.apply(sample), tolerance))
-        if _worst(tree, motion.apply(walls), tolerance) > tolerance:
+        # the motion whose sampled wall cells lie closest (the first of equals): one query for all
+        worst = grid.nearest(placed, upper_bound=tolerance + 1e-9)[0].reshape(len(motions), -1).max(axis=1)
+        motion = motions[int(np.argmin(worst))]
+        if _worst(grid, motion.apply(walls), tolerance) > tolerance:
             continue
-        if _worst(tree, motion.inverse().apply(back), tolerance) > tolerance:
+        if _worst(grid, motion.inverse().apply(back), tolerance) > tolerance:
             continue
         if other == label and moved(motion, walls).max(initial=0.0) < IDENTITY_M:
             continue
@@ -215,15 +227,16 @@ def _refined(
     angle0: float,
     resolution: float,
     tolerance: float,
-) -> list[Pose2D]:
+) -> tuple[list[Pose2D], np.ndarray]:
     """The motions of the refinement grid about ``angle0`` (centroid onto target), for an exact check,
-    or none when the distance map shows that none lays every sampled wall cell within ``tolerance``
-    (and the map's rounding) of a wall. The unrefined motion is tried first: a region it lays far off
-    (median beyond three tolerances) has no twin at this angle."""
+    and the sampled wall cells each lays (motion by motion), or none when the distance map shows
+    that none lays every sampled wall cell within ``tolerance`` (and the map's rounding) of a wall.
+    The unrefined motion is tried first: a region it lays far off (median beyond three tolerances)
+    has no twin at this angle."""
     shift = target - Pose2D(0.0, 0.0, angle0).apply(centroid)
     base = Pose2D(float(shift[0]), float(shift[1]), angle0)
     if float(np.median(near(base.apply(sample)))) > 3 * tolerance:
-        return []
+        return [], sample[:0]
     motions = []
     for ddeg in REFINE_DEG:
         angle = angle0 + math.radians(ddeg)
@@ -236,8 +249,8 @@ def _refined(
     moved = np.concatenate([m.apply(sample) for m in motions])
     worst = near(moved).reshape(len(motions), -1).max(axis=1)
     if worst.min() > tolerance + near.slack:
-        return []
-    return motions
+        return [], sample[:0]
+    return motions, moved
 
 
 class _Lookup:
@@ -255,9 +268,9 @@ class _Lookup:
         return out
 
 
-def _worst(tree: cKDTree, xy: np.ndarray, tolerance: float) -> float:
+def _worst(grid: PointGrid, xy: np.ndarray, tolerance: float) -> float:
     """The largest distance from a point to the nearest wall cell (inf: one beyond ``tolerance``)."""
-    return float(tree.query(xy, k=1, distance_upper_bound=tolerance + 1e-9)[0].max())
+    return float(grid.nearest(xy, upper_bound=tolerance + 1e-9)[0].max())
 
 
 def moved(motion: Pose2D, xy: np.ndarray) -> np.ndarray:
@@ -293,3 +306,34 @@ def _xy(
     x = origin[0] + (cols + 0.5) * resolution
     y = origin[1] + (shape[0] - 1 - rows + 0.5) * resolution
     return np.column_stack([x, y]).astype(float).reshape(-1, 2)
+
+
+def _dilated(mask: np.ndarray) -> np.ndarray:
+    """``mask`` (bool) grown by one cell, diagonals included (3 x 3); nothing beyond the edge."""
+    grown = cv2.dilate(
+        mask.astype(np.uint8), np.ones((3, 3), dtype=np.uint8), borderType=cv2.BORDER_CONSTANT, borderValue=0
+    )
+    return np.asarray(grown > 0)
+
+
+def _boxes(labels: np.ndarray) -> list[tuple[slice, slice] | None]:
+    """Per label 1..max of ``labels`` (H, W), the (rows, cols) slices of its bounding box (None: no
+    cell)."""
+    n = int(labels.max(initial=0))
+    cells = np.flatnonzero(labels)
+    label = labels.ravel()[cells]
+    row, col = np.divmod(cells, labels.shape[1])
+    lo_r = np.full(n + 1, labels.shape[0])
+    lo_c = np.full(n + 1, labels.shape[1])
+    hi_r = np.full(n + 1, -1)
+    hi_c = np.full(n + 1, -1)
+    np.minimum.at(lo_r, label, row)
+    np.minimum.at(lo_c, label, col)
+    np.maximum.at(hi_r, label, row)
+    np.maximum.at(hi_c, label, col)
+    return [
+        (slice(int(lo_r[k]), int(hi_r[k]) + 1), slice(int(lo_c[k]), int(hi_c[k]) + 1))
+        if hi_r[k] >= 0
+        else None
+        for k in range(1, n + 1)
+    ]

@@ -28,8 +28,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
+from initcli.core.geometry.nearest import PointGrid
 from initcli.core.geometry.se2 import Pose2D, rot2, wrap_angle
 
 __all__ = ["TURN_ANGLES_DEG", "Turn", "self_similar_turn"]
@@ -40,6 +40,7 @@ TURN_ANGLES_DEG = (180.0, 120.0)
 TOLERANCE = 0.1  # m: walls and features this close after the turn are alike (two 0.05 m map cells)
 NORMAL_TOLERANCE = math.radians(15.0)  # a feature's turned normal this close to its twin's
 PRECHECK = 256  # wall cells tried first: most angles fail on them, without the whole query
+BUCKET = 1.02  # the wall cells' bucket grid: buckets a little over a tolerance (a query looks at 3 x 3)
 
 
 @dataclass(frozen=True)
@@ -78,18 +79,18 @@ def self_similar_turn(
     if len(walls) < 3:
         return None
     centre = (float(walls[:, 0].mean()), float(walls[:, 1].mean()))
-    tree = cKDTree(walls)
+    grid = PointGrid(walls, cell=BUCKET * tolerance)
     rng = np.random.default_rng(0)
     sample = walls[rng.choice(len(walls), size=min(PRECHECK, len(walls)), replace=False)]
     for degrees in TURN_ANGLES_DEG:
         angle = math.radians(degrees)
-        if not _lands_on(tree, _turn(angle, centre).apply(sample), tolerance):
+        if not _lands_on(grid, _turn(angle, centre).apply(sample), tolerance):
             continue
-        if not _lands_on(tree, _turn(angle, centre).apply(walls), tolerance):
+        if not _lands_on(grid, _turn(angle, centre).apply(walls), tolerance):
             continue
         # the cells' centroid is off the true centre by a fraction of a cell: refine it on the walls
-        at = _refined_centre(tree, walls, angle, centre)
-        if not _lands_on(tree, _turn(angle, at).apply(walls), tolerance):
+        at = _refined_centre(grid, walls, angle, centre)
+        if not _lands_on(grid, _turn(angle, at).apply(walls), tolerance):
             at = centre
         # The features' own centroid is the centre of any turn that maps them onto themselves, exact
         # where the map's cells are off by a fraction of one: test them about it, near the walls'.
@@ -104,7 +105,7 @@ def self_similar_turn(
 
 
 def _refined_centre(
-    tree: cKDTree, walls: np.ndarray, angle: float, centre: tuple[float, float], rounds: int = 3
+    grid: PointGrid, walls: np.ndarray, angle: float, centre: tuple[float, float], rounds: int = 3
 ) -> tuple[float, float]:
     """The centre that brings the turned walls closest to the walls: each round moves it by the
     least-squares step for the mean offset to the nearest wall cells. A turn about ``c`` maps ``p``
@@ -113,7 +114,7 @@ def _refined_centre(
     at = np.asarray(centre, dtype=float)
     for _ in range(rounds):
         moved = _turn(angle, (float(at[0]), float(at[1]))).apply(walls)
-        _, nearest = tree.query(moved, k=1)
+        _, nearest = grid.nearest(moved)
         at = at + step @ (walls[nearest] - moved).mean(axis=0)
     return float(at[0]), float(at[1])
 
@@ -124,9 +125,9 @@ def _turn(angle: float, centre: tuple[float, float]) -> Pose2D:
     return Pose2D(float(x), float(y), angle)
 
 
-def _lands_on(tree: cKDTree, points: np.ndarray, tolerance: float) -> bool:
-    """Does every point lie within ``tolerance`` of one of the tree's?"""
-    distance, _ = tree.query(points, k=1, distance_upper_bound=tolerance + 1e-9)
+def _lands_on(grid: PointGrid, points: np.ndarray, tolerance: float) -> bool:
+    """Does every point lie within ``tolerance`` of one of the grid's points?"""
+    distance, _ = grid.nearest(points, upper_bound=tolerance + 1e-9)
     return bool(np.all(np.isfinite(distance)))
 
 

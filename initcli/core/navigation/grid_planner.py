@@ -13,10 +13,9 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import dijkstra
 
 from bimtools.site.records import FREE, OccupancyGrid
+from initcli.core.navigation.shortest_paths import NO_PREDECESSOR, CsrGraph, csr_from_edges, dijkstra
 
 __all__ = ["DOOR_SEAL_MARGIN", "PREFER_WEIGHT", "PlanningGrid", "with_doors_closed"]
 
@@ -46,7 +45,7 @@ class PlanningGrid:
     origin: tuple[float, float]
     cell: float
     free: np.ndarray  # (rows, cols) bool, row 0 = lowest y
-    graph: object  # scipy sparse matrix over free cells
+    graph: CsrGraph  # over the free cells (nodes), both directions of each step
     index: np.ndarray  # (rows, cols) -> node id or -1
     nodes: np.ndarray  # (n, 2) row, col of each node
 
@@ -78,10 +77,7 @@ class PlanningGrid:
             at = np.flipud(dist)[nodes[:, 0] * step + step // 2, nodes[:, 1] * step + step // 2]
             short = np.clip((prefer - at) / (prefer - clearance), 0.0, 1.0)
             w = w * (1.0 + PREFER_WEIGHT * (short[s] + short[d]) / 2)
-        graph = coo_matrix(
-            (np.concatenate([w, w]), (np.concatenate([s, d]), np.concatenate([d, s]))),
-            shape=(len(nodes), len(nodes)),
-        ).tocsr()
+        graph = csr_from_edges(len(nodes), s, d, w, undirected=True)
         return PlanningGrid(
             (grid.origin[0], grid.origin[1]), step * grid.resolution, coarse, graph, index, nodes
         )
@@ -113,8 +109,8 @@ class PlanningGrid:
         start = self.node_at(x, y)
         if start < 0:
             n = len(self.nodes)
-            return np.full(n, np.inf), np.full(n, -9999), -1
-        dist, pred = dijkstra(self.graph, indices=start, return_predecessors=True)
+            return np.full(n, np.inf), np.full(n, NO_PREDECESSOR), -1
+        dist, pred = dijkstra(self.graph, start)
         return dist, pred, start
 
     def path(self, pred: np.ndarray, start: int, goal: int, spacing: float = 2.0) -> list[np.ndarray]:

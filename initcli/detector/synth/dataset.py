@@ -31,10 +31,10 @@ from pathlib import Path
 import cv2
 import numpy as np
 import yaml
-from scipy import ndimage
 
 from bimkit.errors import InputError
 from bimtools.site.load import load_site
+from initcli.core.geometry.raster import distance_to_outside
 from initcli.detector import CLASS_NAMES
 from initcli.detector.synth.look import random_look
 from initcli.detector.synth.render import View, cast_rays, render_view
@@ -145,7 +145,7 @@ def placement_for(scene: Scene, site: str, clearance: float = 0.35) -> Placement
     for s in w:  # also draws two-sided wall lines
         cv2.line(solid, tuple(px(s[0:2])), tuple(px(s[2:4])), 1, 1)
     free = solid == 0
-    labels, _ = ndimage.label(free)
+    _, labels = cv2.connectedComponents(free.astype(np.uint8), connectivity=4)  # 0: not free
     border = set(np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])))
     keep = set()
     for f in scene.features:
@@ -159,7 +159,7 @@ def placement_for(scene: Scene, site: str, clearance: float = 0.35) -> Placement
             "(its space is open to the outside)"
         )
     region = np.isin(labels, sorted(keep))
-    dist = ndimage.distance_transform_edt(region) * CELL
+    dist = distance_to_outside(region) * CELL
     rows, cols = np.nonzero(region & (dist >= clearance))
     if len(rows) == 0:
         raise NoCirculation(

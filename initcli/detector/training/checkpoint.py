@@ -37,12 +37,37 @@ def load_checkpoint(path: Path) -> dict:
         raise InputError(f"{path}: not a bim-init checkpoint ({type(exc).__name__})") from None
     if not isinstance(ckpt, dict) or "model" not in ckpt or "arch" not in ckpt:
         raise InputError(f"{path}: not a bim-init checkpoint (no model/arch)")
+    model_from_checkpoint(ckpt, path)  # every weight there and of the right shape, before any work
     return ckpt
 
 
-def model_from_checkpoint(ckpt: dict) -> Detector:
-    net = Detector(Arch.from_dict(ckpt["arch"]))
-    net.load_state_dict(upgrade_state_dict(ckpt["model"]))
+def _listed(names: list[str]) -> str:
+    return ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+
+
+def model_from_checkpoint(ckpt: dict, source: Path | str = "the checkpoint") -> Detector:
+    """The network a checkpoint holds; :class:`InputError` naming ``source`` where its architecture
+    cannot be built or a weight is missing, unexpected or of another shape."""
+    try:
+        net = Detector(Arch.from_dict(ckpt["arch"]))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise InputError(f"{source}: its arch cannot be built ({type(exc).__name__}: {exc})") from None
+    state = ckpt["model"]
+    if not isinstance(state, dict) or not all(isinstance(v, torch.Tensor) for v in state.values()):
+        raise InputError(f"{source}: its model is not a table of weights")
+    state = upgrade_state_dict(state)
+    own = net.state_dict()
+    missing = [k for k in own if k not in state]
+    unexpected = [k for k in state if k not in own]
+    reshaped = [k for k in own if k in state and tuple(state[k].shape) != tuple(own[k].shape)]
+    for what, names in (
+        ("missing", missing),
+        ("not of this network", unexpected),
+        ("of another shape", reshaped),
+    ):
+        if names:
+            raise InputError(f"{source}: weights {what}: {_listed(names)}")
+    net.load_state_dict(state)
     return net.eval()
 
 

@@ -101,3 +101,30 @@ def test_train_refuses_a_dataset_without_a_usable_box_naming_what_was_dropped(tm
     )
     assert "1 of width or height 0" in lines[0]
     assert not out.exists() and not out.with_suffix(".csv").exists()
+
+
+def test_export_of_a_checkpoint_missing_a_weight_is_one_line_and_writes_nothing(tmp_path):
+    import pytest
+    from typer.testing import CliRunner
+
+    from initcli.cli.detector import detector_app
+
+    pytest.importorskip("torch")
+    from initcli.detector.training.checkpoint import load_init, save_checkpoint
+
+    ckpt = load_init("default")
+    first = next(iter(ckpt["model"]))
+    for name, change in (
+        ("missing", lambda m: m.pop(first)),
+        ("reshaped", lambda m: m.update({first: m[first][:1]})),
+    ):
+        model = dict(ckpt["model"])
+        change(model)
+        save_checkpoint(tmp_path / f"{name}.pt", {**ckpt, "model": model})
+        out = tmp_path / f"{name}.onnx"
+        result = CliRunner().invoke(detector_app, ["export", str(tmp_path / f"{name}.pt"), "-o", str(out)])
+        lines = [line for line in result.stderr.splitlines() if line.strip()]
+        assert result.exit_code == 2, result.output
+        assert len(lines) == 1 and "Traceback" not in result.output, result.stderr
+        assert f"{name}.pt: weights" in lines[0] and first in lines[0]
+        assert not out.exists()

@@ -219,3 +219,19 @@ def test_a_claim_by_the_lidar_along_the_path_replays_as_a_unique_match(tmp_path)
     assert shown.exit_code == 0, shown.output
     assert "unique by the lidar along the path" in shown.stdout
     assert re.search(r"(pass|fail): missed \d+/\d+", shown.stdout)
+
+
+def test_site_option_runs_on_an_extracted_site_without_extracting_again(tmp_path, site_a):
+    """``--site`` overrides site.path (``make run`` runs on the site it has just extracted)."""
+    config = write_config(tmp_path, "block_a")
+    doc = yaml.safe_load(config.read_text())
+    doc["site"]["path"] = "no_such_model.ifc"
+    config.write_text(yaml.safe_dump(doc))
+    start, seed = STARTS["block_a"]
+    result, summary = run(tmp_path, config, "--site", str(site_a), "--start", start, "--seed", str(seed))
+    assert result.exit_code == 0, result.output
+    assert summary is not None and summary["success"]
+    assert not (tmp_path / "out" / "site").exists()  # no extraction of its own
+    result, _ = run(tmp_path, config, "--site", str(tmp_path / "nowhere"), out="out2")
+    assert result.exit_code == 2 and "--site: " in result.output
+    assert not (tmp_path / "out2").exists()

@@ -112,3 +112,12 @@ def test_a_profile_that_is_missing_or_broken_is_refused_before_anything_runs(tmp
         r"sim.detector.profile: .*bad.json: .*required",
         source,
     )
+
+
+def test_the_onnx_detector_without_onnxruntime_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
+    """onnxruntime is the [detector] extra: a config that needs it says how to install it."""
+    from initcli.config import checks
+
+    monkeypatch.setattr(checks, "RUNTIME_AVAILABLE", False)
+    _refused({"detector": {"kind": "onnx"}}, r"detector.kind onnx runs .* pip install 'bim-init\[detector\]'")
+    _accepted({"detector": {"kind": "simulated"}})

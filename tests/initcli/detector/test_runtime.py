@@ -131,3 +131,18 @@ def test_bad_models(tmp_path):
     )
     with pytest.raises(InputError):
         Detector(mismatch)
+
+
+def test_without_onnxruntime_a_detector_is_one_line_naming_the_extra(monkeypatch: pytest.MonkeyPatch) -> None:
+    import builtins
+
+    real = builtins.__import__
+
+    def no_onnxruntime(name: str, *args: object, **kwargs: object) -> object:
+        if name == "onnxruntime":
+            raise ImportError("No module named 'onnxruntime'")
+        return real(name, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(builtins, "__import__", no_onnxruntime)
+    with pytest.raises(InputError, match=r"default.onnx: the detector runs .* 'bim-init\[detector\]'"):
+        Detector("default")

@@ -61,3 +61,61 @@ def test_a_websocket_server_that_is_no_rosbridge_is_an_error_and_nothing_is_publ
         with pytest.raises(InputError, match=r"is a websocket server but does not speak rosbridge"):
             publish_initial_pose(pose, "127.0.0.1", server.port, timeout=1.0)
         assert [o["op"] for o in server.ops] == ["call_service"]  # the handshake, and nothing after
+
+
+class _RawServer:
+    """A TCP server on loopback that answers each connection with ``reply`` (None: closes at once;
+    b"": reads and stays silent), in a thread."""
+
+    def __init__(self, reply: bytes | None) -> None:
+        import socket
+        import threading
+
+        self.reply = reply
+        self.sock = socket.socket()
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.listen()
+        self.port = self.sock.getsockname()[1]
+        self.held: list[object] = []
+        threading.Thread(target=self._serve, daemon=True).start()
+
+    def _serve(self) -> None:
+        while True:
+            try:
+                conn, _ = self.sock.accept()
+            except OSError:
+                return
+            if self.reply is None:
+                conn.close()
+                continue
+            conn.recv(4096)
+            if self.reply:
+                conn.sendall(self.reply)
+                conn.close()
+            else:
+                self.held.append(conn)  # mute: keeps the connection open, says nothing
+
+    def close(self) -> None:
+        self.sock.close()
+
+
+@pytest.mark.parametrize(
+    ("reply", "said"),
+    [
+        (b"HTTP/1.0 200 OK\r\n\r\n", r"not a rosbridge server: it answered .HTTP/1.0 200 OK."),
+        (b"garbage\r\n\r\n", r"is not a rosbridge server: it answered 'garbage'"),
+        (None, r"closed the connection without answering a websocket request"),
+        (b"", r"does not answer a websocket request \(no reply in 1 s\)"),
+    ],
+    ids=["http", "garbage", "closes", "mute"],
+)
+def test_a_server_that_is_no_websocket_is_one_line_saying_what_it_did(capfd, reply, said):
+    """An HTTP server, garbage, a closed or a silent port: one line, no library log on stderr."""
+    server = _RawServer(reply)
+    try:
+        with pytest.raises(InputError, match=said) as info:
+            RosbridgeLink("127.0.0.1", server.port, timeout=1.0)
+    finally:
+        server.close()
+    assert "\n" not in str(info.value)
+    assert capfd.readouterr().err == ""

@@ -39,3 +39,9 @@ def test_without_a_writable_cache_the_loop_is_compiled_per_process(monkeypatch: 
     fn = jit.compiled(_total)
     assert asked == [True, False]
     assert fn(np.arange(5.0)) == 10.0
+
+
+def test_without_numba_the_loop_runs_as_python(monkeypatch: pytest.MonkeyPatch) -> None:
+    """numba is the [fast] extra: without it, compiled() hands back the function itself."""
+    monkeypatch.setattr(jit, "AVAILABLE", False)
+    assert jit.compiled(_total) is _total

@@ -125,3 +125,17 @@ def test_nearest_segment_distance_is_the_projection_formula() -> None:
         assert got == pytest.approx(expected, rel=0, abs=1e-12)
     assert nearest_segment_distance(0.0, 0.0, np.zeros((0, 4)), 0.8) == 0.8
     assert nearest_segment_distance(0.0, 0.0, np.array([[3.0, -1.0, 3.0, 1.0]]), 5.0) == 3.0
+
+
+def test_without_numba_the_loops_give_the_same_scans(monkeypatch: pytest.MonkeyPatch) -> None:
+    """numba is the [fast] extra: the loops run as plain Python without it, bit for bit the same."""
+    from initcli.core.geometry import raycast
+
+    for name in ("_cast_turn", "_nearest_hits", "_shorten", "nearest_segment_distance"):
+        loop = getattr(raycast, name)
+        monkeypatch.setattr(raycast, name, getattr(loop, "py_func", loop))
+    rng = np.random.default_rng(7)
+    segments = random_segments(rng, 120, 10.0)
+    origin = rng.uniform(-5, 5, 2)
+    assert_same(origin, LIDAR_ANGLES, segments, 12.0)  # a full turn of even beams
+    assert_same(origin, rng.uniform(-math.pi, math.pi, 50), segments, 12.0)  # the sorted runs
