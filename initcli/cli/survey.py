@@ -104,7 +104,11 @@ _Landmarks = Annotated[
 ]
 _Executor = Annotated[
     str,
-    typer.Option("--executor", metavar="local|ray", help="Where the matching runs: local processes or Ray."),
+    typer.Option(
+        "--executor",
+        metavar="local|ray",
+        help="Where the matching and the lidar runs: local processes or Ray.",
+    ),
 ]
 _Workers = Annotated[
     int | None,

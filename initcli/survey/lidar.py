@@ -36,6 +36,9 @@ __all__ = [
     "TRACK_STEP_M",
     "lidar_distances",
     "placed_along",
+    "placed_at",
+    "placed_from",
+    "registration_points",
     "submap_lengths",
 ]
 
@@ -72,6 +75,51 @@ def submap_lengths(params: RegistrationParams) -> tuple[float, ...]:
     return tuple(params.window * f for f in SUBMAP_FRACTIONS)
 
 
+def registration_points(loop: Loop, params: RegistrationParams) -> list[tuple[int, int]]:
+    """The (submap level, loop point) pairs :func:`placed_along` registers: every ``params.every``
+    m of the loop, per submap length of :func:`submap_lengths`."""
+    every = max(1, int(round(params.every / loop.step)))
+    return [(level, at) for level in range(len(submap_lengths(params))) for at in range(0, len(loop), every)]
+
+
+def placed_at(
+    loop: Loop,
+    segments: np.ndarray,
+    maps: list[RegistrationMap],
+    storey: str,
+    params: RegistrationParams,
+    tolerance: float,
+    lidar: LidarModel,
+    points: list[tuple[int, int]],
+) -> list[bool]:
+    """Per (level, point) of ``points`` (:func:`registration_points`): is the registration of that
+    submap length of the loop before the point unique and right on ``storey``? Each is independent
+    of the others, so a loop's points can be shared out."""
+    n = len(loop)
+    lengths = submap_lengths(params)
+    keep = max(1, int(round(TRACK_STEP_M / loop.step)))
+    angles = lidar.angles()[::BEAM_STEP]
+    cache: dict[int, ScanSample] = {}
+    out: list[bool] = []
+    for level, at in points:
+        span = min(n, max(1, int(round(lengths[level] / loop.step))))
+        scans = []
+        for i in ((at - k) % n for k in range(span - 1, -1, -keep)):
+            if i not in cache:
+                cache[i] = _scan(loop.poses[i], lidar, angles, segments)
+            scans.append(cache[i])
+        found = register(BeamEnds.of(scans), maps, params, tolerance)
+        best, truth = found.best, scans[-1].odom
+        out.append(
+            found.unique
+            and best is not None
+            and best.storey == storey
+            and best.pose.distance_to(truth) <= RIGHT_M
+            and best.pose.yaw_error(truth) <= math.radians(RIGHT_DEG)
+        )
+    return out
+
+
 def placed_along(
     loop: Loop,
     segments: np.ndarray,
@@ -84,33 +132,20 @@ def placed_along(
     """(L, P) bool, per submap length of :func:`submap_lengths` and loop point: True where the
     registration of that many metres of the loop before the point (every ``params.every`` m of the
     loop, the points between take the last one's outcome) is unique and right on ``storey``."""
-    n = len(loop)
-    lengths = submap_lengths(params)
-    placed = np.zeros((len(lengths), n), dtype=bool)
-    if n == 0 or not maps:
-        return placed
+    points = registration_points(loop, params) if maps else []
+    return placed_from(
+        loop, params, points, placed_at(loop, segments, maps, storey, params, tolerance, lidar, points)
+    )
+
+
+def placed_from(
+    loop: Loop, params: RegistrationParams, points: list[tuple[int, int]], right: list[bool]
+) -> np.ndarray:
+    """:func:`placed_along`'s (L, P) array from the outcome of each of its ``points``."""
     every = max(1, int(round(params.every / loop.step)))
-    keep = max(1, int(round(TRACK_STEP_M / loop.step)))
-    angles = lidar.angles()[::BEAM_STEP]
-    cache: dict[int, ScanSample] = {}
-    for level, length in enumerate(lengths):
-        span = min(n, max(1, int(round(length / loop.step))))
-        for at in range(0, n, every):
-            scans = []
-            for i in ((at - k) % n for k in range(span - 1, -1, -keep)):
-                if i not in cache:
-                    cache[i] = _scan(loop.poses[i], lidar, angles, segments)
-                scans.append(cache[i])
-            found = register(BeamEnds.of(scans), maps, params, tolerance)
-            best, truth = found.best, scans[-1].odom
-            right = (
-                found.unique
-                and best is not None
-                and best.storey == storey
-                and best.pose.distance_to(truth) <= RIGHT_M
-                and best.pose.yaw_error(truth) <= math.radians(RIGHT_DEG)
-            )
-            placed[level, at : at + every] = right
+    placed = np.zeros((len(submap_lengths(params)), len(loop)), dtype=bool)
+    for (level, at), ok in zip(points, right, strict=True):
+        placed[level, at : at + every] = ok
     return placed
 
 

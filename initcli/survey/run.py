@@ -10,8 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from initcli.executor import Executor, LocalExecutor, map_unordered
-from initcli.survey.exploration import Loop
-from initcli.survey.lidar import lidar_distances, placed_along, submap_lengths
+from initcli.survey.lidar import lidar_distances, placed_at, placed_from, registration_points
 from initcli.survey.plan import StoreyPlan, SurveyParams
 from initcli.survey.sequences import SampleViews, sample_views, sequences
 from initcli.survey.uniqueness import UniquenessParams, first_unique
@@ -90,16 +89,19 @@ def survey_storey(
         distance = np.full(len(plan.starts), np.inf)
         if on_done is not None:
             on_done(len(plan.starts))
-    lidar = lidar_along(plan, views, params)
+    lidar = lidar_along(plan, views, params, executor)
     if lidar is not None:
         distance = np.minimum(distance, lidar)
     return StoreySurvey(plan, distance, params, lidar), views
 
 
-def lidar_along(plan: StoreyPlan, views: SampleViews, params: SurveyParams) -> np.ndarray | None:
+def lidar_along(
+    plan: StoreyPlan, views: SampleViews, params: SurveyParams, executor: Executor | None = None
+) -> np.ndarray | None:
     """(S,) m until the session's lidar registration places each start (:mod:`initcli.survey.lidar`;
     none on a self-similar storey or in a lidar twin's space, where sessions fail while the doors
-    stay shut); None where the registration is off or the storey has no map."""
+    stay shut); None where the registration is off or the storey has no map. The loops are
+    registered on ``executor``, one loop a call."""
     reg = params.registration
     if not reg.enabled or plan.registration_map is None or plan.scan_segments is None:
         return None
@@ -107,19 +109,41 @@ def lidar_along(plan: StoreyPlan, views: SampleViews, params: SurveyParams) -> n
         return np.full(len(plan.starts), np.inf)
     key = (repr(reg), repr(params.lidar), params.scan_tolerance)  # the settings it was made with
     if key not in plan.lidar_placed:
-        plan.lidar_placed[key] = [_placed(plan, loop, params) for loop in plan.loops]
+        plan.lidar_placed[key] = _placed(plan, params, executor or LocalExecutor(1))
     distance = lidar_distances(views.entries, plan.lidar_placed[key], plan.loops, reg, params.limit_m)
     if len(plan.starts):  # a lidar twin's space, doors shut (noise-free scans may tell it apart)
         distance[plan.in_lidar_twin(plan.starts[:, :2])] = np.inf
     return distance
 
 
-def _placed(plan: StoreyPlan, loop: Loop, params: SurveyParams) -> np.ndarray:
-    """:func:`placed_along` for one of the plan's loops; none placed on a loop wholly inside a lidar
-    twin's space (not registered at all)."""
+def _placed(plan: StoreyPlan, params: SurveyParams, executor: Executor) -> list[np.ndarray]:
+    """:func:`initcli.survey.lidar.placed_along` for each of the plan's loops, its registrations
+    shared out on ``executor`` in chunks; none placed on a loop wholly inside a lidar twin's space
+    (not registered at all)."""
     assert plan.scan_segments is not None and plan.registration_map is not None
     reg = params.registration
-    if plan.in_lidar_twin(loop.xy).all():
-        return np.zeros((len(submap_lengths(reg)), len(loop)), dtype=bool)
+    points = [
+        [] if plan.in_lidar_twin(loop.xy).all() else registration_points(loop, reg) for loop in plan.loops
+    ]
+    size = max(1, math.ceil(sum(map(len, points)) / (4 * executor.slots)))
+    chunks = [(k, lo) for k, p in enumerate(points) for lo in range(0, len(p), size)]
     maps = [plan.registration_map]
-    return placed_along(loop, plan.scan_segments, maps, plan.name, reg, params.scan_tolerance, params.lidar)
+    calls = [
+        (
+            placed_at,
+            plan.loops[k],
+            plan.scan_segments,
+            maps,
+            plan.name,
+            reg,
+            params.scan_tolerance,
+            params.lidar,
+            points[k][lo : lo + size],
+        )
+        for k, lo in chunks
+    ]
+    right: list[list[bool]] = [[False] * len(p) for p in points]
+    for j, got in map_unordered(executor, calls):
+        k, lo = chunks[j]
+        right[k][lo : lo + len(got)] = got
+    return [placed_from(loop, reg, points[k], right[k]) for k, loop in enumerate(plan.loops)]

@@ -91,3 +91,22 @@ def test_a_start_is_placed_at_the_first_point_its_longest_submap_places() -> Non
     assert early[0] == pytest.approx(30 * step)
     late = lidar_distances([Entry(0, 100, np.zeros((0, 3)), 0.0)], [placed], [loop], PARAMS, 150.0)
     assert late[0] == pytest.approx(200 * step)  # 150-160 comes at 5-6 m: the 2.5 m submap no longer
+
+
+def test_a_loop_shared_out_in_chunks_places_what_it_places_whole() -> None:
+    """The survey shares a loop's registrations out on its executor: each is independent, so the
+    chunks' outcomes put together are the loop's."""
+    from initcli.survey.lidar import placed_at, placed_from, registration_points
+
+    outline = np.array([[0.0, 0.0], [12.0, 0.0], [12.0, 4.0], [5.0, 4.0], [5.0, 8.0], [0.0, 8.0]])
+    inner = np.array([[0.7, 0.7], [11.3, 0.7], [11.3, 3.3], [4.3, 3.3], [4.3, 7.3], [0.7, 7.3]])
+    grid, loop = _grid(outline), _loop(inner)
+    maps = [RegistrationMap("L0", grid, LikelihoodField(grid))]
+    walls = polygon_edges(np.vstack([outline, outline[:1]]))
+    points = registration_points(loop, PARAMS)
+    right: list[bool] = []
+    for lo in range(0, len(points), 7):  # chunks out of order of level and point
+        right += placed_at(loop, walls, maps, "L0", PARAMS, 0.25, LidarModel(), points[lo : lo + 7])
+    whole = placed_along(loop, walls, maps, "L0", PARAMS, 0.25, LidarModel())
+    assert any(right)
+    np.testing.assert_array_equal(placed_from(loop, PARAMS, points, right), whole)
