@@ -112,6 +112,7 @@ def read_results(path: Path) -> list[TrialRecord]:
     text = read_text(path, "results")
     lines = text.split("\n")
     out = []
+    seen: dict[object, int] = {}  # (trial key, seed) -> its line
     for number, line in enumerate(lines, start=1):
         if not line.strip():
             continue
@@ -122,7 +123,16 @@ def read_results(path: Path) -> list[TrialRecord]:
                 break  # the interrupted last line: that trial runs again
             problem = str(exc).removeprefix(f"{path}:{number}: ")
             raise InputError(f"{path}:{number}: invalid JSON ({problem})") from None
-        out.append(parse_record(doc, f"{path}:{number}"))
+        record = parse_record(doc, f"{path}:{number}")
+        first = seen.setdefault((record.key, record.seed), number)
+        if first != number:  # counted twice, every table and rate would be skewed
+            k = record.key
+            sweep = f", {k.sweep_key}={k.sweep_value}" if k.sweep_key else ""
+            raise InputError(
+                f"{path}:{number}: the trial of site {k.site!r}, start {k.start}, method {k.method!r}{sweep},"
+                f" seed {record.seed} is already on line {first} (a results file written twice?)"
+            )
+        out.append(record)
     return out
 
 

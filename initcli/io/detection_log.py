@@ -223,7 +223,14 @@ def _parse_object(o: Any, i: int) -> DetectedObject:
     depth = o.get("depth", None)
     if depth is not None:
         depth = _coord(o, "depth", where, bound=1000.0)
-    return DetectedObject(cls=_str(o, "class", where), score=_num(o, "score", where), bbox=box, depth=depth)  # type: ignore[arg-type]
+        if depth < 0:
+            raise _Bad(
+                f"field {where}'depth': {depth:g} m is negative (a distance; null where none was valid)"
+            )
+    score = _num(o, "score", where)
+    if not 0.0 <= score <= 1.0:
+        raise _Bad(f"field {where}'score': {score:g} is outside [0, 1] (a detector's confidence)")
+    return DetectedObject(cls=_str(o, "class", where), score=score, bbox=box, depth=depth)  # type: ignore[arg-type]
 
 
 def _parse_body(kind: str, o: dict[str, Any]) -> Record:

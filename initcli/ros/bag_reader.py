@@ -178,6 +178,10 @@ class _Perceiver:
             cu, cv = bbox_centre(det.bbox)
             sx, sy = float(det.bbox.size_x), float(det.bbox.size_y)
             finite(self.topic, "a Detection2D (bbox or score)", cu, cv, sx, sy, score)
+            if not 0.0 <= score <= 1.0:
+                raise InputError(f"{self.topic}: a Detection2D score of {score:g} is outside [0, 1]")
+            if sx < 0 or sy < 0:
+                raise InputError(f"{self.topic}: a Detection2D box of size {sx:g} x {sy:g} px (negative)")
             out.append((self.name(cls), score, (cu - sx / 2, cv - sy / 2, cu + sx / 2, cv + sy / 2)))
         return out
 

@@ -209,6 +209,7 @@ class RosbridgeDriver:
         self._converted: tuple[_RawScan, LaserScan | None] | None = None  # the last raw scan, carried
         self._scans_in = 0  # LaserScan messages that arrived
         self.scans_dropped = 0  # of those, broken ones (dropped)
+        self.detections_dropped = 0  # Detection2Ds with a score or box no detector sends (dropped)
         self._mounts: dict[str, LaserMount] = {}  # laser frame -> its mount on the base
         # /tf_static is waited for this long before a laser frame without a chain to the base is
         # taken as at the base origin
@@ -287,6 +288,15 @@ class RosbridgeDriver:
     def distance(self) -> float:
         return self._distance
 
+    def _drop_detection(self, what: str) -> None:
+        """A Detection2D no detector sends (a score outside [0, 1], a box of negative size or not
+        finite) is dropped, the first with a warning: the session log holds what a log may hold."""
+        self.detections_dropped += 1
+        if self.detections_dropped == 1:
+            self.warn(
+                f"{self.topics.detections_topic}: a Detection2D with {what}; such detections are dropped"
+            )
+
     def _objects(self, msg: dict[str, Any]) -> list[DetectedObject] | None:
         t = header_stamp(msg)
         with self._lock:
@@ -302,6 +312,9 @@ class RosbridgeDriver:
             cls, score = max(hyps, key=lambda h: h[1])
             cu, cv = bbox_centre(det.bbox)
             sx, sy = float(det.bbox.size_x), float(det.bbox.size_y)
+            if not (0.0 <= score <= 1.0 and min(sx, sy) >= 0.0 and all(map(math.isfinite, (cu, cv, sx, sy)))):
+                self._drop_detection(f"score {score:g}, box {sx:g} x {sy:g} px at ({cu:g}, {cv:g})")
+                continue
             z = window_depth(depth, cu, cv, self.depth_window)  # Eq. 1: D at the box centre
             out.append(DetectedObject(cls, score, (cu - sx / 2, cv - sy / 2, cu + sx / 2, cv + sy / 2), z))
         return out

@@ -12,6 +12,7 @@ from tests.hostile.workspace import (
     config_plus,
     depthless_log,
     fifo,
+    huge_score,
     inf_transform,
     log_lines,
     manifest,
@@ -458,6 +459,12 @@ BAGS = [
         ("bim-init", "bag2log", "d.mcap", "-o", "x.jsonl"),
         r"/detections: a Detection2D .* holds nan",
         bag_with("d.mcap", nan_detection),
+    ),
+    Case(
+        "bag Detection2D score 1e9",
+        ("bim-init", "bag2log", "s.mcap", "-o", "x.jsonl"),
+        r"/detections: a Detection2D score of 1e\+09 is outside \[0, 1\]",
+        bag_with("s.mcap", huge_score),
     ),
     Case(
         "match on a bag with all-NaN depth",

@@ -227,6 +227,13 @@ def nan_detection(messages: list[BagMessage]) -> None:
             return
 
 
+def huge_score(messages: list[BagMessage]) -> None:
+    for m in messages:
+        if m.topic == "/detections" and m.value["detections"]:
+            m.value["detections"][0]["results"][0]["hypothesis"]["score"] = 1e9
+            return
+
+
 def nan_depth(messages: list[BagMessage]) -> None:
     for m in messages:
         if m.topic == "/camera/depth/image":

@@ -91,8 +91,13 @@ def export_onnx(
     import onnx
 
     ckpt = load_checkpoint(checkpoint)
-    net = model_from_checkpoint(ckpt)
-    names = [str(n) for n in ckpt["names"]]
+    net = model_from_checkpoint(ckpt, checkpoint)
+    given = ckpt.get("names")
+    if not isinstance(given, list | tuple) or not all(isinstance(n, str) and n.strip() for n in given):
+        raise InputError(f"{checkpoint}: no class names (a 'names' list of strings, as train writes)")
+    names = [str(n) for n in given]
+    if len(names) != net.arch.nc:
+        raise InputError(f"{checkpoint}: {len(names)} class names for a network of {net.arch.nc} classes")
     size = int(imgsz or ckpt.get("imgsz") or 320)
     if size % 32:
         raise InputError(f"--imgsz: must be a multiple of 32, got {size}")

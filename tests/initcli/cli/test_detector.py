@@ -128,3 +128,25 @@ def test_export_of_a_checkpoint_missing_a_weight_is_one_line_and_writes_nothing(
         assert len(lines) == 1 and "Traceback" not in result.output, result.stderr
         assert f"{name}.pt: weights" in lines[0] and first in lines[0]
         assert not out.exists()
+
+
+def test_export_of_a_checkpoint_without_class_names_is_one_line(tmp_path):
+    import pytest
+    from typer.testing import CliRunner
+
+    from initcli.cli.detector import detector_app
+
+    pytest.importorskip("torch")
+    from initcli.detector.training.checkpoint import load_init, save_checkpoint
+
+    ckpt = load_init("default")
+    for name, names, said in (
+        ("none", None, "no class names"),
+        ("empty", [], "0 class names for a network of 3 classes"),
+        ("two", ["door", "lift"], "2 class names for a network of 3 classes"),
+    ):
+        save_checkpoint(tmp_path / f"{name}.pt", {**ckpt, "names": names})
+        out = tmp_path / f"{name}.onnx"
+        result = CliRunner().invoke(detector_app, ["export", str(tmp_path / f"{name}.pt"), "-o", str(out)])
+        assert result.exit_code == 2 and said in result.stderr, result.output
+        assert not out.exists()

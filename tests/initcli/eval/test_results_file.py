@@ -72,3 +72,19 @@ def test_write_csv(tmp_path) -> None:
     path = tmp_path / "table.csv"
     write_csv(path, ["a", "b"], [{"a": 1, "b": "x,y"}, {"a": 2, "b": None}])
     assert path.read_text() == 'a,b\n1,"x,y"\n2,\n'
+
+
+def test_a_trial_written_twice_is_named_by_its_lines(tmp_path) -> None:
+    """The same trial (site, start, method, sweep, seed) twice would count twice in every table;
+    the same start of another seed (two campaigns appended) is another trial."""
+    from dataclasses import replace
+
+    path = tmp_path / "r.jsonl"
+    lines = [record_line(trial(0)), record_line(trial(1)), record_line(replace(trial(0), seed=2))]
+    path.write_text("\n".join(lines) + "\n")
+    assert [(r.start, r.seed) for r in read_results(path)] == [(0, 0), (1, 0), (0, 2)]
+    path.write_text("\n".join([*lines, record_line(trial(1, success=False))]) + "\n")
+    with pytest.raises(
+        InputError, match=r"r\.jsonl:4: the trial of site 'block_a', start 1, .* is already on line 2"
+    ):
+        read_results(path)

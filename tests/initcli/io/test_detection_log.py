@@ -119,6 +119,15 @@ def test_hand_written_log_with_unknown_types_and_extra_keys(tmp_path: Path) -> N
         ((META, DET.replace("[300,100,340,380]", "[340,100,300,380]")), r"u1 <= u2"),
         ((META, DET.replace('"class":"Door",', "")), r"log.jsonl:2: missing field objects\[0\]\.'class'"),
         (
+            (META, DET.replace('"depth":3.2', '"depth":-3.2')),
+            r"log.jsonl:2: field objects\[0\]\.'depth': -3.2 m is negative",
+        ),
+        (
+            (META, DET.replace('"score":0.9', '"score":1e9')),
+            r"log.jsonl:2: field objects\[0\]\.'score': 1e\+09 is outside \[0, 1\]",
+        ),
+        ((META, DET.replace('"score":0.9', '"score":-0.1')), r"'score': -0.1 is outside \[0, 1\]"),
+        (
             (META, DET.replace('"objects":[', '"objects":{"a":').replace("]}", "}}")),
             r"'objects' must be a list",
         ),

@@ -164,3 +164,33 @@ def test_without_rosapi_auto_keeps_the_camera_and_absent_asks_nothing():
         assert "no CameraInfo on /camera/color/camera_info in 1 s" in seen.warnings[0]
         told = live_camera(link, RosbridgeSection(camera="absent"), CAMERA, MOUNT, "base_link")
         assert told.absent and not told.warnings and told.record()["absent_because"].endswith("absent")
+
+
+def test_detections_no_detector_sends_are_dropped_with_one_warning(tmp_path):
+    """A score outside [0, 1] never reaches the session (its log must stay readable): dropped, the
+    first with a warning naming the topic."""
+    recording = make_recording(duration=4.0)
+    for m in recording.messages:
+        if m.topic == "/detections":
+            for det in m.value["detections"]:
+                det["results"][0]["hypothesis"]["score"] = 7.0
+    bag = write(tmp_path, recording, "mcap")
+    warnings: list[str] = []
+    stop = threading.Event()
+    seen = []
+    with RosbridgeServer() as server, RosbridgeLink("127.0.0.1", server.port) as link:
+        driver = RosbridgeDriver(
+            link, CAMERA, MOUNT, TOPICS, odom_timeout=0.3, period=0.02, warn=warnings.append
+        )
+        assert server.wait_for(lambda: len(server.of("subscribe")) == 5)
+        feeder = threading.Thread(target=_replay, args=(server, bag, stop, 3.0), daemon=True)
+        feeder.start()
+        driver.start()
+        with pytest.raises(InputError, match="no odometry on /odom"):
+            for _ in range(400):
+                seen.extend(driver.step(0.3, 0.1).detections or [])
+        stop.set()
+        feeder.join(timeout=5)
+    assert not seen and driver.detections_dropped > 0
+    dropped = [w for w in warnings if "Detection2D" in w]
+    assert len(dropped) == 1 and dropped[0].startswith("/detections: a Detection2D with score 7")
