@@ -133,14 +133,18 @@ HELP: dict[str, Any] = {"rich_markup_mode": None, "cls": HelpGroup}
 # vanished folder, a file too large, a failing device. One line and exit 2, as for bad input.
 STORAGE_ERRORS = frozenset(
     {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EPERM, errno.ENOENT, errno.ENOTDIR}
-    | {errno.EFBIG, errno.EIO, errno.ESTALE}
+    | {errno.EFBIG, errno.EIO, errno.ESTALE, errno.ENAMETOOLONG, errno.ELOOP}
 )
+SHOWN_NAME = 120  # characters of a file name an error line shows at most
 
 
 def storage_problem(exc: OSError) -> str:
     """What a storage error says to a user: the reason, and the file where the error names one
     (a failed write does not)."""
-    where = f" ({exc.filename})" if exc.filename else ""
+    name = str(exc.filename) if exc.filename else ""
+    if len(name) > SHOWN_NAME:
+        name = name[: SHOWN_NAME - 3] + "..."
+    where = f" ({name})" if name else ""
     return f"stopped: {exc.strerror or exc}{where}"
 
 

@@ -72,7 +72,11 @@ def parse_eval_config(doc: Any, source: Path) -> EvalConfig:
     seen: set[str] = set()
     for i, entry in enumerate(doc["sites"]):
         path = (source.parent / entry["config"]).resolve()
-        if not path.is_file():
+        try:
+            found = path.is_file()
+        except OSError as exc:  # a name too long for the file system, a loop of links
+            raise InputError(f"{where}: sites.{i}.config: {exc.strerror or exc}") from None
+        if not found:
             raise InputError(f"{where}: sites.{i}.config: {path} does not exist")
         name = entry.get("name") or site_name(path)
         if name in seen:

@@ -106,14 +106,15 @@ app = typer.Typer()
 
 @app.command()
 def main(code: str) -> None:
-    raise OSError(getattr(errno, code), "the reason", *(["/x/out.png"] if code == "EROFS" else []))
+    names = {"EROFS": "/x/out.png", "ENAMETOOLONG": "/x/" + "9" * 5000 + ".yaml"}
+    raise OSError(getattr(errno, code), "the reason", *([names[code]] if code in names else []))
 
 
 run_cli(app, "tool")
 """
 
 
-@pytest.mark.parametrize("code", ["ENOSPC", "EROFS", "EDQUOT"])
+@pytest.mark.parametrize("code", ["ENOSPC", "EROFS", "EDQUOT", "ENAMETOOLONG"])
 def test_a_full_disk_or_a_read_only_folder_is_one_line_and_exit_2(tmp_path: Path, code: str) -> None:
     script = tmp_path / "tool.py"
     script.write_text(STORAGE)
@@ -122,6 +123,7 @@ def test_a_full_disk_or_a_read_only_folder_is_one_line_and_exit_2(tmp_path: Path
     (line,) = done.stderr.splitlines()
     assert line.startswith("tool: error: stopped: the reason")
     assert ("/x/out.png" in line) == (code == "EROFS")
+    assert len(line) < 200  # a name of 5000 characters is cut short
 
 
 def test_an_os_error_of_the_program_itself_stays_a_traceback(tmp_path: Path) -> None:

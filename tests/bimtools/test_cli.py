@@ -95,6 +95,18 @@ def test_unsupported_schema(tmp_path):
     assert_bad_input(run_extract(str(path), cwd=tmp_path), "old.ifc", "unsupported IFC schema")
 
 
+def test_a_schema_name_no_ifc_has_is_refused_before_ifcopenshell_reads_it(tmp_path):
+    """IfcOpenShell crashes (a segmentation fault) on some FILE_SCHEMA names, such as 10000 digits
+    (found by the fuzz suite): the header is read first and an unknown schema refused."""
+    path = tmp_path / "odd.ifc"
+    path.write_text(MINIMAL_HEADER.format(schema="9" * 10000))
+    assert_bad_input(run_extract(str(path), cwd=tmp_path), "odd.ifc", "unsupported IFC schema '99999")
+    path.write_text(MINIMAL_HEADER.format(schema="IFC4").replace("FILE_SCHEMA", "FILE_SCHEME"))
+    assert_bad_input(run_extract(str(path), cwd=tmp_path), "odd.ifc", "no FILE_SCHEMA in the IFC header")
+    path.write_text(MINIMAL_HEADER.format(schema="IFC4").replace("'IFC4')", "'IFC4')1e300"))
+    assert_bad_input(run_extract(str(path), cwd=tmp_path), "odd.ifc", "malformed IFC header")
+
+
 def test_model_without_storeys(tmp_path):
     path = model_without(tmp_path, storeys=False)
     assert_bad_input(run_extract(str(path), cwd=tmp_path), "no_storeys.ifc", "no storeys")
