@@ -30,15 +30,12 @@ from initcli.survey.exploration import Entry, Loop
 
 __all__ = [
     "LidarModel",
+    "LoopRegistration",
     "RIGHT_DEG",
     "RIGHT_M",
     "SUBMAP_FRACTIONS",
     "TRACK_STEP_M",
     "lidar_distances",
-    "placed_along",
-    "placed_at",
-    "placed_from",
-    "registration_points",
     "submap_lengths",
 ]
 
@@ -75,78 +72,70 @@ def submap_lengths(params: RegistrationParams) -> tuple[float, ...]:
     return tuple(params.window * f for f in SUBMAP_FRACTIONS)
 
 
-def registration_points(loop: Loop, params: RegistrationParams) -> list[tuple[int, int]]:
-    """The (submap level, loop point) pairs :func:`placed_along` registers: every ``params.every``
-    m of the loop, per submap length of :func:`submap_lengths`."""
-    every = max(1, int(round(params.every / loop.step)))
-    return [(level, at) for level in range(len(submap_lengths(params))) for at in range(0, len(loop), every)]
+@dataclass(frozen=True)
+class LoopRegistration:
+    """The session's registration along the survey's loops: scans ray-cast against ``segments``
+    (every door leaf closed) registered on ``maps`` with ``params``; a point is placed where that
+    registration is unique and right on ``storey``."""
 
+    segments: np.ndarray
+    maps: list[RegistrationMap]
+    storey: str
+    params: RegistrationParams
+    tolerance: float
+    lidar: LidarModel
 
-def placed_at(
-    loop: Loop,
-    segments: np.ndarray,
-    maps: list[RegistrationMap],
-    storey: str,
-    params: RegistrationParams,
-    tolerance: float,
-    lidar: LidarModel,
-    points: list[tuple[int, int]],
-) -> list[bool]:
-    """Per (level, point) of ``points`` (:func:`registration_points`): is the registration of that
-    submap length of the loop before the point unique and right on ``storey``? Each is independent
-    of the others, so a loop's points can be shared out."""
-    n = len(loop)
-    lengths = submap_lengths(params)
-    keep = max(1, int(round(TRACK_STEP_M / loop.step)))
-    angles = lidar.angles()[::BEAM_STEP]
-    cache: dict[int, ScanSample] = {}
-    out: list[bool] = []
-    for level, at in points:
-        span = min(n, max(1, int(round(lengths[level] / loop.step))))
-        scans = []
-        for i in ((at - k) % n for k in range(span - 1, -1, -keep)):
-            if i not in cache:
-                cache[i] = _scan(loop.poses[i], lidar, angles, segments)
-            scans.append(cache[i])
-        found = register(BeamEnds.of(scans), maps, params, tolerance)
-        best, truth = found.best, scans[-1].odom
-        out.append(
-            found.unique
-            and best is not None
-            and best.storey == storey
-            and best.pose.distance_to(truth) <= RIGHT_M
-            and best.pose.yaw_error(truth) <= math.radians(RIGHT_DEG)
-        )
-    return out
+    def points(self, loop: Loop) -> list[tuple[int, int]]:
+        """The (submap level, loop point) pairs registered: every ``params.every`` m of the loop,
+        per submap length of :func:`submap_lengths`; none without a map."""
+        if not self.maps:
+            return []
+        every = max(1, int(round(self.params.every / loop.step)))
+        levels = range(len(submap_lengths(self.params)))
+        return [(level, at) for level in levels for at in range(0, len(loop), every)]
 
+    def placed_at(self, loop: Loop, points: list[tuple[int, int]]) -> list[bool]:
+        """Per (level, point) of ``points``: is the registration of that submap length of the loop
+        before the point unique and right? Each is independent of the others, so a loop's points
+        can be shared out."""
+        n = len(loop)
+        lengths = submap_lengths(self.params)
+        keep = max(1, int(round(TRACK_STEP_M / loop.step)))
+        angles = self.lidar.angles()[::BEAM_STEP]
+        cache: dict[int, ScanSample] = {}
+        out: list[bool] = []
+        for level, at in points:
+            span = min(n, max(1, int(round(lengths[level] / loop.step))))
+            scans = []
+            for i in ((at - k) % n for k in range(span - 1, -1, -keep)):
+                if i not in cache:
+                    cache[i] = _scan(loop.poses[i], self.lidar, angles, self.segments)
+                scans.append(cache[i])
+            found = register(BeamEnds.of(scans), self.maps, self.params, self.tolerance)
+            best, truth = found.best, scans[-1].odom
+            out.append(
+                found.unique
+                and best is not None
+                and best.storey == self.storey
+                and best.pose.distance_to(truth) <= RIGHT_M
+                and best.pose.yaw_error(truth) <= math.radians(RIGHT_DEG)
+            )
+        return out
 
-def placed_along(
-    loop: Loop,
-    segments: np.ndarray,
-    maps: list[RegistrationMap],
-    storey: str,
-    params: RegistrationParams,
-    tolerance: float,
-    lidar: LidarModel,
-) -> np.ndarray:
-    """(L, P) bool, per submap length of :func:`submap_lengths` and loop point: True where the
-    registration of that many metres of the loop before the point (every ``params.every`` m of the
-    loop, the points between take the last one's outcome) is unique and right on ``storey``."""
-    points = registration_points(loop, params) if maps else []
-    return placed_from(
-        loop, params, points, placed_at(loop, segments, maps, storey, params, tolerance, lidar, points)
-    )
+    def placed_from(self, loop: Loop, points: list[tuple[int, int]], right: list[bool]) -> np.ndarray:
+        """(L, P) bool, per submap length and loop point, from the outcome of each of ``points``:
+        the points between two registered ones take the last one's outcome."""
+        every = max(1, int(round(self.params.every / loop.step)))
+        placed = np.zeros((len(submap_lengths(self.params)), len(loop)), dtype=bool)
+        for (level, at), ok in zip(points, right, strict=True):
+            placed[level, at : at + every] = ok
+        return placed
 
-
-def placed_from(
-    loop: Loop, params: RegistrationParams, points: list[tuple[int, int]], right: list[bool]
-) -> np.ndarray:
-    """:func:`placed_along`'s (L, P) array from the outcome of each of its ``points``."""
-    every = max(1, int(round(params.every / loop.step)))
-    placed = np.zeros((len(submap_lengths(params)), len(loop)), dtype=bool)
-    for (level, at), ok in zip(points, right, strict=True):
-        placed[level, at : at + every] = ok
-    return placed
+    def placed_along(self, loop: Loop) -> np.ndarray:
+        """(L, P) bool, per submap length of :func:`submap_lengths` and loop point: True where the
+        registration of that many metres of the loop before the point is unique and right."""
+        points = self.points(loop)
+        return self.placed_from(loop, points, self.placed_at(loop, points))
 
 
 def lidar_distances(
@@ -158,7 +147,8 @@ def lidar_distances(
 ) -> np.ndarray:
     """(S,) m driven until the lidar places each start (``inf``: not within ``limit_m``): its
     approach, then along its loop from where it joins, to the first point placed by the longest
-    submap of :func:`submap_lengths` it has driven (``placed``: per loop, :func:`placed_along`)."""
+    submap of :func:`submap_lengths` it has driven (``placed``: per loop,
+    :meth:`LoopRegistration.placed_along`)."""
     lengths = submap_lengths(params)
     out = np.full(len(entries), np.inf)
     for s, entry in enumerate(entries):

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from initcli.executor import Executor, LocalExecutor, map_unordered
-from initcli.survey.lidar import lidar_distances, placed_at, placed_from, registration_points
+from initcli.survey.lidar import LoopRegistration, lidar_distances
 from initcli.survey.plan import StoreyPlan, SurveyParams
 from initcli.survey.sequences import SampleViews, sample_views, sequences
 from initcli.survey.uniqueness import UniquenessParams, first_unique
@@ -117,33 +117,24 @@ def lidar_along(
 
 
 def _placed(plan: StoreyPlan, params: SurveyParams, executor: Executor) -> list[np.ndarray]:
-    """:func:`initcli.survey.lidar.placed_along` for each of the plan's loops, its registrations
-    shared out on ``executor`` in chunks; none placed on a loop wholly inside a lidar twin's space
-    (not registered at all)."""
+    """:meth:`LoopRegistration.placed_along` for each of the plan's loops, its registrations shared
+    out on ``executor`` in chunks; none placed on a loop wholly inside a lidar twin's space (not
+    registered at all)."""
     assert plan.scan_segments is not None and plan.registration_map is not None
-    reg = params.registration
-    points = [
-        [] if plan.in_lidar_twin(loop.xy).all() else registration_points(loop, reg) for loop in plan.loops
-    ]
+    along = LoopRegistration(
+        plan.scan_segments,
+        [plan.registration_map],
+        plan.name,
+        params.registration,
+        params.scan_tolerance,
+        params.lidar,
+    )
+    points = [[] if plan.in_lidar_twin(loop.xy).all() else along.points(loop) for loop in plan.loops]
     size = max(1, math.ceil(sum(map(len, points)) / (4 * executor.slots)))
     chunks = [(k, lo) for k, p in enumerate(points) for lo in range(0, len(p), size)]
-    maps = [plan.registration_map]
-    calls = [
-        (
-            placed_at,
-            plan.loops[k],
-            plan.scan_segments,
-            maps,
-            plan.name,
-            reg,
-            params.scan_tolerance,
-            params.lidar,
-            points[k][lo : lo + size],
-        )
-        for k, lo in chunks
-    ]
+    calls = [(along.placed_at, plan.loops[k], points[k][lo : lo + size]) for k, lo in chunks]
     right: list[list[bool]] = [[False] * len(p) for p in points]
     for j, got in map_unordered(executor, calls):
         k, lo = chunks[j]
         right[k][lo : lo + len(got)] = got
-    return [placed_from(loop, reg, points[k], right[k]) for k, loop in enumerate(plan.loops)]
+    return [along.placed_from(loop, points[k], right[k]) for k, loop in enumerate(plan.loops)]

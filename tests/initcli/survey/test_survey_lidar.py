@@ -15,7 +15,7 @@ from initcli.core.lidar.registration import RegistrationMap
 from initcli.core.lidar.registration_params import RegistrationParams
 from initcli.storey.outlines import polygon_edges
 from initcli.survey.exploration import Entry, Loop
-from initcli.survey.lidar import LidarModel, lidar_distances, placed_along
+from initcli.survey.lidar import LidarModel, LoopRegistration, lidar_distances
 
 RES = 0.05
 PARAMS = RegistrationParams(window=10.0, every=2.5)
@@ -51,7 +51,7 @@ def _placed(outline: np.ndarray, inner: np.ndarray) -> np.ndarray:
     grid = _grid(outline)
     maps = [RegistrationMap("L0", grid, LikelihoodField(grid))]
     walls = polygon_edges(np.vstack([outline, outline[:1]]))
-    return placed_along(_loop(inner), walls, maps, "L0", PARAMS, 0.25, LidarModel())
+    return LoopRegistration(walls, maps, "L0", PARAMS, 0.25, LidarModel()).placed_along(_loop(inner))
 
 
 def test_a_room_that_is_its_own_twin_turned_half_round_places_no_start() -> None:
@@ -96,17 +96,16 @@ def test_a_start_is_placed_at_the_first_point_its_longest_submap_places() -> Non
 def test_a_loop_shared_out_in_chunks_places_what_it_places_whole() -> None:
     """The survey shares a loop's registrations out on its executor: each is independent, so the
     chunks' outcomes put together are the loop's."""
-    from initcli.survey.lidar import placed_at, placed_from, registration_points
-
     outline = np.array([[0.0, 0.0], [12.0, 0.0], [12.0, 4.0], [5.0, 4.0], [5.0, 8.0], [0.0, 8.0]])
     inner = np.array([[0.7, 0.7], [11.3, 0.7], [11.3, 3.3], [4.3, 3.3], [4.3, 7.3], [0.7, 7.3]])
     grid, loop = _grid(outline), _loop(inner)
     maps = [RegistrationMap("L0", grid, LikelihoodField(grid))]
-    walls = polygon_edges(np.vstack([outline, outline[:1]]))
-    points = registration_points(loop, PARAMS)
+    along = LoopRegistration(
+        polygon_edges(np.vstack([outline, outline[:1]])), maps, "L0", PARAMS, 0.25, LidarModel()
+    )
+    points = along.points(loop)
     right: list[bool] = []
     for lo in range(0, len(points), 7):  # chunks out of order of level and point
-        right += placed_at(loop, walls, maps, "L0", PARAMS, 0.25, LidarModel(), points[lo : lo + 7])
-    whole = placed_along(loop, walls, maps, "L0", PARAMS, 0.25, LidarModel())
+        right += along.placed_at(loop, points[lo : lo + 7])
     assert any(right)
-    np.testing.assert_array_equal(placed_from(loop, PARAMS, points, right), whole)
+    np.testing.assert_array_equal(along.placed_from(loop, points, right), along.placed_along(loop))
