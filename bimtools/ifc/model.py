@@ -59,7 +59,11 @@ def _check_header_schema(path: Path, head: bytes) -> None:
     found = _FILE_SCHEMA.search(head.split(b"ENDSEC;", 1)[0])
     if found is None:
         raise InputError(f"{path}: no FILE_SCHEMA in the IFC header")
-    name = found.group(1).decode("latin-1").strip()
+    _check_schema(path, found.group(1).decode("latin-1").strip())
+
+
+def _check_schema(path: Path, name: str) -> None:
+    """The one rule on a schema name, the header's before parsing and the model's after."""
     if not any(name.upper().startswith(s) for s in SUPPORTED_SCHEMAS):
         shown = name if len(name) <= 20 else name[:17] + "..."
         raise InputError(
@@ -117,11 +121,7 @@ def open_model(path: Path) -> ifcopenshell.file:
         if "schema" in text.lower():
             raise InputError(f"{path}: unsupported IFC schema ({text})") from None
         raise InputError(f"{path}: cannot parse IFC file ({text}); is it truncated?") from None
-    schema = model.schema_identifier if hasattr(model, "schema_identifier") else model.schema
-    if not any(str(schema).upper().startswith(s) for s in SUPPORTED_SCHEMAS):
-        raise InputError(
-            f"{path}: unsupported IFC schema {schema}; supported: {', '.join(SUPPORTED_SCHEMAS)}"
-        )
+    _check_schema(path, str(model.schema_identifier if hasattr(model, "schema_identifier") else model.schema))
     if not model.by_type("IfcProject"):
         raise InputError(f"{path}: IFC file has no IfcProject; is it truncated?")
     return model

@@ -100,8 +100,8 @@ def lidar_along(
 ) -> np.ndarray | None:
     """(S,) m until the session's lidar registration places each start (:mod:`initcli.survey.lidar`;
     none on a self-similar storey or in a lidar twin's space, where sessions fail while the doors
-    stay shut); None where the registration is off or the storey has no map. The loops are
-    registered on ``executor``, one loop a call."""
+    stay shut); None where the registration is off or the storey has no map. The loops'
+    registrations are shared out on ``executor`` in chunks."""
     reg = params.registration
     if not reg.enabled or plan.registration_map is None or plan.scan_segments is None:
         return None
