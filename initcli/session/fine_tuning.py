@@ -23,14 +23,16 @@ from initcli.core.filters.covariance import honest_covariance
 from initcli.core.filters.particle_filter import (
     FilterNoise,
     LaserModel,
+    LikelihoodField,
     ParticleFilter,
     likelihood_field,
     scan_fit,
 )
 from initcli.core.geometry.motion import motion_delta
 from initcli.core.geometry.se2 import Pose2D, wrap_angle
+from initcli.core.lidar.scan_jackknife import sector_jackknife
 from initcli.core.navigation.wall_following import ScanView, WallFollowParams, wall_follow
-from initcli.drivers.base import RobotDriver, SensorFrame
+from initcli.drivers.base import LaserScan, RobotDriver, SensorFrame
 from initcli.session.result import SessionResult
 
 __all__ = [
@@ -201,14 +203,11 @@ class FineTuning:
             carried = transform * frame.odom
             carried_fit = scan_fit(carried, scan.angles, scan.ranges, scan.range_max, pf.field)
             verdict = settle(estimate.pose, fit, carried, carried_fit, reseeded, cfg, self.min_scan_fit)
-            # what is sent with either pose: the cloud's covariance and what the cloud cannot see
-            sent = honest_covariance(
-                cov, estimate.pose, carried, cfg.covariance_floor_m, cfg.covariance_floor_deg
-            )
             if verdict is Settlement.KEEP_RECTIFIED:
                 hooks.note(
                     frame.t, f"filter drifted (scan fit {fit:.0%}); rectified pose kept ({carried_fit:.0%})"
                 )
+                sent = self.covariance(cov, estimate.pose, carried, carried, scan, pf.field)
                 return FineTuned(frame, carried, sent, converged=False)
             if verdict is Settlement.LOST:
                 return FineLost(frame, f"lost during fine tuning (only {fit:.0%} of the scan fits the map)")
@@ -219,7 +218,26 @@ class FineTuning:
                 pf.seed(estimate.pose, cfg.reseed_sigma_xy, math.radians(cfg.seed_sigma_yaw))
                 start_distance, converged_at = driver.distance, None
                 continue
+            sent = self.covariance(cov, estimate.pose, carried, estimate.pose, scan, pf.field)
             return FineTuned(frame, estimate.pose, sent, converged=converged_at is not None)
+
+    def covariance(
+        self,
+        cloud: np.ndarray,
+        estimate: Pose2D,
+        carried: Pose2D,
+        sent: Pose2D,
+        scan: LaserScan,
+        field: LikelihoodField,
+    ) -> np.ndarray:
+        """What is sent with the ``sent`` pose (the filter's ``estimate`` or the ``carried`` claim):
+        the ``cloud``'s covariance and what the cloud cannot see (their disagreement, how much the
+        pose rests on one part of the last ``scan``)."""
+        cfg = self.params
+        jack = sector_jackknife(sent, scan.angles, scan.ranges, scan.range_max, field)
+        return honest_covariance(
+            cloud, estimate, carried, cfg.covariance_floor_m, cfg.covariance_floor_deg, jack
+        )
 
 
 class FineStage:

@@ -84,6 +84,23 @@ class LikelihoodField:
         distance: np.ndarray = self._padded[self.padded_row(y), self.padded_col(x)]
         return distance
 
+    def interpolated(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """The distance field at world points, interpolated bilinearly between cell centres (smooth
+        for a local fit, where :meth:`lookup` steps from cell to cell; max_distance off the map)."""
+        res, (ox, oy) = self.grid.resolution, self.grid.origin[:2]
+        u, v = (np.asarray(x) - ox) / res - 0.5, (np.asarray(y) - oy) / res - 0.5
+        c0, r0 = np.floor(u), np.floor(v)  # r0 counts rows up from the bottom
+        fc, fr = u - c0, v - r0
+        col = np.clip(c0.astype(np.int64) + 1, 0, self.cols + 1)
+        col1 = np.clip(c0.astype(np.int64) + 2, 0, self.cols + 1)
+        row = np.clip(self.rows - r0.astype(np.int64), 0, self.rows + 1)
+        row1 = np.clip(self.rows - r0.astype(np.int64) - 1, 0, self.rows + 1)
+        f = self._padded
+        below = (1 - fc) * f[row, col] + fc * f[row, col1]
+        above = (1 - fc) * f[row1, col] + fc * f[row1, col1]
+        value: np.ndarray = (1 - fr) * below + fr * above
+        return value
+
     def padded_col(self, x: np.ndarray) -> np.ndarray:
         """The column of the padded field holding each world ``x`` (the border off the map)."""
         col = np.floor((x - self.grid.origin[0]) / self.grid.resolution).astype(np.int64)

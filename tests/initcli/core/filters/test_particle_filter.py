@@ -49,3 +49,19 @@ def test_likelihood_field_lookup_reads_cells_and_max_distance_off_the_map() -> N
     assert math.isclose(float(d[0, 1]), 0.10, abs_tol=1e-6)  # two cells from it
     assert d[0, 2] == np.float32(0.3) and d[0, 3] == np.float32(0.3)  # capped at max_distance
     assert all(d[0, 4:] == np.float32(0.3))  # left of, right of and above the map
+
+
+def test_the_interpolated_field_meets_the_cells_at_their_centres_and_is_smooth_between():
+    from bimtools.site.records import FREE, OCCUPIED, OccupancyGrid
+    from initcli.core.filters.particle_filter import LikelihoodField
+
+    cells = np.full((40, 40), FREE, dtype=np.uint8)
+    cells[:, 5] = OCCUPIED  # a wall whose cell centres lie at x = 0.275
+    field = LikelihoodField(OccupancyGrid(cells, 0.05, (0.0, 0.0, 0.0)), max_distance=1.0)
+    centres = np.array([0.275, 0.475, 0.975, 1.525])
+    y = np.full(4, 1.0 + 0.025)
+    assert np.allclose(field.interpolated(centres, y), field.lookup(centres, y), atol=1e-6)
+    x = np.linspace(0.3, 1.2, 91)
+    d = field.interpolated(x, np.full(91, 1.0))
+    assert np.allclose(d, x - 0.275, atol=1e-5)  # linear away from the wall, not in steps
+    assert field.interpolated(np.array([-5.0]), np.array([-5.0]))[0] == np.float32(1.0)  # off the map
