@@ -10,11 +10,14 @@
 - initialised: the share of those starts the survey places within ``limits.max_distance`` (the
   camera's Algorithm 1 or the session's lidar registration along the loop, whichever first) beside
   the eval's share localised, per storey, and the mean distance of those placed. ``--camera off``
-  surveys a robot whose camera sees nothing, for an eval with ``sim.miss_rate: 1``; ``--method`` and
-  ``--sweep-value`` pick the eval's rows (``--sweep registration.min_fit=0.7,0.8``: ``0.7``).
+  surveys a robot whose camera sees nothing, for an eval with ``sim.miss_rate: 1``; ``--reality
+  construction`` surveys the site as built, for an eval run with ``--reality construction``;
+  ``--method`` and ``--sweep-value`` pick the eval's rows (``--sweep registration.min_fit=0.7,0.8``:
+  ``0.7``).
 
     python benchmarks/bench_survey.py [--quick] [--workers 2] [--starts 100] [--models ...] [--results FILE]
                                       [--method bim+pf] [--sweep-value V] [--camera on|off]
+                                      [--reality ideal|construction]
                                       [--eval-config sample_models/eval_real.yaml]
 """
 
@@ -70,6 +73,12 @@ def main() -> None:
         default="on",
         help="off: the survey of a robot whose camera sees nothing (an eval with sim.miss_rate 1)",
     )
+    ap.add_argument(
+        "--reality",
+        choices=("ideal", "construction"),
+        default=None,
+        help="survey (and draw the starts) in this reality, for an eval run with the same --reality",
+    )
     ap.add_argument("--no-landmarks", action="store_true")
     ap.add_argument("--spacing", type=float, default=1.0, help="m between surveyed positions")
     ap.add_argument("--headings", type=int, default=4, help="headings surveyed at each position")
@@ -90,7 +99,7 @@ def main() -> None:
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for name, config_path in _sites(args):
-            config = load_config(config_path)
+            config = load_config(config_path, args.reality)
             site = prepare_site(config, Path(tmp) / name)
             simulated, _ = choose_storey(config, site)
             params = replace(

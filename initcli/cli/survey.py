@@ -20,7 +20,8 @@ from bimkit.outputs import OutputFolder, check_outputs, removed_on_storage_error
 from bimtools.site.load import Site, load_site
 from bimtools.site.names import storey_slugs
 from initcli.cli import PROG
-from initcli.config import SessionConfig, camera_of, followed_side, load_config
+from initcli.config import REALITY_PROFILES, SessionConfig, camera_of, followed_side, load_config
+from initcli.config.load import parse_config
 from initcli.core.features.visibility import CameraModel
 from initcli.executor import Executor, make_executor
 from initcli.match.pipeline import site_class_map
@@ -62,10 +63,32 @@ def survey_params(config: SessionConfig, spacing: float, headings: int) -> Surve
         matching=UniquenessParams(
             alpha=m.alpha,
             beta_deg=m.beta,
-            max_outliers=m.max_outliers,
+            max_outliers=m.max_outliers + as_built_outliers(config),
             min_claim=config.verification.min_claim_inliers if config.verification.enabled else 0,
         ),
     )
+
+
+def as_built_outliers(config: SessionConfig) -> int:
+    """Outliers the site as built adds to a match: one where the robot meets doors the model lacks
+    (``sim.as_built.extra_doors``) or a detector that takes a panel for a door every time
+    (``sim.detector.persistent_phantoms``). Each costs the session's match an outlier, and a rival
+    place that needs one more outlier then passes as well: on a storey of repeating rooms the
+    session drives on. The survey predicts it by allowing the matching one outlier more."""
+    sim = config.sim
+    return 1 if sim.as_built.extra_doors > 0 or sim.detector.persistent_phantoms > 0 else 0
+
+
+def _session(config: Path | None, reality: str | None, site: Path) -> SessionConfig:
+    """The run config the survey of ``site`` takes its settings from (none: the defaults), in
+    ``reality`` (none: the config's)."""
+    if reality is not None and reality not in REALITY_PROFILES:
+        raise InputError(f"--reality: expected one of {', '.join(REALITY_PROFILES)}, got {reality!r}")
+    if config is not None:
+        return load_config(config, reality)
+    if reality is None:
+        return SessionConfig()
+    return parse_config({"site": {"path": str(site)}, "sim": {"reality": reality}})
 
 
 # The options of survey that take more than a line (typer reads these Annotated types).
@@ -126,6 +149,15 @@ _Force = Annotated[
     bool,
     typer.Option("--force", help="Write into an --out folder holding other files than a survey's (kept)."),
 ]
+_Reality = Annotated[
+    str | None,
+    typer.Option(
+        "--reality",
+        metavar="ideal|construction",
+        help="Survey the site in this named reality (sim.reality; keys the --config sets win): as"
+        " built, one door the model lacks may join a match [default: the config's].",
+    ),
+]
 _Yes = Annotated[bool, typer.Option("--yes", help=f"Run a survey of more than {MAX_STARTS} starts.")]
 
 
@@ -142,6 +174,7 @@ def survey(
     address: _Address = None,
     force: _Force = False,
     yes: _Yes = False,
+    reality: _Reality = None,
 ) -> None:
     """Map the distance to a unique match over a floor from its features and walls alone (no noise):
     sampled starts look round, follow the wall and match until one hypothesis is left."""
@@ -150,7 +183,7 @@ def survey(
     try:
         check_outputs([site, config], [OutputFolder(out, "--out", SURVEY_MARKERS, SURVEY_WRITES)], force)
         model = load_site(site)
-        session = load_config(config) if config is not None else SessionConfig()
+        session = _session(config, reality, site)
         params = survey_params(session, spacing, headings)
         names = list(model.storeys) if storey == "all" else [model.storey(storey).name]
         cmap = site_class_map(model)
@@ -178,6 +211,8 @@ def survey(
         "version": SURVEY_VERSION,
         "site": str(site),
         "limit_m": params.limit_m,
+        "reality": session.sim.reality,
+        "max_outliers": params.matching.max_outliers,
         "storeys": storeys,
     }
     stems = _stems(model)

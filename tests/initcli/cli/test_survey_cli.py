@@ -55,8 +55,30 @@ def test_survey_writes_a_valid_report_and_a_map(site_dir, tmp_path):
     assert "Survey" in result.output
 
 
+def test_as_built_a_match_may_hold_one_outlier_more_and_is_unique_no_sooner(site_dir, tmp_path):
+    reports = {}
+    camera_only = tmp_path / "camera.yaml"  # the lidar's registration is the same either way
+    camera_only.write_text(f"site: {{path: {site_dir}}}\nregistration: {{enabled: false}}\n")
+    for reality in ("ideal", "construction"):
+        out = tmp_path / reality
+        args = ["survey", str(site_dir), "--out", str(out), "--spacing", "2", "--headings", "2"]
+        args += ["--config", str(camera_only), "--reality", reality]
+        result = runner.invoke(app, [*args, "--landmarks", "0", "--workers", "1"])
+        assert result.exit_code == 0, result.output
+        reports[reality] = json.loads((out / "survey.json").read_text())
+        jsonschema.validate(reports[reality], json.loads(schema_path("survey.schema.json").read_text()))
+    ideal, built = reports["ideal"], reports["construction"]
+    assert (ideal["reality"], built["reality"]) == ("ideal", "construction")
+    assert built["max_outliers"] == ideal["max_outliers"] + 1
+    (a,), (b,) = ideal["storeys"], built["storeys"]
+    assert b["samples"] == a["samples"]
+    for within in ("5m", "10m", "20m"):
+        assert b["unique_within"][within] <= a["unique_within"][within]
+    assert b["unique_within"]["5m"] < a["unique_within"]["5m"]  # block_b's repeating offices
+
+
 def test_unknown_storey_and_executor_exit_2(site_dir, tmp_path):
-    for extra in (["--storey", "Roof"], ["--executor", "slurm"]):
+    for extra in (["--storey", "Roof"], ["--executor", "slurm"], ["--reality", "rubble"]):
         result = runner.invoke(app, ["survey", str(site_dir), "--out", str(tmp_path), *extra])
         assert result.exit_code == 2
         assert result.output.count("\n") <= 2 and "error" in result.output
