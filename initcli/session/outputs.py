@@ -18,6 +18,8 @@ __all__ = ["render_report", "report_title", "summary_document", "write_summary"]
 
 PLAN_MARGIN_M = 2.0  # m of the report's plan round the storey's walls and the true path
 ZOOM_MIN_M = 3.0  # m: the smallest side of the inset round the final pose
+INSET_HEIGHT = 0.48  # of the plan's height: the inset round the final pose
+INSET_GAP_PT = 18.0  # points: room for the inset's title under the legend
 
 
 def _pose(p: Pose2D | None) -> dict | None:
@@ -118,14 +120,17 @@ def _plan_limits(
     return (float(lo[0]), float(hi[0])), (float(lo[1]), float(hi[1]))
 
 
-def _zoom(ax: Any, result: SessionResult, storey: StoreyModel, world_segments: np.ndarray | None) -> None:
+def _zoom(
+    ax: Any, result: SessionResult, storey: StoreyModel, world_segments: np.ndarray | None, top: float
+) -> None:
     """An inset beside the plan round the final pose: the coarse, rectified and final poses, the
-    truth and the covariance ellipse, at a scale where they can be told apart."""
+    truth and the covariance ellipse, at a scale where they can be told apart; its top at ``top``
+    (axes fraction: under the legend)."""
     from matplotlib.collections import LineCollection
 
     pose = result.pose
     assert pose is not None
-    inset = ax.inset_axes([1.03, 0.0, 0.34, 0.48])
+    inset = ax.inset_axes([1.03, top - INSET_HEIGHT, 0.34, INSET_HEIGHT])
     pts = [np.array([[pose.x, pose.y]])]
     for other in (result.coarse_pose, result.rectified_pose, result.truth_pose):
         if other is not None and other.distance_to(pose) < 5.0:
@@ -295,8 +300,6 @@ def render_report(
     if limits is not None:  # cropped to the building: a hypothesis far outside is clipped
         ax.set_xlim(*limits[0])
         ax.set_ylim(*limits[1])
-    if result.pose is not None:
-        _zoom(ax, result, storey, world_segments)
     ax.set_xlabel("x (m, BIM frame)")
     ax.set_ylabel("y (m)")
     ax.set_title(title)
@@ -304,8 +307,14 @@ def render_report(
     seen: dict[str, Artist] = {}
     for h, lab in zip(handles, labels, strict=True):
         seen.setdefault(lab, h)
-    ax.legend(
+    legend = ax.legend(
         list(seen.values()), list(seen.keys()), fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0)
     )
+    if result.pose is not None:
+        # under the legend: beside a plan wider than tall the legend reaches below the middle
+        ax.apply_aspect()
+        below = legend.get_window_extent().transformed(ax.transAxes.inverted())
+        gap = INSET_GAP_PT * fig.dpi / 72.0 / ax.get_window_extent().height
+        _zoom(ax, result, storey, world_segments, min(INSET_HEIGHT, float(below.y0) - gap))
     fig.savefig(path, dpi=130, bbox_inches="tight")  # the legend and the inset in, no blank canvas
     plt.close(fig)

@@ -125,3 +125,24 @@ def test_the_plan_is_cropped_to_the_building_not_to_a_hypothesis_far_outside() -
     (x0, x1), (y0, y1) = _plan_limits(storey, result) or ((0, 0), (0, 0))
     assert (x0, x1) == (-PLAN_MARGIN_M, 6.0 + PLAN_MARGIN_M)
     assert (y0, y1) == (-1.0 - PLAN_MARGIN_M, 2.0 + PLAN_MARGIN_M)  # the true path ends at y 2
+
+
+def test_beside_a_plan_wider_than_tall_the_inset_sits_under_the_legend(tmp_path: Path, monkeypatch) -> None:
+    import matplotlib.pyplot as plt
+
+    closed: list = []
+    monkeypatch.setattr(plt, "close", closed.append)  # keep the figure to look at
+    walls = [
+        WallSegment("L0", f"w{i}", "IfcWall", *ends, (0.0, 1.0))
+        for i, ends in enumerate([(0, 0, 60, 0), (60, 0, 60, 8), (60, 8, 0, 8), (0, 8, 0, 0)])
+    ]
+    storey = StoreyModel("L0", 0.0, [Feature("d1", "Door", 3.0, 0.0, -1.0, 0.0, 1.0, 2.1)], walls)
+    render_report(tmp_path / "report.png", _result(), storey, "a title")
+    (fig,) = closed
+    ax = fig.axes[0]
+    (inset,) = ax.child_axes
+    legend = ax.get_legend()
+    assert len(legend.get_texts()) >= 8  # tall beside this plan: it reaches below the middle
+    box, zoom = legend.get_window_extent(), inset.get_tightbbox()
+    assert not box.overlaps(zoom), (box, zoom)
+    plt.close(fig)
