@@ -40,7 +40,7 @@ EVAL_MEDIAN = {"ntu_hallway": 28.0, "block_a": 3.2, "block_b": 4.3}
 
 def main() -> None:
     from initcli.cli.survey import survey_params
-    from initcli.config import load_config
+    from initcli.config import REALITY_PROFILES, load_config
     from initcli.config.building import choose_storey, prepare_site
     from initcli.eval.trial import trial_seed
     from initcli.executor import LocalExecutor
@@ -75,7 +75,7 @@ def main() -> None:
     )
     ap.add_argument(
         "--reality",
-        choices=("ideal", "construction"),
+        choices=tuple(REALITY_PROFILES),
         default=None,
         help="survey (and draw the starts) in this reality, for an eval run with the same --reality",
     )

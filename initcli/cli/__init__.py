@@ -6,6 +6,15 @@ displays and :mod:`initcli.cli.plot_hypotheses` the ``--plot`` of ``match``. Alg
 :mod:`initcli.core`, file formats in :mod:`initcli.io`.
 """
 
-__all__ = ["PROG"]
+from bimkit.errors import InputError
+from initcli.config.sim import REALITY_PROFILES
+
+__all__ = ["PROG", "check_reality"]
 
 PROG = "bim-init"  # the program name of every error line (``bim-init: error: ...``)
+
+
+def check_reality(reality: str | None) -> None:
+    """A ``--reality`` option names a profile of ``sim.reality`` (None: not given)."""
+    if reality is not None and reality not in REALITY_PROFILES:
+        raise InputError(f"--reality: expected one of {', '.join(REALITY_PROFILES)}, got {reality!r}")

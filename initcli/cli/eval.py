@@ -26,8 +26,7 @@ from bimkit.atomic import claim
 from bimkit.cli import EXIT_INTERRUPTED, fail, number_option
 from bimkit.errors import InputError
 from bimkit.outputs import OutputFolder, check_outputs
-from initcli.cli import PROG
-from initcli.config import REALITY_PROFILES
+from initcli.cli import PROG, check_reality
 from initcli.eval.campaign import (
     campaign_inputs,
     check_start_poses,
@@ -181,8 +180,7 @@ def evaluate(
         eval_config = load_eval_config(config)
         chosen = parse_methods(methods) if methods else eval_config.methods
         the_sweep = parse_sweep(sweep) if sweep else None
-        if reality is not None and reality not in REALITY_PROFILES:
-            raise InputError(f"--reality: expected one of {', '.join(REALITY_PROFILES)}, got {reality!r}")
+        check_reality(reality)
         only = _only_sites(sites, eval_config)
         if the_sweep is not None:
             check_sweep(the_sweep, site_configs(eval_config, only))

@@ -19,8 +19,8 @@ from bimkit.errors import InputError
 from bimkit.outputs import OutputFolder, check_outputs, removed_on_storage_error
 from bimtools.site.load import Site, load_site
 from bimtools.site.names import storey_slugs
-from initcli.cli import PROG
-from initcli.config import REALITY_PROFILES, SessionConfig, camera_of, followed_side, load_config
+from initcli.cli import PROG, check_reality
+from initcli.config import SessionConfig, camera_of, followed_side, load_config
 from initcli.config.load import parse_config
 from initcli.core.features.visibility import CameraModel
 from initcli.executor import Executor, make_executor
@@ -82,8 +82,7 @@ def as_built_outliers(config: SessionConfig) -> int:
 def _session(config: Path | None, reality: str | None, site: Path) -> SessionConfig:
     """The run config the survey of ``site`` takes its settings from (none: the defaults), in
     ``reality`` (none: the config's)."""
-    if reality is not None and reality not in REALITY_PROFILES:
-        raise InputError(f"--reality: expected one of {', '.join(REALITY_PROFILES)}, got {reality!r}")
+    check_reality(reality)
     if config is not None:
         return load_config(config, reality)
     if reality is None:

@@ -34,6 +34,7 @@ __all__ = [
     "low_variance_indices",
     "sample_motion",
     "scan_fit",
+    "valid_beams",
     "weighted_pose_stats",
 ]
 
@@ -61,6 +62,16 @@ class LaserModel:
     beam_skip_distance: float = 0.25  # m (AMCL 0.5; tighter for clutter standing against walls)
     beam_skip_threshold: float = 0.3  # fraction of particles
     beam_skip_error_threshold: float = 0.9  # skip nothing if more than this fraction would be skipped
+
+
+MIN_RANGE_M = 0.05  # m: a beam shorter than this hit the robot or read nothing
+
+
+def valid_beams(ranges: np.ndarray, range_max: float) -> np.ndarray:
+    """The beams of a scan that ended on something: finite, shorter than ``range_max`` (a beam at
+    ``range_max`` saw nothing), longer than :data:`MIN_RANGE_M`."""
+    ok: np.ndarray = np.isfinite(ranges) & (ranges < range_max) & (ranges > MIN_RANGE_M)
+    return ok
 
 
 class LikelihoodField:
@@ -163,7 +174,7 @@ def beam_log_likelihood(
     model: LaserModel,
 ) -> np.ndarray:
     """log p(z | x, m) per particle with the likelihood-field model (Eq. 18's measurement term)."""
-    ok = np.isfinite(ranges) & (ranges < range_max) & (ranges > 0.05)
+    ok = valid_beams(ranges, range_max)
     angles, ranges = angles[ok], ranges[ok]
     if len(ranges) == 0:
         return np.zeros(len(particles))
@@ -257,7 +268,7 @@ class ParticleFilter:
             self.resample()
 
     def _beams_used(self, ranges: np.ndarray, range_max: float) -> int:
-        valid = int((np.isfinite(ranges) & (ranges < range_max) & (ranges > 0.05)).sum())
+        valid = int(valid_beams(ranges, range_max).sum())
         return max(1, min(self.model.beams, valid))
 
     def effective_size(self) -> float:
@@ -305,7 +316,7 @@ def scan_fit(
     map cell, seen from ``pose``, with no beam skipped: a check of a final estimate. Beam skipping
     (above) lets a whole cloud in the wrong place keep only the beams that happen to agree with it;
     at the right pose most beams end on mapped walls even with clutter about."""
-    ok = np.isfinite(ranges) & (ranges < range_max) & (ranges > 0.05)
+    ok = valid_beams(ranges, range_max)
     if not ok.any():
         return 0.0
     heading = pose.yaw + angles[ok]

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from initcli.core.filters.particle_filter import LikelihoodField
+from initcli.core.filters.particle_filter import LikelihoodField, valid_beams
 from initcli.core.geometry.se2 import Pose2D
 
 __all__ = ["AlignmentMoves", "BeamEnds", "SCAN_TURN_STEP_DEG", "ScanSample", "best_scan_alignment"]
@@ -52,7 +52,7 @@ class BeamEnds:
         valid = np.zeros(len(scans))
         origins = np.zeros((len(scans), 2))
         for i, scan in enumerate(scans):
-            ok = np.isfinite(scan.ranges) & (scan.ranges < scan.range_max) & (scan.ranges > 0.05)
+            ok = valid_beams(scan.ranges, scan.range_max)
             rel = back * scan.odom
             origins[i] = rel.x, rel.y
             heading = rel.yaw + scan.angles[ok]

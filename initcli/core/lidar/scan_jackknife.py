@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from initcli.core.filters.particle_filter import LikelihoodField
+from initcli.core.filters.particle_filter import LikelihoodField, valid_beams
 from initcli.core.geometry.se2 import Pose2D
 
 __all__ = ["JackknifeParams", "fit_scan_locally", "sector_jackknife"]
@@ -100,7 +100,7 @@ def sector_jackknife(
     """``J`` of the module docstring (3x3, x, y, yaw) for a scan seen from ``pose``: zero for a scan
     of too few valid beams."""
     params = params or JackknifeParams()
-    ok = np.isfinite(ranges) & (ranges < range_max) & (ranges > 0.05)
+    ok = valid_beams(ranges, range_max)
     if int(ok.sum()) < max(params.min_beams, 2 * params.sectors):
         return np.zeros((3, 3))
     bearing, r = np.asarray(angles, dtype=float)[ok], np.asarray(ranges, dtype=float)[ok]
